@@ -1,0 +1,488 @@
+// Generated from protocol/schema.toml by protocol/generate.py; do not edit.
+#pragma once
+
+#include <stdint.h>  // fixed-width wire types
+
+#include "wire.h"  // put_*/get_* little-endian helpers, is_finite
+
+namespace mr {
+namespace proto {
+
+constexpr uint16_t kProtocolVersion = 1;
+constexpr uint32_t kSchemaHash = 0x163C8F28u;
+constexpr uint8_t kMaxPacket = 44;  // [bytes] id + seq + payload + CRC
+constexpr uint8_t kMaxWire = 46;  // [bytes] COBS packet + delimiter
+constexpr uint8_t kNoField = 255;  // nack.field when no single field is at fault
+
+enum class ErrorCode : uint8_t {
+  kOk = 0,
+  kUnknownMessage = 1,  // The message id is not one the firmware handles in this direction.
+  kBadLength = 2,  // The payload length differs from the schema's length for that message id.
+  kNotFinite = 3,  // A float field is NaN or infinite (nack.field names it).
+  kOutOfRange = 4,  // A field is outside its documented bounds, or an enum value is unknown (nack.field names it).
+  kBadState = 5,  // The command is not allowed in the current supervisor state (see PROTOCOL.md, state table).
+  kNoTarget = 6,  // start was sent before any set_target.
+  kUnsupported = 7,  // The command exists but this build cannot do it (sim_clock on a wall-clock or real board).
+  kStalePosition = 8,  // object_position whose frame counter repeats the last one or whose capture time does not advance.
+};
+
+// Supervisor state.
+enum class State : uint8_t {
+  kIdle = 0,
+  kRunning = 1,
+  kReached = 2,
+  kFault = 3,
+  kEstop = 4,
+};
+
+// Tilt controller: Manhattan (Algorithm 1, two PIDs) or Euclidean (Algorithm 2, one PID).
+enum class Controller : uint8_t {
+  kManhattan = 0,
+  kEuclidean = 1,
+};
+
+// Which PID configure_pid sets: x and y are Manhattan's, radial is Euclidean's.
+enum class Axis : uint8_t {
+  kX = 0,
+  kY = 1,
+  kRadial = 2,
+};
+
+// Where the firmware's time comes from.
+enum class Clock : uint8_t {
+  kWall = 0,
+  kSimulated = 1,
+};
+
+// Why the firmware (re)started, reported in boot.
+enum class ResetCause : uint8_t {
+  kPowerOn = 0,
+  kExternal = 1,
+  kBrownOut = 2,
+  kWatchdog = 3,
+  kUnknown = 4,
+};
+
+// object_position.flags bits.
+namespace position_flags {
+constexpr uint16_t kNotVisible = 1u << 0;
+}  // namespace position_flags
+
+// telemetry.faults bits; latched until stop.
+namespace faults {
+constexpr uint16_t kPositionTimeout = 1u << 0;
+constexpr uint16_t kEstop = 1u << 1;
+}  // namespace faults
+
+// Boot gains of each PID, indexed by Axis: {kp [deg/m], ki [deg/(m s)], kd [deg s/m], integral_limit [deg]}.
+struct PidDefaults { float kp, ki, kd, integral_limit; };
+constexpr PidDefaults kPidDefaults[] = {
+    {30.9f, 26.78f, 15.45f, 26.565051f},  // x
+    {30.9f, 26.78f, 15.45f, 26.565051f},  // y
+    {86.72f, 27.91f, 10.19f, 26.565051f},  // radial
+};
+
+// Handshake: ask for protocol version, firmware version and schema hash.
+struct Identify {
+  static constexpr uint8_t kId = 0x01;
+  static constexpr uint8_t kSize = 0;  // [bytes] payload
+};
+inline void encode(const Identify&, uint8_t*) {}
+inline void decode(const uint8_t*, Identify&) {}
+// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
+inline ErrorCode validate(const Identify& /*m*/, uint8_t& /*field*/) {
+  return ErrorCode::kOk;
+}
+
+// Controller-wide settings. Only in idle. Validated whole: any bad field refuses the lot and changes nothing.
+struct Configure {
+  static constexpr uint8_t kId = 0x02;
+  static constexpr uint8_t kSize = 29;  // [bytes] payload
+  uint8_t controller;  // Manhattan or Euclidean. (enum controller)
+  float module_x;  // [m] Module size m along x (actuators at x = +-m/2).
+  float module_y;  // [m] Module size n along y (actuators at y = +-n/2).
+  float tilt_limit;  // [deg] Saturation of each tilt angle; at most atan(range / ((m + n) / 2)), which keeps every corner in range.
+  float tolerance;  // [m] epsilon: the object counts as reached within this distance of the target.
+  float noise_amplitude;  // [m] alpha: each command gets alpha * delta, delta ~ U(-1, 1), drawn every control step.
+  uint32_t noise_seed;  // Seed of the noise PRNG (xorshift32; 0 is replaced by 1); reseeded at every start.
+  uint16_t deadman;  // [ms] Longest time without a valid position while running before the surface levels and a position_timeout fault latches.
+  uint16_t telemetry_period;  // [ms] Period of unsolicited telemetry; 0 = only in answer to object_position. Nonzero values below 5 ms are refused (the link cannot carry them).
+};
+inline void encode(const Configure& m, uint8_t* out) {
+  put_u8(out + 0, m.controller);
+  put_f32(out + 1, m.module_x);
+  put_f32(out + 5, m.module_y);
+  put_f32(out + 9, m.tilt_limit);
+  put_f32(out + 13, m.tolerance);
+  put_f32(out + 17, m.noise_amplitude);
+  put_u32(out + 21, m.noise_seed);
+  put_u16(out + 25, m.deadman);
+  put_u16(out + 27, m.telemetry_period);
+}
+inline void decode(const uint8_t* in, Configure& m) {
+  m.controller = get_u8(in + 0);
+  m.module_x = get_f32(in + 1);
+  m.module_y = get_f32(in + 5);
+  m.tilt_limit = get_f32(in + 9);
+  m.tolerance = get_f32(in + 13);
+  m.noise_amplitude = get_f32(in + 17);
+  m.noise_seed = get_u32(in + 21);
+  m.deadman = get_u16(in + 25);
+  m.telemetry_period = get_u16(in + 27);
+}
+// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
+inline ErrorCode validate(const Configure& m, uint8_t& field) {
+  if ((m.controller != 0 && m.controller != 1)) { field = 0; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.module_x)) { field = 1; return ErrorCode::kNotFinite; }
+  if ((m.module_x < 0.1f) || (m.module_x > 10.0f)) { field = 1; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.module_y)) { field = 2; return ErrorCode::kNotFinite; }
+  if ((m.module_y < 0.1f) || (m.module_y > 10.0f)) { field = 2; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.tilt_limit)) { field = 3; return ErrorCode::kNotFinite; }
+  if ((m.tilt_limit < 0.1f) || (m.tilt_limit > 89.0f)) { field = 3; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.tolerance)) { field = 4; return ErrorCode::kNotFinite; }
+  if ((m.tolerance < 0.001f) || (m.tolerance > 0.5f)) { field = 4; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.noise_amplitude)) { field = 5; return ErrorCode::kNotFinite; }
+  if ((m.noise_amplitude < 0.0f) || (m.noise_amplitude > 0.25f)) { field = 5; return ErrorCode::kOutOfRange; }
+  if ((m.deadman < 20) || (m.deadman > 60000)) { field = 7; return ErrorCode::kOutOfRange; }
+  if ((m.telemetry_period > 60000)) { field = 8; return ErrorCode::kOutOfRange; }
+  return ErrorCode::kOk;
+}
+// Boot values from the schema.
+inline void set_defaults(Configure& m) {
+  m.controller = 0;
+  m.module_x = 0.5f;
+  m.module_y = 0.5f;
+  m.tilt_limit = 26.565051f;
+  m.tolerance = 0.02f;
+  m.noise_amplitude = 0.0f;
+  m.noise_seed = 1;
+  m.deadman = 500;
+  m.telemetry_period = 100;
+}
+
+// Gains of one PID. Only in idle. Output unit is degrees of tilt (see PROTOCOL.md, units).
+struct ConfigurePid {
+  static constexpr uint8_t kId = 0x03;
+  static constexpr uint8_t kSize = 17;  // [bytes] payload
+  uint8_t axis;  // x, y (Manhattan) or radial (Euclidean). (enum axis)
+  float kp;  // [deg/m] Proportional gain.
+  float ki;  // [deg/(m s)] Integral gain.
+  float kd;  // [deg s/m] Derivative gain (on measurement: no kick when the target changes).
+  float integral_limit;  // [deg] Anti-windup bound on the integral term's contribution.
+};
+inline void encode(const ConfigurePid& m, uint8_t* out) {
+  put_u8(out + 0, m.axis);
+  put_f32(out + 1, m.kp);
+  put_f32(out + 5, m.ki);
+  put_f32(out + 9, m.kd);
+  put_f32(out + 13, m.integral_limit);
+}
+inline void decode(const uint8_t* in, ConfigurePid& m) {
+  m.axis = get_u8(in + 0);
+  m.kp = get_f32(in + 1);
+  m.ki = get_f32(in + 5);
+  m.kd = get_f32(in + 9);
+  m.integral_limit = get_f32(in + 13);
+}
+// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
+inline ErrorCode validate(const ConfigurePid& m, uint8_t& field) {
+  if ((m.axis != 0 && m.axis != 1 && m.axis != 2)) { field = 0; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.kp)) { field = 1; return ErrorCode::kNotFinite; }
+  if ((m.kp < 0.0f) || (m.kp > 10000.0f)) { field = 1; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.ki)) { field = 2; return ErrorCode::kNotFinite; }
+  if ((m.ki < 0.0f) || (m.ki > 10000.0f)) { field = 2; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.kd)) { field = 3; return ErrorCode::kNotFinite; }
+  if ((m.kd < 0.0f) || (m.kd > 10000.0f)) { field = 3; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.integral_limit)) { field = 4; return ErrorCode::kNotFinite; }
+  if ((m.integral_limit < 0.0f) || (m.integral_limit > 90.0f)) { field = 4; return ErrorCode::kOutOfRange; }
+  return ErrorCode::kOk;
+}
+
+// Target position p_d in the fabric frame. Any state but estop; must lie inside the module (|x| <= m/2, |y| <= n/2).
+struct SetTarget {
+  static constexpr uint8_t kId = 0x04;
+  static constexpr uint8_t kSize = 8;  // [bytes] payload
+  float x;  // [m] x_d.
+  float y;  // [m] y_d.
+};
+inline void encode(const SetTarget& m, uint8_t* out) {
+  put_f32(out + 0, m.x);
+  put_f32(out + 4, m.y);
+}
+inline void decode(const uint8_t* in, SetTarget& m) {
+  m.x = get_f32(in + 0);
+  m.y = get_f32(in + 4);
+}
+// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
+inline ErrorCode validate(const SetTarget& m, uint8_t& field) {
+  if (!is_finite(m.x)) { field = 0; return ErrorCode::kNotFinite; }
+  if (!is_finite(m.y)) { field = 1; return ErrorCode::kNotFinite; }
+  return ErrorCode::kOk;
+}
+
+// idle -> running: reset the PIDs, reseed the noise, start the deadman.
+struct Start {
+  static constexpr uint8_t kId = 0x05;
+  static constexpr uint8_t kSize = 0;  // [bytes] payload
+};
+inline void encode(const Start&, uint8_t*) {}
+inline void decode(const uint8_t*, Start&) {}
+// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
+inline ErrorCode validate(const Start& /*m*/, uint8_t& /*field*/) {
+  return ErrorCode::kOk;
+}
+
+// Any state -> idle: level the surface. Also how a fault or an emergency stop is cleared.
+struct Stop {
+  static constexpr uint8_t kId = 0x06;
+  static constexpr uint8_t kSize = 0;  // [bytes] payload
+};
+inline void encode(const Stop&, uint8_t*) {}
+inline void decode(const uint8_t*, Stop&) {}
+// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
+inline ErrorCode validate(const Stop& /*m*/, uint8_t& /*field*/) {
+  return ErrorCode::kOk;
+}
+
+// Any state -> estop: actuator power cut at once; latched until stop.
+struct EmergencyStop {
+  static constexpr uint8_t kId = 0x07;
+  static constexpr uint8_t kSize = 0;  // [bytes] payload
+};
+inline void encode(const EmergencyStop&, uint8_t*) {}
+inline void decode(const uint8_t*, EmergencyStop&) {}
+// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
+inline ErrorCode validate(const EmergencyStop& /*m*/, uint8_t& /*field*/) {
+  return ErrorCode::kOk;
+}
+
+// Move one actuator to a position, for calibration. Only in idle; stop or start ends the jog.
+struct Jog {
+  static constexpr uint8_t kId = 0x08;
+  static constexpr uint8_t kSize = 5;  // [bytes] payload
+  uint8_t actuator;  // Actuator index (PROTOCOL.md, geometry).
+  float position;  // [m] Command, + lowers the corner; within the actuator range.
+};
+inline void encode(const Jog& m, uint8_t* out) {
+  put_u8(out + 0, m.actuator);
+  put_f32(out + 1, m.position);
+}
+inline void decode(const uint8_t* in, Jog& m) {
+  m.actuator = get_u8(in + 0);
+  m.position = get_f32(in + 1);
+}
+// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
+inline ErrorCode validate(const Jog& m, uint8_t& field) {
+  if ((m.actuator > 3)) { field = 0; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.position)) { field = 1; return ErrorCode::kNotFinite; }
+  return ErrorCode::kOk;
+}
+
+// Simulated clock only: set the firmware's time; it must not go backwards. Real boards answer unsupported.
+struct SimClock {
+  static constexpr uint8_t kId = 0x09;
+  static constexpr uint8_t kSize = 4;  // [bytes] payload
+  uint32_t now;  // [us] New time of the firmware clock.
+};
+inline void encode(const SimClock& m, uint8_t* out) {
+  put_u32(out + 0, m.now);
+}
+inline void decode(const uint8_t* in, SimClock& m) {
+  m.now = get_u32(in + 0);
+}
+// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
+inline ErrorCode validate(const SimClock& /*m*/, uint8_t& /*field*/) {
+  return ErrorCode::kOk;
+}
+
+// One camera measurement. Answered by telemetry (or a nack); one controller step when running.
+struct ObjectPosition {
+  static constexpr uint8_t kId = 0x10;
+  static constexpr uint8_t kSize = 15;  // [bytes] payload
+  uint16_t frame;  // Camera frame counter, +1 per frame (wraps).
+  uint32_t capture_time;  // [us] When the frame was captured, host clock; the controller's dt is the difference of these.
+  float x;  // [m] Object x in the fabric frame.
+  float y;  // [m] Object y in the fabric frame.
+  uint8_t flags;  // not_visible: the camera lost the object; x and y are ignored. (flags position_flags)
+};
+inline void encode(const ObjectPosition& m, uint8_t* out) {
+  put_u16(out + 0, m.frame);
+  put_u32(out + 2, m.capture_time);
+  put_f32(out + 6, m.x);
+  put_f32(out + 10, m.y);
+  put_u8(out + 14, m.flags);
+}
+inline void decode(const uint8_t* in, ObjectPosition& m) {
+  m.frame = get_u16(in + 0);
+  m.capture_time = get_u32(in + 2);
+  m.x = get_f32(in + 6);
+  m.y = get_f32(in + 10);
+  m.flags = get_u8(in + 14);
+}
+// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
+inline ErrorCode validate(const ObjectPosition& m, uint8_t& field) {
+  if (!is_finite(m.x)) { field = 2; return ErrorCode::kNotFinite; }
+  if (!is_finite(m.y)) { field = 3; return ErrorCode::kNotFinite; }
+  return ErrorCode::kOk;
+}
+
+// Answer to identify.
+struct IdentifyReply {
+  static constexpr uint8_t kId = 0x81;
+  static constexpr uint8_t kSize = 11;  // [bytes] payload
+  uint16_t protocol_version;  // [protocol] version of the firmware's schema.
+  uint8_t firmware_major;  // Firmware version, major.
+  uint8_t firmware_minor;  // Firmware version, minor.
+  uint8_t firmware_patch;  // Firmware version, patch.
+  uint32_t schema_hash;  // CRC-32 of the canonical schema; the host refuses a mismatch.
+  uint8_t max_wire;  // [bytes] Largest frame the firmware accepts, delimiter included.
+  uint8_t clock;  // Wall or simulated clock. (enum clock)
+};
+inline void encode(const IdentifyReply& m, uint8_t* out) {
+  put_u16(out + 0, m.protocol_version);
+  put_u8(out + 2, m.firmware_major);
+  put_u8(out + 3, m.firmware_minor);
+  put_u8(out + 4, m.firmware_patch);
+  put_u32(out + 5, m.schema_hash);
+  put_u8(out + 9, m.max_wire);
+  put_u8(out + 10, m.clock);
+}
+inline void decode(const uint8_t* in, IdentifyReply& m) {
+  m.protocol_version = get_u16(in + 0);
+  m.firmware_major = get_u8(in + 2);
+  m.firmware_minor = get_u8(in + 3);
+  m.firmware_patch = get_u8(in + 4);
+  m.schema_hash = get_u32(in + 5);
+  m.max_wire = get_u8(in + 9);
+  m.clock = get_u8(in + 10);
+}
+
+// The command with this id and seq was applied (or was a retransmission of one that was).
+struct Ack {
+  static constexpr uint8_t kId = 0x82;
+  static constexpr uint8_t kSize = 2;  // [bytes] payload
+  uint8_t ref_id;  // Message id of the command.
+  uint8_t ref_seq;  // Sequence number of the command.
+};
+inline void encode(const Ack& m, uint8_t* out) {
+  put_u8(out + 0, m.ref_id);
+  put_u8(out + 1, m.ref_seq);
+}
+inline void decode(const uint8_t* in, Ack& m) {
+  m.ref_id = get_u8(in + 0);
+  m.ref_seq = get_u8(in + 1);
+}
+
+// The command with this id and seq was refused and changed nothing.
+struct Nack {
+  static constexpr uint8_t kId = 0x83;
+  static constexpr uint8_t kSize = 4;  // [bytes] payload
+  uint8_t ref_id;  // Message id of the command.
+  uint8_t ref_seq;  // Sequence number of the command.
+  uint8_t code;  // Error code (errors above).
+  uint8_t field;  // Index of the offending field in the command, 255 if none.
+};
+inline void encode(const Nack& m, uint8_t* out) {
+  put_u8(out + 0, m.ref_id);
+  put_u8(out + 1, m.ref_seq);
+  put_u8(out + 2, m.code);
+  put_u8(out + 3, m.field);
+}
+inline void decode(const uint8_t* in, Nack& m) {
+  m.ref_id = get_u8(in + 0);
+  m.ref_seq = get_u8(in + 1);
+  m.code = get_u8(in + 2);
+  m.field = get_u8(in + 3);
+}
+
+// Firmware state; after every accepted object_position and every telemetry_period.
+struct Telemetry {
+  static constexpr uint8_t kId = 0x84;
+  static constexpr uint8_t kSize = 35;  // [bytes] payload
+  uint32_t time;  // [ms] Firmware clock.
+  uint8_t state;  // Supervisor state. (enum state)
+  uint16_t faults;  // Latched fault flags. (flags faults)
+  uint16_t position_frame;  // Frame counter of the last accepted object_position.
+  uint16_t position_age;  // [ms] Time since the last valid position (65535: none, or longer).
+  int16_t tilt_zx;  // [deg] theta_zx after saturation (Euclidean: theta resolved along x). (wire = value / 0.01)
+  int16_t tilt_zy;  // [deg] theta_zy after saturation (Euclidean: theta resolved along y). (wire = value / 0.01)
+  int16_t command[4];  // [m] Actuator commands a_i, + lowers the corner. (wire = value / 1e-05)
+  int16_t measured[4];  // [m] Measured actuator positions, same convention. (wire = value / 1e-05)
+  uint16_t crc_errors;  // Frames dropped for a bad CRC since boot (wraps).
+  uint16_t frame_errors;  // Frames dropped for bad COBS, oversize or truncation since boot (wraps).
+  static constexpr float kTiltZxScale = 0.01f;  // [deg] per wire unit
+  static constexpr float kTiltZyScale = 0.01f;  // [deg] per wire unit
+  static constexpr float kCommandScale = 1e-05f;  // [m] per wire unit
+  static constexpr float kMeasuredScale = 1e-05f;  // [m] per wire unit
+};
+inline void encode(const Telemetry& m, uint8_t* out) {
+  put_u32(out + 0, m.time);
+  put_u8(out + 4, m.state);
+  put_u16(out + 5, m.faults);
+  put_u16(out + 7, m.position_frame);
+  put_u16(out + 9, m.position_age);
+  put_i16(out + 11, m.tilt_zx);
+  put_i16(out + 13, m.tilt_zy);
+  put_i16(out + 15, m.command[0]);
+  put_i16(out + 17, m.command[1]);
+  put_i16(out + 19, m.command[2]);
+  put_i16(out + 21, m.command[3]);
+  put_i16(out + 23, m.measured[0]);
+  put_i16(out + 25, m.measured[1]);
+  put_i16(out + 27, m.measured[2]);
+  put_i16(out + 29, m.measured[3]);
+  put_u16(out + 31, m.crc_errors);
+  put_u16(out + 33, m.frame_errors);
+}
+inline void decode(const uint8_t* in, Telemetry& m) {
+  m.time = get_u32(in + 0);
+  m.state = get_u8(in + 4);
+  m.faults = get_u16(in + 5);
+  m.position_frame = get_u16(in + 7);
+  m.position_age = get_u16(in + 9);
+  m.tilt_zx = get_i16(in + 11);
+  m.tilt_zy = get_i16(in + 13);
+  m.command[0] = get_i16(in + 15);
+  m.command[1] = get_i16(in + 17);
+  m.command[2] = get_i16(in + 19);
+  m.command[3] = get_i16(in + 21);
+  m.measured[0] = get_i16(in + 23);
+  m.measured[1] = get_i16(in + 25);
+  m.measured[2] = get_i16(in + 27);
+  m.measured[3] = get_i16(in + 29);
+  m.crc_errors = get_u16(in + 31);
+  m.frame_errors = get_u16(in + 33);
+}
+
+// Sent once when the firmware starts, so the host notices a reset.
+struct Boot {
+  static constexpr uint8_t kId = 0x85;
+  static constexpr uint8_t kSize = 1;  // [bytes] payload
+  uint8_t reset_cause;  // Why it started. (enum reset_cause)
+};
+inline void encode(const Boot& m, uint8_t* out) {
+  put_u8(out + 0, m.reset_cause);
+}
+inline void decode(const uint8_t* in, Boot& m) {
+  m.reset_cause = get_u8(in + 0);
+}
+
+// Payload size [bytes] of a message id travelling host -> MCU, or -1 if the MCU handles no such id.
+inline int8_t host_to_mcu_size(uint8_t id) {
+  switch (id) {
+    case Identify::kId: return Identify::kSize;
+    case Configure::kId: return Configure::kSize;
+    case ConfigurePid::kId: return ConfigurePid::kSize;
+    case SetTarget::kId: return SetTarget::kSize;
+    case Start::kId: return Start::kSize;
+    case Stop::kId: return Stop::kSize;
+    case EmergencyStop::kId: return EmergencyStop::kSize;
+    case Jog::kId: return Jog::kSize;
+    case SimClock::kId: return SimClock::kSize;
+    case ObjectPosition::kId: return ObjectPosition::kSize;
+    default: return -1;
+  }
+}
+
+}  // namespace proto
+}  // namespace mr

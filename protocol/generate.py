@@ -1,0 +1,429 @@
+"""Generate the C++ and Python protocol code from schema.toml (and the C++ test vectors from vectors.json).
+
+Usage:  python protocol/generate.py           write the generated files
+        python protocol/generate.py --check   exit 1 if any generated file is stale (CI runs this)
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import tomllib
+import zlib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+SCHEMA = ROOT / "protocol" / "schema.toml"
+VECTORS = ROOT / "protocol" / "vectors.json"
+CPP_OUT = ROOT / "firmware" / "lib" / "core" / "protocol_gen.h"
+PY_OUT = ROOT / "protocol" / "messages.py"
+CPP_VECTORS_OUT = ROOT / "firmware" / "tests" / "vectors_gen.h"
+
+# wire type -> (size [bytes], C++ type, struct format char)
+TYPES = {
+    "u8": (1, "uint8_t", "B"),
+    "u16": (2, "uint16_t", "H"),
+    "u32": (4, "uint32_t", "I"),
+    "i16": (2, "int16_t", "h"),
+    "f32": (4, "float", "f"),
+}
+HEADER = "Generated from protocol/schema.toml by protocol/generate.py; do not edit."
+
+
+def load_schema(path: Path = SCHEMA) -> dict:
+    with open(path, "rb") as f:
+        return tomllib.load(f)
+
+
+def canonical(schema: dict) -> bytes:
+    """The schema without its prose: what two ends must agree on byte for byte."""
+    def strip(obj):
+        if isinstance(obj, dict):
+            return {k: strip(v) for k, v in obj.items() if k not in ("doc", "unit", "reply", "default")}
+        if isinstance(obj, list):
+            return [strip(v) for v in obj]
+        return obj
+    return json.dumps(strip(schema), sort_keys=True, separators=(",", ":")).encode()
+
+
+def schema_hash(schema: dict) -> int:
+    """CRC-32 (zlib) of the canonical schema."""
+    return zlib.crc32(canonical(schema))
+
+
+def payload_size(msg: dict) -> int:
+    return sum(TYPES[f["type"]][0] * f.get("count", 1) for f in msg["fields"])
+
+
+def camel(name: str) -> str:
+    return "".join(p.capitalize() for p in name.split("_"))
+
+
+def f32_literal(value: float) -> str:
+    if math.isnan(value):
+        return "(0.0f / 0.0f)"
+    if math.isinf(value):
+        return "(1.0f / 0.0f)" if value > 0 else "(-1.0f / 0.0f)"
+    return f"{float(value)!r}f"
+
+
+def enum_default(schema: dict, field: dict) -> int:
+    value = field.get("default", 0)
+    if isinstance(value, str):
+        return schema["enums"][field["enum"]]["values"][value]
+    return value
+
+
+def field_comment(field: dict) -> str:
+    unit = f"[{field['unit']}] " if "unit" in field else ""
+    extra = ""
+    if "scale" in field:
+        extra += f" (wire = value / {field['scale']!r})"
+    if "enum" in field:
+        extra += f" (enum {field['enum']})"
+    if "flags" in field:
+        extra += f" (flags {field['flags']})"
+    return f"{unit}{field['doc']}{extra}"
+
+
+# ------------------------------------------------------------------------------------------------ C++
+
+def cpp_scalar_put(field: dict, expr: str, offset: str) -> str:
+    return f"put_{field['type']}(out + {offset}, {expr});"
+
+
+def cpp_scalar_get(field: dict, expr: str, offset: str) -> str:
+    return f"{expr} = get_{field['type']}(in + {offset});"
+
+
+def cpp_message(schema: dict, msg: dict) -> list[str]:
+    name = camel(msg["name"])
+    lines = [f"// {msg['doc']}", f"struct {name} {{",
+             f"  static constexpr uint8_t kId = 0x{msg['id']:02X};",
+             f"  static constexpr uint8_t kSize = {payload_size(msg)};  // [bytes] payload"]
+    for field in msg["fields"]:
+        ctype = TYPES[field["type"]][1]
+        dim = f"[{field['count']}]" if "count" in field else ""
+        lines.append(f"  {ctype} {field['name']}{dim};  // {field_comment(field)}")
+    for field in msg["fields"]:
+        if "scale" in field:
+            lines.append(f"  static constexpr float k{camel(field['name'])}Scale = {f32_literal(field['scale'])};"
+                         f"  // [{field['unit']}] per wire unit")
+    lines.append("};")
+
+    enc, dec = [], []
+    offset = 0
+    for field in msg["fields"]:
+        size = TYPES[field["type"]][0]
+        if "count" in field:
+            for i in range(field["count"]):
+                enc.append("  " + cpp_scalar_put(field, f"m.{field['name']}[{i}]", str(offset)))
+                dec.append("  " + cpp_scalar_get(field, f"m.{field['name']}[{i}]", str(offset)))
+                offset += size
+        else:
+            enc.append("  " + cpp_scalar_put(field, f"m.{field['name']}", str(offset)))
+            dec.append("  " + cpp_scalar_get(field, f"m.{field['name']}", str(offset)))
+            offset += size
+    if msg["fields"]:
+        lines.append(f"inline void encode(const {name}& m, uint8_t* out) {{")
+        lines += enc
+        lines.append("}")
+        lines.append(f"inline void decode(const uint8_t* in, {name}& m) {{")
+        lines += dec
+        lines.append("}")
+    else:
+        lines.append(f"inline void encode(const {name}&, uint8_t*) {{}}")
+        lines.append(f"inline void decode(const uint8_t*, {name}&) {{}}")
+
+    if msg["direction"] == "host_to_mcu":
+        checks = []
+        for index, field in enumerate(msg["fields"]):
+            ref = f"m.{field['name']}"
+            if field["type"] == "f32":
+                checks.append(f"  if (!is_finite({ref})) {{ field = {index}; return ErrorCode::kNotFinite; }}")
+            conds = []
+            if "enum" in field:
+                values = schema["enums"][field["enum"]]["values"].values()
+                conds.append(" && ".join(f"{ref} != {v}" for v in sorted(values)))
+            fmt = f32_literal if field["type"] == "f32" else (lambda v: str(int(v)))
+            if "min" in field and not (field["type"] != "f32" and field["min"] == 0):
+                conds.append(f"{ref} < {fmt(field['min'])}")
+            if "max" in field:
+                conds.append(f"{ref} > {fmt(field['max'])}")
+            if conds:
+                cond = " || ".join(f"({c})" for c in conds)
+                checks.append(f"  if ({cond}) {{ field = {index}; return ErrorCode::kOutOfRange; }}")
+        lines.append(f"// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.")
+        sig_m = " m" if checks else " /*m*/"
+        sig_f = " field" if checks else " /*field*/"
+        lines.append(f"inline ErrorCode validate(const {name}&{sig_m}, uint8_t&{sig_f}) {{")
+        lines += checks
+        lines.append("  return ErrorCode::kOk;")
+        lines.append("}")
+
+    if any("default" in f for f in msg["fields"]):
+        lines.append(f"// Boot values from the schema.")
+        lines.append(f"inline void set_defaults({name}& m) {{")
+        for field in msg["fields"]:
+            if "default" not in field:
+                continue
+            if field["type"] == "f32":
+                lines.append(f"  m.{field['name']} = {f32_literal(field['default'])};")
+            else:
+                lines.append(f"  m.{field['name']} = {enum_default(schema, field)};")
+        lines.append("}")
+    return lines
+
+
+def render_cpp(schema: dict) -> str:
+    proto = schema["protocol"]
+    out = [f"// {HEADER}", "#pragma once", "",
+           '#include <stdint.h>  // fixed-width wire types', "",
+           '#include "wire.h"  // put_*/get_* little-endian helpers, is_finite', "",
+           "namespace mr {", "namespace proto {", "",
+           f"constexpr uint16_t kProtocolVersion = {proto['version']};",
+           f"constexpr uint32_t kSchemaHash = 0x{schema_hash(schema):08X}u;",
+           f"constexpr uint8_t kMaxPacket = {proto['max_packet']};  // [bytes] id + seq + payload + CRC",
+           f"constexpr uint8_t kMaxWire = {proto['max_wire']};  // [bytes] COBS packet + delimiter",
+           "constexpr uint8_t kNoField = 255;  // nack.field when no single field is at fault", "",
+           "enum class ErrorCode : uint8_t {", "  kOk = 0,"]
+    for err in schema["errors"]:
+        out.append(f"  k{camel(err['name'])} = {err['code']},  // {err['doc']}")
+    out.append("};")
+    out.append("")
+    for name, enum in schema["enums"].items():
+        out.append(f"// {enum['doc']}")
+        out.append(f"enum class {camel(name)} : uint8_t {{")
+        for vname, value in enum["values"].items():
+            out.append(f"  k{camel(vname)} = {value},")
+        out.append("};")
+        out.append("")
+    for name, flags in schema["flags"].items():
+        out.append(f"// {flags['doc']}")
+        out.append(f"namespace {name} {{")
+        for vname, bit in flags["values"].items():
+            out.append(f"constexpr uint16_t k{camel(vname)} = 1u << {bit};")
+        out.append(f"}}  // namespace {name}")
+        out.append("")
+    out.append("// Boot gains of each PID, indexed by Axis: {kp [deg/m], ki [deg/(m s)], kd [deg s/m], integral_limit [deg]}.")
+    out.append("struct PidDefaults { float kp, ki, kd, integral_limit; };")
+    out.append("constexpr PidDefaults kPidDefaults[] = {")
+    for axis, value in sorted(schema["enums"]["axis"]["values"].items(), key=lambda kv: kv[1]):
+        g = schema["pid_defaults"][axis]
+        out.append(f"    {{{f32_literal(g['kp'])}, {f32_literal(g['ki'])}, {f32_literal(g['kd'])}, "
+                   f"{f32_literal(g['integral_limit'])}}},  // {axis}")
+    out.append("};")
+    out.append("")
+    for msg in schema["messages"]:
+        out += cpp_message(schema, msg)
+        out.append("")
+    out.append("// Payload size [bytes] of a message id travelling host -> MCU, or -1 if the MCU handles no such id.")
+    out.append("inline int8_t host_to_mcu_size(uint8_t id) {")
+    out.append("  switch (id) {")
+    for msg in schema["messages"]:
+        if msg["direction"] == "host_to_mcu":
+            out.append(f"    case {camel(msg['name'])}::kId: return {camel(msg['name'])}::kSize;")
+    out.append("    default: return -1;")
+    out.append("  }")
+    out.append("}")
+    out += ["", "}  // namespace proto", "}  // namespace mr", ""]
+    return "\n".join(out)
+
+
+# --------------------------------------------------------------------------------------------- Python
+
+def py_default(schema: dict, field: dict) -> str:
+    if "enum" in field:
+        enum = schema["enums"][field["enum"]]
+        value = enum_default(schema, field)
+        member = next(k for k, v in enum["values"].items() if v == value) if value in enum["values"].values() else None
+        return f"{camel(field['enum'])}.{member.upper()}" if member else str(value)
+    if "flags" in field:
+        return f"{camel(field['flags'])}(0)"
+    if "count" in field:
+        zero = "0.0" if field["type"] == "f32" or "scale" in field else "0"
+        return "(" + ", ".join([zero] * field["count"]) + ")"
+    if "default" in field:
+        return repr(float(field["default"])) if field["type"] == "f32" else str(int(field["default"]))
+    return "0.0" if field["type"] == "f32" or "scale" in field else "0"
+
+
+def py_annotation(field: dict) -> str:
+    base = "float" if field["type"] == "f32" or "scale" in field else "int"
+    if "enum" in field:
+        base = camel(field["enum"])
+    if "flags" in field:
+        base = camel(field["flags"])
+    return f"tuple[{base}, ...]" if "count" in field else base
+
+
+def render_py(schema: dict) -> str:
+    proto = schema["protocol"]
+    out = [f'"""Protocol messages, enums and error codes. {HEADER}"""', "",
+           "from __future__ import annotations", "",
+           "import enum", "from dataclasses import dataclass", "from typing import ClassVar", "",
+           "from .codec import FieldSpec, Message", "",
+           f"PROTOCOL_VERSION = {proto['version']}",
+           f"SCHEMA_HASH = 0x{schema_hash(schema):08X}",
+           f"MAX_PACKET = {proto['max_packet']}  # [bytes] id + seq + payload + CRC",
+           f"MAX_WIRE = {proto['max_wire']}  # [bytes] COBS packet + delimiter",
+           "NO_FIELD = 255", "", "",
+           "class ErrorCode(enum.IntEnum):",
+           '    """nack.code values."""', "", "    OK = 0"]
+    for err in schema["errors"]:
+        out.append(f"    {err['name'].upper()} = {err['code']}")
+    out += ["", "", "ERROR_DOCS = {"]
+    for err in schema["errors"]:
+        out.append(f"    ErrorCode.{err['name'].upper()}: {err['doc']!r},")
+    out.append("}")
+    for name, enum in schema["enums"].items():
+        out += ["", "", f"class {camel(name)}(enum.IntEnum):", f'    """{enum["doc"]}"""', ""]
+        for vname, value in enum["values"].items():
+            out.append(f"    {vname.upper()} = {value}")
+    for name, flags in schema["flags"].items():
+        out += ["", "", f"class {camel(name)}(enum.IntFlag):", f'    """{flags["doc"]}"""', ""]
+        for vname, bit in flags["values"].items():
+            out.append(f"    {vname.upper()} = 1 << {bit}")
+    out += ["", "", "# Boot gains of each PID: kp [deg/m], ki [deg/(m s)], kd [deg s/m], integral_limit [deg].",
+            "PID_DEFAULTS = {"]
+    for axis in schema["enums"]["axis"]["values"]:
+        g = schema["pid_defaults"][axis]
+        out.append(f"    Axis.{axis.upper()}: {{'kp': {g['kp']!r}, 'ki': {g['ki']!r}, 'kd': {g['kd']!r}, "
+                   f"'integral_limit': {g['integral_limit']!r}}},")
+    out.append("}")
+    names = []
+    for msg in schema["messages"]:
+        cls = camel(msg["name"])
+        names.append(cls)
+        out += ["", "", "@dataclass(frozen=True)", f"class {cls}(Message):", f'    """{msg["doc"]}"""', "",
+                f"    ID: ClassVar[int] = 0x{msg['id']:02X}",
+                f"    NAME: ClassVar[str] = {msg['name']!r}",
+                f"    DIRECTION: ClassVar[str] = {msg['direction']!r}",
+                f"    REPLY: ClassVar[str | None] = {msg.get('reply')!r}",
+                f"    SIZE: ClassVar[int] = {payload_size(msg)}  # [bytes] payload",
+                "    FIELDS: ClassVar[tuple[FieldSpec, ...]] = ("]
+        for field in msg["fields"]:
+            kind = camel(field["enum"]) if "enum" in field else camel(field["flags"]) if "flags" in field else "None"
+            out.append(f"        FieldSpec({field['name']!r}, {TYPES[field['type']][2]!r}, {field.get('count', 1)}, "
+                       f"{field.get('scale')!r}, {kind}, {field.get('min')!r}, {field.get('max')!r}, "
+                       f"{field.get('unit', '')!r}),")
+        out.append("    )")
+        if msg["fields"]:
+            out.append("")
+        for field in msg["fields"]:
+            out.append(f"    {field['name']}: {py_annotation(field)} = {py_default(schema, field)}"
+                       f"  # {field_comment(field)}")
+    out += ["", "", "MESSAGES: dict[int, type[Message]] = {m.ID: m for m in (" + ", ".join(names) + ")}", ""]
+    return "\n".join(out)
+
+
+# ------------------------------------------------------------------------------------- C++ test vectors
+
+def cpp_field_checks(schema: dict, msg: dict, fields: dict) -> list[str]:
+    checks = []
+    for field in msg["fields"]:
+        values = fields[field["name"]]
+        values = values if "count" in field else [values]
+        for i, value in enumerate(values):
+            ref = f"m.{field['name']}" + (f"[{i}]" if "count" in field else "")
+            if "enum" in field and isinstance(value, str):
+                value = schema["enums"][field["enum"]]["values"][value]
+            if field["type"] == "f32":
+                value = float(value)
+                if math.isnan(value):
+                    checks.append(f"{ref} != {ref}")
+                else:
+                    checks.append(f"{ref} == {f32_literal(value)}")
+            elif "scale" in field:
+                checks.append(f"{ref} == {round(value / field['scale'])}")
+            else:
+                checks.append(f"{ref} == {int(value)}u" if int(value) >= 0 else f"{ref} == {int(value)}")
+    return checks
+
+
+def render_cpp_vectors(schema: dict, vectors: list[dict]) -> str:
+    by_name = {m["name"]: m for m in schema["messages"]}
+    out = [f"// Test vectors from protocol/vectors.json. {HEADER}", "#pragma once", "",
+           "#include <stdint.h>  // uint8_t", "",
+           '#include "protocol_gen.h"  // message structs and decode()', "",
+           "namespace vectors {", "",
+           "enum class Yield : uint8_t { kFrame, kCrcError, kFrameError };", "",
+           "struct Expected {",
+           "  Yield yield;",
+           "  uint8_t id, seq;",
+           "  const uint8_t* payload;",
+           "  uint8_t payload_len;",
+           "  bool (*fields_ok)(const uint8_t* payload);  // null when the vector names no fields",
+           "};", "",
+           "struct Vector {",
+           "  const char* name;",
+           "  const uint8_t* wire;",
+           "  uint16_t wire_len;",
+           "  const Expected* expected;",
+           "  uint8_t expected_len;",
+           "};", ""]
+    table = []
+    for vi, vec in enumerate(vectors):
+        wire = bytes.fromhex(vec["wire"])
+        out.append(f"// {vec['name']}")
+        out.append(f"const uint8_t wire_{vi}[] = {{{', '.join(f'0x{b:02X}' for b in wire) or '0'}}};")
+        exp_rows = []
+        for yi, y in enumerate(vec["yields"]):
+            if y["yield"] == "frame":
+                payload = bytes.fromhex(y["payload"])
+                out.append(f"const uint8_t payload_{vi}_{yi}[] = {{{', '.join(f'0x{b:02X}' for b in payload) or '0'}}};")
+                check = "nullptr"
+                if "fields" in y:
+                    msg = by_name[y["message"]]
+                    checks = cpp_field_checks(schema, msg, y["fields"])
+                    out.append(f"inline bool fields_ok_{vi}_{yi}(const uint8_t* p) {{")
+                    out.append(f"  mr::proto::{camel(msg['name'])} m;")
+                    out.append("  mr::proto::decode(p, m);")
+                    out.append("  return " + (" &&\n         ".join(checks) if checks else "true") + ";")
+                    out.append("}")
+                    check = f"fields_ok_{vi}_{yi}"
+                exp_rows.append(f"{{Yield::kFrame, 0x{y['id']:02X}, {y['seq']}, payload_{vi}_{yi}, {len(payload)}, {check}}}")
+            else:
+                kind = {"crc_error": "kCrcError", "frame_error": "kFrameError"}[y["yield"]]
+                exp_rows.append(f"{{Yield::{kind}, 0, 0, nullptr, 0, nullptr}}")
+        if exp_rows:
+            out.append(f"const Expected expected_{vi}[] = {{{', '.join(exp_rows)}}};")
+        table.append(f"    {{{json.dumps(vec['name'])}, wire_{vi}, {len(wire)}, "
+                     f"{f'expected_{vi}' if exp_rows else 'nullptr'}, {len(exp_rows)}}},")
+        out.append("")
+    out.append("const Vector kAll[] = {")
+    out += table
+    out.append("};")
+    out += ["", "}  // namespace vectors", ""]
+    return "\n".join(out)
+
+
+def outputs() -> dict[Path, str]:
+    schema = load_schema()
+    files = {CPP_OUT: render_cpp(schema), PY_OUT: render_py(schema)}
+    if VECTORS.exists():
+        files[CPP_VECTORS_OUT] = render_cpp_vectors(schema, json.loads(VECTORS.read_text())["vectors"])
+    return files
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--check", action="store_true", help="fail if a generated file differs from the schema")
+    args = parser.parse_args(argv)
+    stale = []
+    for path, text in outputs().items():
+        if args.check:
+            if not path.exists() or path.read_text() != text:
+                stale.append(path.relative_to(ROOT))
+        else:
+            path.write_text(text)
+    if stale:
+        print("stale generated files (run: python protocol/generate.py): " + ", ".join(map(str, stale)),
+              file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,411 @@
+"""Protocol messages, enums and error codes. Generated from protocol/schema.toml by protocol/generate.py; do not edit."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+from typing import ClassVar
+
+from .codec import FieldSpec, Message
+
+PROTOCOL_VERSION = 1
+SCHEMA_HASH = 0x163C8F28
+MAX_PACKET = 44  # [bytes] id + seq + payload + CRC
+MAX_WIRE = 46  # [bytes] COBS packet + delimiter
+NO_FIELD = 255
+
+
+class ErrorCode(enum.IntEnum):
+    """nack.code values."""
+
+    OK = 0
+    UNKNOWN_MESSAGE = 1
+    BAD_LENGTH = 2
+    NOT_FINITE = 3
+    OUT_OF_RANGE = 4
+    BAD_STATE = 5
+    NO_TARGET = 6
+    UNSUPPORTED = 7
+    STALE_POSITION = 8
+
+
+ERROR_DOCS = {
+    ErrorCode.UNKNOWN_MESSAGE: 'The message id is not one the firmware handles in this direction.',
+    ErrorCode.BAD_LENGTH: "The payload length differs from the schema's length for that message id.",
+    ErrorCode.NOT_FINITE: 'A float field is NaN or infinite (nack.field names it).',
+    ErrorCode.OUT_OF_RANGE: 'A field is outside its documented bounds, or an enum value is unknown (nack.field names it).',
+    ErrorCode.BAD_STATE: 'The command is not allowed in the current supervisor state (see PROTOCOL.md, state table).',
+    ErrorCode.NO_TARGET: 'start was sent before any set_target.',
+    ErrorCode.UNSUPPORTED: 'The command exists but this build cannot do it (sim_clock on a wall-clock or real board).',
+    ErrorCode.STALE_POSITION: 'object_position whose frame counter repeats the last one or whose capture time does not advance.',
+}
+
+
+class State(enum.IntEnum):
+    """Supervisor state."""
+
+    IDLE = 0
+    RUNNING = 1
+    REACHED = 2
+    FAULT = 3
+    ESTOP = 4
+
+
+class Controller(enum.IntEnum):
+    """Tilt controller: Manhattan (Algorithm 1, two PIDs) or Euclidean (Algorithm 2, one PID)."""
+
+    MANHATTAN = 0
+    EUCLIDEAN = 1
+
+
+class Axis(enum.IntEnum):
+    """Which PID configure_pid sets: x and y are Manhattan's, radial is Euclidean's."""
+
+    X = 0
+    Y = 1
+    RADIAL = 2
+
+
+class Clock(enum.IntEnum):
+    """Where the firmware's time comes from."""
+
+    WALL = 0
+    SIMULATED = 1
+
+
+class ResetCause(enum.IntEnum):
+    """Why the firmware (re)started, reported in boot."""
+
+    POWER_ON = 0
+    EXTERNAL = 1
+    BROWN_OUT = 2
+    WATCHDOG = 3
+    UNKNOWN = 4
+
+
+class PositionFlags(enum.IntFlag):
+    """object_position.flags bits."""
+
+    NOT_VISIBLE = 1 << 0
+
+
+class Faults(enum.IntFlag):
+    """telemetry.faults bits; latched until stop."""
+
+    POSITION_TIMEOUT = 1 << 0
+    ESTOP = 1 << 1
+
+
+# Boot gains of each PID: kp [deg/m], ki [deg/(m s)], kd [deg s/m], integral_limit [deg].
+PID_DEFAULTS = {
+    Axis.X: {'kp': 30.9, 'ki': 26.78, 'kd': 15.45, 'integral_limit': 26.565051},
+    Axis.Y: {'kp': 30.9, 'ki': 26.78, 'kd': 15.45, 'integral_limit': 26.565051},
+    Axis.RADIAL: {'kp': 86.72, 'ki': 27.91, 'kd': 10.19, 'integral_limit': 26.565051},
+}
+
+
+@dataclass(frozen=True)
+class Identify(Message):
+    """Handshake: ask for protocol version, firmware version and schema hash."""
+
+    ID: ClassVar[int] = 0x01
+    NAME: ClassVar[str] = 'identify'
+    DIRECTION: ClassVar[str] = 'host_to_mcu'
+    REPLY: ClassVar[str | None] = 'identify_reply'
+    SIZE: ClassVar[int] = 0  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+    )
+
+
+@dataclass(frozen=True)
+class Configure(Message):
+    """Controller-wide settings. Only in idle. Validated whole: any bad field refuses the lot and changes nothing."""
+
+    ID: ClassVar[int] = 0x02
+    NAME: ClassVar[str] = 'configure'
+    DIRECTION: ClassVar[str] = 'host_to_mcu'
+    REPLY: ClassVar[str | None] = 'ack'
+    SIZE: ClassVar[int] = 29  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('controller', 'B', 1, None, Controller, None, None, ''),
+        FieldSpec('module_x', 'f', 1, None, None, 0.1, 10.0, 'm'),
+        FieldSpec('module_y', 'f', 1, None, None, 0.1, 10.0, 'm'),
+        FieldSpec('tilt_limit', 'f', 1, None, None, 0.1, 89.0, 'deg'),
+        FieldSpec('tolerance', 'f', 1, None, None, 0.001, 0.5, 'm'),
+        FieldSpec('noise_amplitude', 'f', 1, None, None, 0.0, 0.25, 'm'),
+        FieldSpec('noise_seed', 'I', 1, None, None, None, None, ''),
+        FieldSpec('deadman', 'H', 1, None, None, 20, 60000, 'ms'),
+        FieldSpec('telemetry_period', 'H', 1, None, None, 0, 60000, 'ms'),
+    )
+
+    controller: Controller = Controller.MANHATTAN  # Manhattan or Euclidean. (enum controller)
+    module_x: float = 0.5  # [m] Module size m along x (actuators at x = +-m/2).
+    module_y: float = 0.5  # [m] Module size n along y (actuators at y = +-n/2).
+    tilt_limit: float = 26.565051  # [deg] Saturation of each tilt angle; at most atan(range / ((m + n) / 2)), which keeps every corner in range.
+    tolerance: float = 0.02  # [m] epsilon: the object counts as reached within this distance of the target.
+    noise_amplitude: float = 0.0  # [m] alpha: each command gets alpha * delta, delta ~ U(-1, 1), drawn every control step.
+    noise_seed: int = 1  # Seed of the noise PRNG (xorshift32; 0 is replaced by 1); reseeded at every start.
+    deadman: int = 500  # [ms] Longest time without a valid position while running before the surface levels and a position_timeout fault latches.
+    telemetry_period: int = 100  # [ms] Period of unsolicited telemetry; 0 = only in answer to object_position. Nonzero values below 5 ms are refused (the link cannot carry them).
+
+
+@dataclass(frozen=True)
+class ConfigurePid(Message):
+    """Gains of one PID. Only in idle. Output unit is degrees of tilt (see PROTOCOL.md, units)."""
+
+    ID: ClassVar[int] = 0x03
+    NAME: ClassVar[str] = 'configure_pid'
+    DIRECTION: ClassVar[str] = 'host_to_mcu'
+    REPLY: ClassVar[str | None] = 'ack'
+    SIZE: ClassVar[int] = 17  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('axis', 'B', 1, None, Axis, None, None, ''),
+        FieldSpec('kp', 'f', 1, None, None, 0.0, 10000.0, 'deg/m'),
+        FieldSpec('ki', 'f', 1, None, None, 0.0, 10000.0, 'deg/(m s)'),
+        FieldSpec('kd', 'f', 1, None, None, 0.0, 10000.0, 'deg s/m'),
+        FieldSpec('integral_limit', 'f', 1, None, None, 0.0, 90.0, 'deg'),
+    )
+
+    axis: Axis = Axis.X  # x, y (Manhattan) or radial (Euclidean). (enum axis)
+    kp: float = 0.0  # [deg/m] Proportional gain.
+    ki: float = 0.0  # [deg/(m s)] Integral gain.
+    kd: float = 0.0  # [deg s/m] Derivative gain (on measurement: no kick when the target changes).
+    integral_limit: float = 0.0  # [deg] Anti-windup bound on the integral term's contribution.
+
+
+@dataclass(frozen=True)
+class SetTarget(Message):
+    """Target position p_d in the fabric frame. Any state but estop; must lie inside the module (|x| <= m/2, |y| <= n/2)."""
+
+    ID: ClassVar[int] = 0x04
+    NAME: ClassVar[str] = 'set_target'
+    DIRECTION: ClassVar[str] = 'host_to_mcu'
+    REPLY: ClassVar[str | None] = 'ack'
+    SIZE: ClassVar[int] = 8  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('x', 'f', 1, None, None, None, None, 'm'),
+        FieldSpec('y', 'f', 1, None, None, None, None, 'm'),
+    )
+
+    x: float = 0.0  # [m] x_d.
+    y: float = 0.0  # [m] y_d.
+
+
+@dataclass(frozen=True)
+class Start(Message):
+    """idle -> running: reset the PIDs, reseed the noise, start the deadman."""
+
+    ID: ClassVar[int] = 0x05
+    NAME: ClassVar[str] = 'start'
+    DIRECTION: ClassVar[str] = 'host_to_mcu'
+    REPLY: ClassVar[str | None] = 'ack'
+    SIZE: ClassVar[int] = 0  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+    )
+
+
+@dataclass(frozen=True)
+class Stop(Message):
+    """Any state -> idle: level the surface. Also how a fault or an emergency stop is cleared."""
+
+    ID: ClassVar[int] = 0x06
+    NAME: ClassVar[str] = 'stop'
+    DIRECTION: ClassVar[str] = 'host_to_mcu'
+    REPLY: ClassVar[str | None] = 'ack'
+    SIZE: ClassVar[int] = 0  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+    )
+
+
+@dataclass(frozen=True)
+class EmergencyStop(Message):
+    """Any state -> estop: actuator power cut at once; latched until stop."""
+
+    ID: ClassVar[int] = 0x07
+    NAME: ClassVar[str] = 'emergency_stop'
+    DIRECTION: ClassVar[str] = 'host_to_mcu'
+    REPLY: ClassVar[str | None] = 'ack'
+    SIZE: ClassVar[int] = 0  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+    )
+
+
+@dataclass(frozen=True)
+class Jog(Message):
+    """Move one actuator to a position, for calibration. Only in idle; stop or start ends the jog."""
+
+    ID: ClassVar[int] = 0x08
+    NAME: ClassVar[str] = 'jog'
+    DIRECTION: ClassVar[str] = 'host_to_mcu'
+    REPLY: ClassVar[str | None] = 'ack'
+    SIZE: ClassVar[int] = 5  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('actuator', 'B', 1, None, None, 0, 3, ''),
+        FieldSpec('position', 'f', 1, None, None, None, None, 'm'),
+    )
+
+    actuator: int = 0  # Actuator index (PROTOCOL.md, geometry).
+    position: float = 0.0  # [m] Command, + lowers the corner; within the actuator range.
+
+
+@dataclass(frozen=True)
+class SimClock(Message):
+    """Simulated clock only: set the firmware's time; it must not go backwards. Real boards answer unsupported."""
+
+    ID: ClassVar[int] = 0x09
+    NAME: ClassVar[str] = 'sim_clock'
+    DIRECTION: ClassVar[str] = 'host_to_mcu'
+    REPLY: ClassVar[str | None] = 'ack'
+    SIZE: ClassVar[int] = 4  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('now', 'I', 1, None, None, None, None, 'us'),
+    )
+
+    now: int = 0  # [us] New time of the firmware clock.
+
+
+@dataclass(frozen=True)
+class ObjectPosition(Message):
+    """One camera measurement. Answered by telemetry (or a nack); one controller step when running."""
+
+    ID: ClassVar[int] = 0x10
+    NAME: ClassVar[str] = 'object_position'
+    DIRECTION: ClassVar[str] = 'host_to_mcu'
+    REPLY: ClassVar[str | None] = 'telemetry'
+    SIZE: ClassVar[int] = 15  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('frame', 'H', 1, None, None, None, None, ''),
+        FieldSpec('capture_time', 'I', 1, None, None, None, None, 'us'),
+        FieldSpec('x', 'f', 1, None, None, None, None, 'm'),
+        FieldSpec('y', 'f', 1, None, None, None, None, 'm'),
+        FieldSpec('flags', 'B', 1, None, PositionFlags, None, None, ''),
+    )
+
+    frame: int = 0  # Camera frame counter, +1 per frame (wraps).
+    capture_time: int = 0  # [us] When the frame was captured, host clock; the controller's dt is the difference of these.
+    x: float = 0.0  # [m] Object x in the fabric frame.
+    y: float = 0.0  # [m] Object y in the fabric frame.
+    flags: PositionFlags = PositionFlags(0)  # not_visible: the camera lost the object; x and y are ignored. (flags position_flags)
+
+
+@dataclass(frozen=True)
+class IdentifyReply(Message):
+    """Answer to identify."""
+
+    ID: ClassVar[int] = 0x81
+    NAME: ClassVar[str] = 'identify_reply'
+    DIRECTION: ClassVar[str] = 'mcu_to_host'
+    REPLY: ClassVar[str | None] = None
+    SIZE: ClassVar[int] = 11  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('protocol_version', 'H', 1, None, None, None, None, ''),
+        FieldSpec('firmware_major', 'B', 1, None, None, None, None, ''),
+        FieldSpec('firmware_minor', 'B', 1, None, None, None, None, ''),
+        FieldSpec('firmware_patch', 'B', 1, None, None, None, None, ''),
+        FieldSpec('schema_hash', 'I', 1, None, None, None, None, ''),
+        FieldSpec('max_wire', 'B', 1, None, None, None, None, 'bytes'),
+        FieldSpec('clock', 'B', 1, None, Clock, None, None, ''),
+    )
+
+    protocol_version: int = 0  # [protocol] version of the firmware's schema.
+    firmware_major: int = 0  # Firmware version, major.
+    firmware_minor: int = 0  # Firmware version, minor.
+    firmware_patch: int = 0  # Firmware version, patch.
+    schema_hash: int = 0  # CRC-32 of the canonical schema; the host refuses a mismatch.
+    max_wire: int = 0  # [bytes] Largest frame the firmware accepts, delimiter included.
+    clock: Clock = Clock.WALL  # Wall or simulated clock. (enum clock)
+
+
+@dataclass(frozen=True)
+class Ack(Message):
+    """The command with this id and seq was applied (or was a retransmission of one that was)."""
+
+    ID: ClassVar[int] = 0x82
+    NAME: ClassVar[str] = 'ack'
+    DIRECTION: ClassVar[str] = 'mcu_to_host'
+    REPLY: ClassVar[str | None] = None
+    SIZE: ClassVar[int] = 2  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('ref_id', 'B', 1, None, None, None, None, ''),
+        FieldSpec('ref_seq', 'B', 1, None, None, None, None, ''),
+    )
+
+    ref_id: int = 0  # Message id of the command.
+    ref_seq: int = 0  # Sequence number of the command.
+
+
+@dataclass(frozen=True)
+class Nack(Message):
+    """The command with this id and seq was refused and changed nothing."""
+
+    ID: ClassVar[int] = 0x83
+    NAME: ClassVar[str] = 'nack'
+    DIRECTION: ClassVar[str] = 'mcu_to_host'
+    REPLY: ClassVar[str | None] = None
+    SIZE: ClassVar[int] = 4  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('ref_id', 'B', 1, None, None, None, None, ''),
+        FieldSpec('ref_seq', 'B', 1, None, None, None, None, ''),
+        FieldSpec('code', 'B', 1, None, None, None, None, ''),
+        FieldSpec('field', 'B', 1, None, None, None, None, ''),
+    )
+
+    ref_id: int = 0  # Message id of the command.
+    ref_seq: int = 0  # Sequence number of the command.
+    code: int = 0  # Error code (errors above).
+    field: int = 0  # Index of the offending field in the command, 255 if none.
+
+
+@dataclass(frozen=True)
+class Telemetry(Message):
+    """Firmware state; after every accepted object_position and every telemetry_period."""
+
+    ID: ClassVar[int] = 0x84
+    NAME: ClassVar[str] = 'telemetry'
+    DIRECTION: ClassVar[str] = 'mcu_to_host'
+    REPLY: ClassVar[str | None] = None
+    SIZE: ClassVar[int] = 35  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('time', 'I', 1, None, None, None, None, 'ms'),
+        FieldSpec('state', 'B', 1, None, State, None, None, ''),
+        FieldSpec('faults', 'H', 1, None, Faults, None, None, ''),
+        FieldSpec('position_frame', 'H', 1, None, None, None, None, ''),
+        FieldSpec('position_age', 'H', 1, None, None, None, None, 'ms'),
+        FieldSpec('tilt_zx', 'h', 1, 0.01, None, None, None, 'deg'),
+        FieldSpec('tilt_zy', 'h', 1, 0.01, None, None, None, 'deg'),
+        FieldSpec('command', 'h', 4, 1e-05, None, None, None, 'm'),
+        FieldSpec('measured', 'h', 4, 1e-05, None, None, None, 'm'),
+        FieldSpec('crc_errors', 'H', 1, None, None, None, None, ''),
+        FieldSpec('frame_errors', 'H', 1, None, None, None, None, ''),
+    )
+
+    time: int = 0  # [ms] Firmware clock.
+    state: State = State.IDLE  # Supervisor state. (enum state)
+    faults: Faults = Faults(0)  # Latched fault flags. (flags faults)
+    position_frame: int = 0  # Frame counter of the last accepted object_position.
+    position_age: int = 0  # [ms] Time since the last valid position (65535: none, or longer).
+    tilt_zx: float = 0.0  # [deg] theta_zx after saturation (Euclidean: theta resolved along x). (wire = value / 0.01)
+    tilt_zy: float = 0.0  # [deg] theta_zy after saturation (Euclidean: theta resolved along y). (wire = value / 0.01)
+    command: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)  # [m] Actuator commands a_i, + lowers the corner. (wire = value / 1e-05)
+    measured: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)  # [m] Measured actuator positions, same convention. (wire = value / 1e-05)
+    crc_errors: int = 0  # Frames dropped for a bad CRC since boot (wraps).
+    frame_errors: int = 0  # Frames dropped for bad COBS, oversize or truncation since boot (wraps).
+
+
+@dataclass(frozen=True)
+class Boot(Message):
+    """Sent once when the firmware starts, so the host notices a reset."""
+
+    ID: ClassVar[int] = 0x85
+    NAME: ClassVar[str] = 'boot'
+    DIRECTION: ClassVar[str] = 'mcu_to_host'
+    REPLY: ClassVar[str | None] = None
+    SIZE: ClassVar[int] = 1  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('reset_cause', 'B', 1, None, ResetCause, None, None, ''),
+    )
+
+    reset_cause: ResetCause = ResetCause.POWER_ON  # Why it started. (enum reset_cause)
+
+
+MESSAGES: dict[int, type[Message]] = {m.ID: m for m in (Identify, Configure, ConfigurePid, SetTarget, Start, Stop, EmergencyStop, Jog, SimClock, ObjectPosition, IdentifyReply, Ack, Nack, Telemetry, Boot)}
