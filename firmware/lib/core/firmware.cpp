@@ -1,0 +1,174 @@
+// Frame dispatch, replies, duplicate suppression and telemetry.
+#include "firmware.h"
+
+#include "hal.h"         // now_us, serial_write, actuators_*, sim_clock_set
+#include "rig_config.h"  // firmware version
+
+namespace mr {
+
+namespace {
+
+using proto::ErrorCode;
+
+// Physical value -> scaled int16 wire value, rounded, saturated; NaN -> 0.
+int16_t to_wire_i16(float value, float scale) {
+  const float raw = value / scale;
+  if (!(raw == raw)) return 0;
+  if (raw >= 32767.0f) return 32767;
+  if (raw <= -32768.0f) return -32768;
+  return static_cast<int16_t>(raw >= 0.0f ? raw + 0.5f : raw - 0.5f);
+}
+
+template <typename Msg>
+Msg decoded(const uint8_t* payload) {
+  Msg msg;
+  proto::decode(payload, msg);
+  return msg;
+}
+
+}  // namespace
+
+void Firmware::boot(proto::ResetCause cause) {
+  apply_outputs();
+  proto::Boot msg{static_cast<uint8_t>(cause)};
+  uint8_t payload[proto::Boot::kSize];
+  proto::encode(msg, payload);
+  send(proto::Boot::kId, payload, sizeof payload);
+  last_telemetry_us_ = hal::now_us();
+}
+
+void Firmware::rx_byte(uint8_t byte) {
+  if (decoder_.push(byte) == FrameDecoder::Result::kFrame) dispatch();
+}
+
+void Firmware::poll() {
+  const uint32_t now = hal::now_us();
+  supervisor_.tick(now);
+  apply_outputs();
+  const uint32_t period_us = static_cast<uint32_t>(supervisor_.config().telemetry_period) * 1000u;
+  if (period_us != 0 && now - last_telemetry_us_ >= period_us) send_telemetry(now);
+}
+
+void Firmware::apply_outputs() {
+  hal::actuators_power(supervisor_.actuator_power());
+  hal::actuators_command(supervisor_.output().command);
+}
+
+void Firmware::dispatch() {
+  const uint8_t id = decoder_.id();
+  const uint8_t seq = decoder_.seq();
+  const int8_t size = proto::host_to_mcu_size(id);
+  if (size < 0) return send_reply(id, seq, ErrorCode::kUnknownMessage, proto::kNoField);
+  if (size != decoder_.payload_len()) return send_reply(id, seq, ErrorCode::kBadLength, proto::kNoField);
+
+  if (id == proto::Identify::kId) {
+    has_last_ = false;  // a (re)connected host: its sequence numbers start afresh
+    supervisor_.forget_positions();
+    return send_identify_reply();
+  }
+  if (id == proto::ObjectPosition::kId) {
+    const uint32_t now = hal::now_us();
+    uint8_t field = proto::kNoField;
+    const ErrorCode code = supervisor_.position(decoded<proto::ObjectPosition>(decoder_.payload()), now, field);
+    apply_outputs();
+    if (code != ErrorCode::kOk) return send_reply(id, seq, code, field);
+    return send_telemetry(now);
+  }
+  if (has_last_ && id == last_id_ && seq == last_seq_ && decoder_.crc() == last_crc_) {
+    return send_reply(id, seq, last_code_, last_field_);  // a retransmission: answer again, apply once
+  }
+  uint8_t field = proto::kNoField;
+  const ErrorCode code = handle_command(field);
+  apply_outputs();
+  has_last_ = true;
+  last_id_ = id;
+  last_seq_ = seq;
+  last_crc_ = decoder_.crc();
+  last_code_ = code;
+  last_field_ = field;
+  send_reply(id, seq, code, field);
+}
+
+ErrorCode Firmware::handle_command(uint8_t& field) {
+  const uint8_t* payload = decoder_.payload();
+  switch (decoder_.id()) {
+    case proto::Configure::kId:
+      return supervisor_.configure(decoded<proto::Configure>(payload), field);
+    case proto::ConfigurePid::kId:
+      return supervisor_.configure_pid(decoded<proto::ConfigurePid>(payload), field);
+    case proto::SetTarget::kId:
+      return supervisor_.set_target(decoded<proto::SetTarget>(payload), field);
+    case proto::Start::kId:
+      return supervisor_.start(hal::now_us());
+    case proto::Stop::kId:
+      supervisor_.stop();
+      return ErrorCode::kOk;
+    case proto::EmergencyStop::kId:
+      supervisor_.emergency_stop();
+      return ErrorCode::kOk;
+    case proto::Jog::kId:
+      return supervisor_.jog(decoded<proto::Jog>(payload), field);
+    case proto::SimClock::kId: {
+      const ErrorCode code = hal::sim_clock_set(decoded<proto::SimClock>(payload).now);
+      if (code == ErrorCode::kOk) poll();  // what is due at the new time happens before the ack
+      return code;
+    }
+    default:
+      return ErrorCode::kUnknownMessage;
+  }
+}
+
+void Firmware::send(uint8_t id, const uint8_t* payload, uint8_t len) {
+  uint8_t wire[proto::kMaxWire];
+  const uint8_t n = frame_encode(id, tx_seq_++, payload, len, wire);
+  hal::serial_write(wire, n);
+}
+
+void Firmware::send_reply(uint8_t ref_id, uint8_t ref_seq, ErrorCode code, uint8_t field) {
+  if (code == ErrorCode::kOk) {
+    const proto::Ack ack{ref_id, ref_seq};
+    uint8_t payload[proto::Ack::kSize];
+    proto::encode(ack, payload);
+    return send(proto::Ack::kId, payload, sizeof payload);
+  }
+  const proto::Nack nack{ref_id, ref_seq, static_cast<uint8_t>(code), field};
+  uint8_t payload[proto::Nack::kSize];
+  proto::encode(nack, payload);
+  send(proto::Nack::kId, payload, sizeof payload);
+}
+
+void Firmware::send_identify_reply() {
+  const proto::IdentifyReply reply{proto::kProtocolVersion, kFirmwareMajor,  kFirmwareMinor,
+                                   kFirmwarePatch,          proto::kSchemaHash, proto::kMaxWire,
+                                   static_cast<uint8_t>(hal::clock_kind())};
+  uint8_t payload[proto::IdentifyReply::kSize];
+  proto::encode(reply, payload);
+  send(proto::IdentifyReply::kId, payload, sizeof payload);
+}
+
+void Firmware::send_telemetry(uint32_t now_us) {
+  using T = proto::Telemetry;
+  const ControllerOutput& out = supervisor_.output();
+  float measured[kActuatorCount];
+  hal::actuators_measured(measured);
+  T t;
+  t.time = now_us / 1000u;
+  t.state = static_cast<uint8_t>(supervisor_.state());
+  t.faults = supervisor_.faults();
+  t.position_frame = supervisor_.last_frame();
+  t.position_age = supervisor_.position_age_ms(now_us);
+  t.tilt_zx = to_wire_i16(out.tilt_zx, T::kTiltZxScale);
+  t.tilt_zy = to_wire_i16(out.tilt_zy, T::kTiltZyScale);
+  for (uint8_t i = 0; i < kActuatorCount; ++i) {
+    t.command[i] = to_wire_i16(out.command[i], T::kCommandScale);
+    t.measured[i] = to_wire_i16(measured[i], T::kMeasuredScale);
+  }
+  t.crc_errors = decoder_.crc_errors();
+  t.frame_errors = decoder_.frame_errors();
+  uint8_t payload[T::kSize];
+  proto::encode(t, payload);
+  send(T::kId, payload, sizeof payload);
+  last_telemetry_us_ = now_us;
+}
+
+}  // namespace mr

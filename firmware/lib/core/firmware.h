@@ -1,0 +1,47 @@
+// The firmware's top level: bytes in -> frames -> supervisor -> replies and telemetry out; the same on every board.
+//
+// Scheduling contract (each board's main loop): call rx_byte() for every received byte as it arrives
+// and poll() on every pass; neither blocks. poll() runs the deadman, sends periodic telemetry and hands
+// the actuator setpoints to the HAL.
+#pragma once
+
+#include <stdint.h>  // uint8_t..uint32_t
+
+#include "frame.h"         // FrameDecoder
+#include "protocol_gen.h"  // proto messages
+#include "supervisor.h"    // Supervisor
+
+namespace mr {
+
+class Firmware {
+ public:
+  // Announces the start to the host (boot message) and levels the surface.
+  void boot(proto::ResetCause cause);
+  void rx_byte(uint8_t byte);
+  void poll();
+
+  const Supervisor& supervisor() const { return supervisor_; }
+
+ private:
+  void dispatch();
+  proto::ErrorCode handle_command(uint8_t& field);
+  void send(uint8_t id, const uint8_t* payload, uint8_t len);
+  void send_reply(uint8_t ref_id, uint8_t ref_seq, proto::ErrorCode code, uint8_t field);
+  void send_identify_reply();
+  void send_telemetry(uint32_t now_us);
+  void apply_outputs();
+
+  FrameDecoder decoder_;
+  Supervisor supervisor_;
+  uint8_t tx_seq_ = 0;
+  uint32_t last_telemetry_us_ = 0;
+  // The last command answered, to answer a retransmission again without applying it twice.
+  bool has_last_ = false;
+  uint8_t last_id_ = 0;
+  uint8_t last_seq_ = 0;
+  uint16_t last_crc_ = 0;
+  proto::ErrorCode last_code_ = proto::ErrorCode::kOk;
+  uint8_t last_field_ = proto::kNoField;
+};
+
+}  // namespace mr

@@ -1,0 +1,182 @@
+// Supervisor state machine and validation.
+#include "supervisor.h"
+
+#include "plane.h"  // max_tilt_deg
+#include "wire.h"   // is_finite
+
+namespace mr {
+
+namespace {
+
+using proto::ErrorCode;
+using proto::State;
+
+constexpr uint16_t kMinTelemetryPeriodMs = 5;  // [ms] faster than the link can carry
+constexpr float kTiltLimitSlackDeg = 1e-4f;    // [deg] float rounding of the derived limit
+
+bool running(State s) { return s == State::kRunning || s == State::kReached; }
+
+bool inside_module(float x, float y, const proto::Configure& c) {
+  return x >= -0.5f * c.module_x && x <= 0.5f * c.module_x && y >= -0.5f * c.module_y && y <= 0.5f * c.module_y;
+}
+
+}  // namespace
+
+Supervisor::Supervisor() {
+  proto::set_defaults(config_);
+  for (uint8_t axis = 0; axis < 3; ++axis) {
+    const proto::PidDefaults& d = proto::kPidDefaults[axis];
+    pid_[axis] = PidGains{d.kp, d.ki, d.kd, d.integral_limit};
+  }
+  level();
+}
+
+void Supervisor::level() {
+  output_.tilt_zx = 0.0f;
+  output_.tilt_zy = 0.0f;
+  for (float& a : output_.command) a = 0.0f;
+}
+
+ControllerConfig Supervisor::controller_config() const {
+  return ControllerConfig{static_cast<proto::Controller>(config_.controller), config_.module_x, config_.module_y,
+                          config_.tilt_limit, config_.noise_amplitude, {pid_[0], pid_[1], pid_[2]}};
+}
+
+ErrorCode Supervisor::configure(const proto::Configure& msg, uint8_t& field) {
+  field = proto::kNoField;
+  if (state_ != State::kIdle) return ErrorCode::kBadState;
+  const ErrorCode local = proto::validate(msg, field);
+  if (local != ErrorCode::kOk) return local;
+  if (msg.tilt_limit > max_tilt_deg(msg.module_x, msg.module_y, kActuatorRange) + kTiltLimitSlackDeg) {
+    field = 3;
+    return ErrorCode::kOutOfRange;
+  }
+  if (msg.telemetry_period != 0 && msg.telemetry_period < kMinTelemetryPeriodMs) {
+    field = 8;
+    return ErrorCode::kOutOfRange;
+  }
+  config_ = msg;
+  if (has_target_ && !inside_module(target_x_, target_y_, config_)) has_target_ = false;
+  return ErrorCode::kOk;
+}
+
+ErrorCode Supervisor::configure_pid(const proto::ConfigurePid& msg, uint8_t& field) {
+  field = proto::kNoField;
+  if (state_ != State::kIdle) return ErrorCode::kBadState;
+  const ErrorCode local = proto::validate(msg, field);
+  if (local != ErrorCode::kOk) return local;
+  pid_[msg.axis] = PidGains{msg.kp, msg.ki, msg.kd, msg.integral_limit};
+  return ErrorCode::kOk;
+}
+
+ErrorCode Supervisor::set_target(const proto::SetTarget& msg, uint8_t& field) {
+  field = proto::kNoField;
+  if (state_ == State::kEstop) return ErrorCode::kBadState;
+  const ErrorCode local = proto::validate(msg, field);
+  if (local != ErrorCode::kOk) return local;
+  if (!inside_module(msg.x, 0.0f, config_)) {
+    field = 0;
+    return ErrorCode::kOutOfRange;
+  }
+  if (!inside_module(0.0f, msg.y, config_)) {
+    field = 1;
+    return ErrorCode::kOutOfRange;
+  }
+  target_x_ = msg.x;
+  target_y_ = msg.y;
+  has_target_ = true;
+  return ErrorCode::kOk;
+}
+
+ErrorCode Supervisor::start(uint32_t now_us) {
+  if (state_ != State::kIdle) return ErrorCode::kBadState;
+  if (!has_target_) return ErrorCode::kNoTarget;
+  controller_.reset(config_.noise_seed);
+  level();
+  forget_positions();
+  has_step_ = false;
+  deadman_from_us_ = now_us;  // the first position must arrive within the deadman
+  state_ = State::kRunning;
+  return ErrorCode::kOk;
+}
+
+void Supervisor::stop() {
+  state_ = State::kIdle;
+  faults_ = 0;
+  level();
+}
+
+void Supervisor::emergency_stop() {
+  state_ = State::kEstop;
+  faults_ |= proto::faults::kEstop;
+  level();
+}
+
+ErrorCode Supervisor::jog(const proto::Jog& msg, uint8_t& field) {
+  field = proto::kNoField;
+  if (state_ != State::kIdle) return ErrorCode::kBadState;
+  const ErrorCode local = proto::validate(msg, field);
+  if (local != ErrorCode::kOk) return local;
+  if (msg.position > kActuatorRange || msg.position < -kActuatorRange) {
+    field = 1;
+    return ErrorCode::kOutOfRange;
+  }
+  output_.command[msg.actuator] = msg.position;
+  return ErrorCode::kOk;
+}
+
+ErrorCode Supervisor::position(const proto::ObjectPosition& msg, uint32_t now_us, uint8_t& field) {
+  field = proto::kNoField;
+  const bool visible = !(msg.flags & proto::position_flags::kNotVisible);
+  if (visible) {
+    const ErrorCode local = proto::validate(msg, field);
+    if (local != ErrorCode::kOk) return local;
+  }
+  if (has_frame_) {
+    if (msg.frame == last_frame_) {
+      field = 0;
+      return ErrorCode::kStalePosition;
+    }
+    if (static_cast<int32_t>(msg.capture_time - last_capture_us_) <= 0) {
+      field = 1;
+      return ErrorCode::kStalePosition;
+    }
+  }
+  has_frame_ = true;
+  last_frame_ = msg.frame;
+  last_capture_us_ = msg.capture_time;
+  if (!visible) return ErrorCode::kOk;  // no measurement: commands hold, the deadman keeps counting
+  has_valid_ = true;
+  last_valid_us_ = now_us;
+  deadman_from_us_ = now_us;
+  if (!running(state_)) return ErrorCode::kOk;
+
+  // dt from the capture times, as the camera saw the motion; a gap longer than the deadman is a restart.
+  float dt = 0.0f;
+  if (has_step_) {
+    const uint32_t gap_us = msg.capture_time - last_step_capture_us_;
+    if (gap_us <= static_cast<uint32_t>(config_.deadman) * 1000u) dt = static_cast<float>(gap_us) * 1e-6f;
+  }
+  has_step_ = true;
+  last_step_capture_us_ = msg.capture_time;
+  const float distance = controller_.step(controller_config(), target_x_, target_y_, msg.x, msg.y, dt, output_);
+  state_ = distance < config_.tolerance ? State::kReached : State::kRunning;
+  return ErrorCode::kOk;
+}
+
+void Supervisor::tick(uint32_t now_us) {
+  if (!running(state_)) return;
+  if (now_us - deadman_from_us_ > static_cast<uint32_t>(config_.deadman) * 1000u) {
+    state_ = State::kFault;
+    faults_ |= proto::faults::kPositionTimeout;
+    level();
+  }
+}
+
+uint16_t Supervisor::position_age_ms(uint32_t now_us) const {
+  if (!has_valid_) return 0xFFFF;
+  const uint32_t age_ms = (now_us - last_valid_us_) / 1000u;
+  return age_ms > 0xFFFFu ? 0xFFFF : static_cast<uint16_t>(age_ms);
+}
+
+}  // namespace mr
