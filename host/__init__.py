@@ -1,0 +1,1 @@
+"""Host-side tools for the rig and the virtual MCU."""

@@ -1,0 +1,154 @@
+"""The host end of the protocol: handshake, acknowledged commands with retransmission, position frames, telemetry."""
+from __future__ import annotations
+
+import collections
+import time
+from typing import Callable
+
+from mantaray.protocol import messages as m
+from mantaray.protocol.codec import Message
+from mantaray.protocol.framing import Frame, FrameDecoder, FrameError, encode_frame
+
+from .transport import Transport
+
+
+class LinkError(RuntimeError):
+    """The firmware did not answer as the protocol says it must."""
+
+
+class IncompatibleFirmware(LinkError):
+    """identify showed a protocol version or schema hash other than this host's."""
+
+
+class CommandRefused(LinkError):
+    """The firmware answered a command with a nack."""
+
+    def __init__(self, command: Message, nack: m.Nack) -> None:
+        self.command, self.nack = command, nack
+        self.code = m.ErrorCode(nack.code) if nack.code in m.ErrorCode._value2member_map_ else nack.code
+        field = ""
+        if nack.field != m.NO_FIELD and nack.field < len(command.FIELDS):
+            field = f" (field {command.FIELDS[nack.field].name})"
+        name = self.code.name.lower() if isinstance(self.code, m.ErrorCode) else f"code {nack.code}"
+        doc = m.ERROR_DOCS.get(self.code, "unknown error code")
+        super().__init__(f"{command.NAME} refused: {name}{field}: {doc}")
+
+
+class Link:
+    """Talks to one firmware over a transport.
+
+    Commands wait for their ack (or the identify_reply); without one within ack_timeout [s] the same
+    frame, same sequence number, is sent again, up to `retries` times; the firmware answers a
+    retransmission again without applying it twice. Frames that arrive while waiting (telemetry,
+    boot) go to `on_message` and are kept in `received` (the last 1000).
+    """
+
+    def __init__(self, transport: Transport, ack_timeout: float = 0.2, retries: int = 3,
+                 on_message: Callable[[Message], None] | None = None) -> None:
+        self.transport = transport
+        self.ack_timeout = ack_timeout
+        self.retries = retries
+        self.on_message = on_message
+        self.received: collections.deque[Message] = collections.deque(maxlen=1000)
+        self.decoder = FrameDecoder()
+        self.seq = 0
+        self.last_rx_seq: int | None = None
+        self.lost_frames = 0  # firmware frames missing from the firmware's sequence
+        self.resets = 0  # boot messages seen
+        self._pending: collections.deque[Message] = collections.deque()
+
+    # ---------------------------------------------------------------------------------- receiving
+    def _pump(self, timeout: float) -> None:
+        data = self.transport.read(timeout)
+        for item in self.decoder.feed(data):
+            if isinstance(item, FrameError):
+                continue
+            self._accept(item)
+
+    def _accept(self, frame: Frame) -> None:
+        if self.last_rx_seq is not None and frame.id != m.Boot.ID:
+            self.lost_frames += (frame.seq - self.last_rx_seq - 1) & 0xFF
+        self.last_rx_seq = frame.seq
+        try:
+            msg = frame.message()
+        except ValueError:
+            return  # counted by the decoder's peers as garbage; nothing to act on
+        if isinstance(msg, m.Boot):
+            self.resets += 1
+        self._pending.append(msg)
+
+    def receive(self, timeout: float = 0.0) -> Message | None:
+        """The next message from the firmware, waiting up to timeout [s]."""
+        deadline = time.monotonic() + timeout
+        while not self._pending:
+            remaining = deadline - time.monotonic()
+            self._pump(max(remaining, 0.0))
+            if remaining <= 0:
+                break
+        if not self._pending:
+            return None
+        msg = self._pending.popleft()
+        self.received.append(msg)
+        if self.on_message is not None:
+            self.on_message(msg)
+        return msg
+
+    # ------------------------------------------------------------------------------------ sending
+    def _next_seq(self) -> int:
+        self.seq = (self.seq + 1) & 0xFF
+        return self.seq
+
+    def _await_reply(self, frame: bytes, accept: Callable[[Message], bool]) -> Message:
+        for _ in range(self.retries + 1):
+            self.transport.write(frame)
+            deadline = time.monotonic() + self.ack_timeout
+            while (remaining := deadline - time.monotonic()) > 0:
+                msg = self.receive(remaining)
+                if msg is not None and accept(msg):
+                    return msg
+        raise LinkError(f"no answer after {self.retries + 1} tries of {self.ack_timeout:.3f} s each")
+
+    def command(self, msg: Message) -> Message:
+        """Sends a command and returns its ack (identify_reply for identify); raises CommandRefused on a nack."""
+        seq = self._next_seq()
+
+        def answers(reply: Message) -> bool:
+            if isinstance(msg, m.Identify):
+                return isinstance(reply, m.IdentifyReply)
+            return isinstance(reply, (m.Ack, m.Nack)) and reply.ref_id == msg.ID and reply.ref_seq == seq
+
+        reply = self._await_reply(encode_frame(msg, seq), answers)
+        if isinstance(reply, m.Nack):
+            raise CommandRefused(msg, reply)
+        return reply
+
+    def position(self, msg: m.ObjectPosition, timeout: float | None = None) -> m.Telemetry:
+        """Sends one camera frame and returns the telemetry that answers it (not retransmitted: stale by then)."""
+        seq = self._next_seq()
+        self.transport.write(encode_frame(msg, seq))
+        deadline = time.monotonic() + (self.ack_timeout if timeout is None else timeout)
+        while (remaining := deadline - time.monotonic()) > 0:
+            reply = self.receive(remaining)
+            if isinstance(reply, m.Nack) and reply.ref_id == msg.ID and reply.ref_seq == seq:
+                raise CommandRefused(msg, reply)
+            if isinstance(reply, m.Telemetry) and reply.position_frame == msg.frame:
+                return reply
+        raise LinkError(f"no telemetry answered position frame {msg.frame}")
+
+    def send_raw(self, frame: bytes) -> None:
+        """Bytes straight to the transport, for tests of garbage and corrupt frames."""
+        self.transport.write(frame)
+
+    def identify(self) -> m.IdentifyReply:
+        """Handshake; raises IncompatibleFirmware unless version and schema hash match this host's."""
+        reply = self.command(m.Identify())
+        assert isinstance(reply, m.IdentifyReply)
+        if reply.protocol_version != m.PROTOCOL_VERSION or reply.schema_hash != m.SCHEMA_HASH:
+            raise IncompatibleFirmware(
+                f"firmware speaks protocol {reply.protocol_version} (schema 0x{reply.schema_hash:08X}); this host "
+                f"speaks {m.PROTOCOL_VERSION} (schema 0x{m.SCHEMA_HASH:08X}): flash the firmware built from "
+                f"this checkout, or use the host that matches the firmware")
+        return reply
+
+    def close(self) -> None:
+        self.transport.close()

@@ -1,0 +1,47 @@
+"""Starts the native virtual MCU on a fresh pty and hands back the device path the host opens."""
+from __future__ import annotations
+
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+from mantaray.paths import native_artifact
+
+
+class VirtualMcu:
+    """A `mantaray-vmcu --pty LINK` process; use as a context manager. `path` is the serial device path."""
+
+    def __init__(self, clock: str = "sim", start_timeout: float = 5.0) -> None:
+        self._dir = tempfile.TemporaryDirectory(prefix="mantaray-vmcu-")
+        self.path = str(Path(self._dir.name) / "tty")
+        self.clock = clock
+        self.process = subprocess.Popen(
+            [str(native_artifact("mantaray-vmcu")), "--pty", self.path, "--clock", clock],
+            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        deadline = time.monotonic() + start_timeout
+        while not Path(self.path).exists():
+            if self.process.poll() is not None:
+                raise RuntimeError(f"virtual MCU exited: {self.process.stderr.read().decode().strip()}")
+            if time.monotonic() > deadline:
+                self.close()
+                raise RuntimeError(f"virtual MCU did not create {self.path} within {start_timeout} s")
+            time.sleep(0.005)
+
+    def close(self) -> None:
+        if self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        if self.process.stderr is not None:
+            self.process.stderr.close()
+        self._dir.cleanup()
+
+    def __enter__(self) -> "VirtualMcu":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

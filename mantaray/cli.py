@@ -1,0 +1,3 @@
+"""Command-line entry point: mantaray <command>."""
+def main():
+    print("ok")
