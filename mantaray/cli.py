@@ -1,3 +1,84 @@
-"""Command-line entry point: mantaray <command>."""
-def main():
-    print("ok")
+"""Command-line entry point: `mantaray <command>`; run `mantaray --help` for the list."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def cmd_vmcu(args: argparse.Namespace) -> int:
+    """Start the virtual MCU on a pty, identify it, and keep it running until Ctrl-C."""
+    import time
+
+    from mantaray.host.link import Link
+    from mantaray.host.transport import SerialTransport
+    from mantaray.host.vmcu import VirtualMcu
+
+    with VirtualMcu(clock=args.clock) as vmcu:
+        link = Link(SerialTransport(vmcu.path))
+        reply = link.identify()
+        link.close()
+        print(f"virtual MCU on {vmcu.path}: protocol {reply.protocol_version}, firmware "
+              f"{reply.firmware_major}.{reply.firmware_minor}.{reply.firmware_patch}, "
+              f"schema 0x{reply.schema_hash:08X} (matches this host), clock {reply.clock.name.lower()}")
+        if args.identify_only:
+            return 0
+        print("running; Ctrl-C stops it", flush=True)
+        try:
+            while vmcu.process.poll() is None:
+                time.sleep(0.2)
+        except KeyboardInterrupt:
+            pass
+    return 0
+
+
+def cmd_conformance(args: argparse.Namespace) -> int:
+    """Run the protocol conformance suite against a firmware on a serial device path."""
+    import pytest
+
+    pytest_args = ["--pyargs", "mantaray.protocol.conformance", "-p", "mantaray.protocol.conformance.plugin",
+                   "-q", "-p", "no:cacheprovider"]
+    if args.port:
+        pytest_args += ["--port", args.port]
+    return int(pytest.main(pytest_args + args.pytest_args))
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="mantaray", description="MANTA-RAY control stack: firmware link, simulation and tools.")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    vmcu = sub.add_parser("vmcu", help="start the native virtual MCU on a pty and check the handshake",
+                          description=cmd_vmcu.__doc__)
+    vmcu.add_argument("--clock", choices=["wall", "sim"], default="wall",
+                      help="wall: real time (default); sim: time advances only by sim_clock messages")
+    vmcu.add_argument("--identify-only", action="store_true", help="exit after the handshake")
+    vmcu.set_defaults(func=cmd_vmcu)
+
+    conf = sub.add_parser("conformance", help="run the protocol conformance suite against a firmware",
+                          description=cmd_conformance.__doc__ + " Without --port, a virtual MCU is started "
+                          "on a pty. Arguments after -- go to pytest.")
+    conf.add_argument("--port", help="serial device path of the firmware (board, simulator or pty)")
+    conf.add_argument("pytest_args", nargs=argparse.REMAINDER, help=argparse.SUPPRESS)
+    conf.set_defaults(func=cmd_conformance)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 2
+    try:
+        return args.func(args)
+    except Exception as exc:  # a user-facing tool: one clear line, no traceback
+        from mantaray.host.link import LinkError
+        from mantaray.paths import NotBuilt
+        if isinstance(exc, (LinkError, NotBuilt, OSError)):
+            print(f"mantaray {args.command}: error: {exc}", file=sys.stderr)
+            return 1
+        raise
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -18,7 +18,7 @@ SCHEMA = ROOT / "protocol" / "schema.toml"
 VECTORS = ROOT / "protocol" / "vectors.json"
 CPP_OUT = ROOT / "firmware" / "lib" / "core" / "protocol_gen.h"
 PY_OUT = ROOT / "protocol" / "messages.py"
-CPP_VECTORS_OUT = ROOT / "firmware" / "tests" / "vectors_gen.h"
+CPP_VECTORS_OUT = ROOT / "firmware" / "tests" / "test_core" / "vectors_gen.h"
 
 # wire type -> (size [bytes], C++ type, struct format char)
 TYPES = {
