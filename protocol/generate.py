@@ -18,6 +18,9 @@ SCHEMA = ROOT / "protocol" / "schema.toml"
 VECTORS = ROOT / "protocol" / "vectors.json"
 CPP_OUT = ROOT / "firmware" / "lib" / "core" / "protocol_gen.h"
 PY_OUT = ROOT / "protocol" / "messages.py"
+SPEC = ROOT / "protocol" / "PROTOCOL.md"
+SPEC_BEGIN = "<!-- BEGIN GENERATED REFERENCE: protocol/generate.py writes this part from schema.toml -->"
+SPEC_END = "<!-- END GENERATED REFERENCE -->"
 CPP_VECTORS_OUT = ROOT / "firmware" / "tests" / "test_core" / "vectors_gen.h"
 
 # wire type -> (size [bytes], C++ type, struct format char)
@@ -318,6 +321,67 @@ def render_py(schema: dict) -> str:
     return "\n".join(out)
 
 
+# ------------------------------------------------------------------------------- PROTOCOL.md reference
+
+def md_bounds(field: dict) -> str:
+    parts = []
+    if "min" in field or "max" in field:
+        parts.append(f"{field.get('min', '')} .. {field.get('max', '')}")
+    if "default" in field:
+        parts.append(f"default {field['default']}")
+    return "; ".join(parts)
+
+
+def render_md(schema: dict) -> str:
+    out = [SPEC_BEGIN, "", f"Schema hash of this version: `0x{schema_hash(schema):08X}`.", "",
+           "### Error codes (`nack.code`)", "", "| code | name | meaning |", "|---|---|---|"]
+    for err in schema["errors"]:
+        out.append(f"| {err['code']} | `{err['name']}` | {err['doc']} |")
+    out += ["", "### Enums and flags", ""]
+    for name, enum in schema["enums"].items():
+        values = ", ".join(f"{v} = `{k}`" for k, v in enum["values"].items())
+        out.append(f"- **{name}** ({enum['doc']}): {values}")
+    for name, flags in schema["flags"].items():
+        values = ", ".join(f"bit {v} = `{k}`" for k, v in flags["values"].items())
+        out.append(f"- **{name}** ({flags['doc']}): {values}")
+    out += ["", "### Messages", "",
+            "Offsets are into the payload (after id and seq); all fields little-endian; f32 is IEEE-754 binary32.",
+            "A scaled field carries round(value / scale) saturated to its integer range.", ""]
+    for msg in schema["messages"]:
+        arrow = "host → firmware" if msg["direction"] == "host_to_mcu" else "firmware → host"
+        reply = f"; answered by `{msg['reply']}`" if "reply" in msg else ""
+        size = payload_size(msg)
+        out += [f"#### `{msg['name']}` — id 0x{msg['id']:02X}, {arrow}{reply}",
+                "", f"{msg['doc']} Payload {size} bytes; frame on the wire {cobs_wire_size(size)} bytes.", ""]
+        if not msg["fields"]:
+            continue
+        out += ["| offset | field | type | unit | scale | bounds, default | meaning |", "|---|---|---|---|---|---|---|"]
+        offset = 0
+        for field in msg["fields"]:
+            count = field.get("count", 1)
+            ftype = field["type"] + (f"[{count}]" if count > 1 else "")
+            kind = f" (enum `{field['enum']}`)" if "enum" in field else f" (flags `{field['flags']}`)" if "flags" in field else ""
+            out.append(f"| {offset} | `{field['name']}` | {ftype} | {field.get('unit', '')} | {field.get('scale', '')} | "
+                       f"{md_bounds(field)} | {field['doc']}{kind} |")
+            offset += TYPES[field["type"]][0] * count
+        out.append("")
+    out.append(SPEC_END)
+    return "\n".join(out)
+
+
+def cobs_wire_size(payload: int) -> int:
+    """[bytes] on the wire: id + seq + payload + CRC, one COBS code byte (packets < 254 bytes), delimiter."""
+    return payload + 4 + 1 + 1
+
+
+def splice_spec(text: str, reference: str) -> str:
+    if SPEC_BEGIN not in text or SPEC_END not in text:
+        raise SystemExit(f"{SPEC} lacks the generated-reference markers")
+    head, rest = text.split(SPEC_BEGIN, 1)
+    tail = rest.split(SPEC_END, 1)[1]
+    return head + reference + tail
+
+
 # ------------------------------------------------------------------------------------- C++ test vectors
 
 def cpp_field_checks(schema: dict, msg: dict, fields: dict) -> list[str]:
@@ -401,7 +465,8 @@ def render_cpp_vectors(schema: dict, vectors: list[dict]) -> str:
 
 def outputs() -> dict[Path, str]:
     schema = load_schema()
-    files = {CPP_OUT: render_cpp(schema), PY_OUT: render_py(schema)}
+    files = {CPP_OUT: render_cpp(schema), PY_OUT: render_py(schema),
+             SPEC: splice_spec(SPEC.read_text(), render_md(schema))}
     if VECTORS.exists():
         files[CPP_VECTORS_OUT] = render_cpp_vectors(schema, json.loads(VECTORS.read_text())["vectors"])
     return files
