@@ -1,7 +1,7 @@
 // Manhattan and Euclidean control steps: PID -> tilt -> plane -> noisy, clamped actuator commands.
 #include "controller.h"
 
-#include <math.h>  // sqrtf
+#include <math.h>  // hypotf
 
 namespace mr {
 
@@ -17,7 +17,7 @@ float TiltController::step(const ControllerConfig& config, float target_x, float
   if (!rate_known) dt = 0.0f;
   const float ex = target_x - x;
   const float ey = target_y - y;
-  const float distance = sqrtf(ex * ex + ey * ey);
+  const float distance = hypotf(ex, ey);  // no underflow or overflow of the squares
   Normal normal;
   if (config.kind == proto::Controller::kManhattan) {
     // The error at the previous measurement against today's target: its change is the object's motion only.
@@ -31,7 +31,7 @@ float TiltController::step(const ControllerConfig& config, float target_x, float
     if (rate_known) {
       const float px = target_x - prev_x_;
       const float py = target_y - prev_y_;
-      rate = (distance - sqrtf(px * px + py * py)) / dt;
+      rate = (distance - hypotf(px, py)) / dt;
     }
     const float theta = pid_[2].update(config.pid[2], distance, rate, dt, config.tilt_limit);
     const float ux = distance > 0.0f ? ex / distance : 0.0f;

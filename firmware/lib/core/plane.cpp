@@ -1,7 +1,7 @@
 // Plane normal and actuator commands from tilt angles, as in the paper's equations for n, z_i and a_i.
 #include "plane.h"
 
-#include <math.h>  // sinf, cosf, sqrtf, atanf
+#include <math.h>  // sinf, cosf, hypotf, atanf
 
 namespace mr {
 
@@ -12,7 +12,7 @@ Normal manhattan_normal(float tilt_zx_deg, float tilt_zy_deg) {
 }
 
 Normal euclidean_normal(float theta_deg, float error_x, float error_y) {
-  const float d = sqrtf(error_x * error_x + error_y * error_y);
+  const float d = hypotf(error_x, error_y);  // no underflow or overflow of the squares
   if (!(d > 0.0f)) return Normal{0.0f, 0.0f, 1.0f};
   const float theta = theta_deg * kDegToRad;
   const float s = sinf(theta) / d;

@@ -149,7 +149,7 @@ inline bool fields_ok_9_0(const uint8_t* p) {
   mr::proto::decode(p, m);
   return true;
 }
-const Expected expected_9[] = {{Yield::kFrame, 0x07, 256, payload_9_0, 0, fields_ok_9_0}};
+const Expected expected_9[] = {{Yield::kFrame, 0x07, 0, payload_9_0, 0, fields_ok_9_0}};
 
 // jog actuator 3 to -0.1 m
 const uint8_t wire_10[] = {0x0A, 0x08, 0x0A, 0x03, 0xCD, 0xCC, 0xCC, 0xBD, 0x48, 0xF6, 0x00};
