@@ -1,0 +1,26 @@
+"""Runs the firmware core's C++ unit tests (doctest, <build dir>/core_tests) so pytest's summary includes them."""
+from __future__ import annotations
+
+import re
+import subprocess
+
+import pytest
+
+from mantaray.paths import NotBuilt, native_artifact
+
+MIN_TEST_CASES = 100  # [test cases] fewer means the binary is stale or lost test files
+
+
+def test_core_unit_tests_pass() -> None:
+    try:
+        binary = native_artifact("core_tests")
+    except NotBuilt as exc:
+        pytest.fail(f"the C++ unit tests are not built: {exc}")
+    proc = subprocess.run([str(binary), "--no-colors"], capture_output=True, text=True, timeout=300)
+    output = proc.stdout + proc.stderr
+    assert proc.returncode == 0, f"{binary} failed (exit {proc.returncode}):\n{output[-6000:]}"
+    summary = re.search(r"test cases:\s*(\d+)\s*\|\s*(\d+) passed\s*\|\s*(\d+) failed", output)
+    assert summary, f"no doctest summary in the output of {binary}:\n{output[-2000:]}"
+    total, passed, failed = (int(g) for g in summary.groups())
+    assert failed == 0 and passed == total, output[-6000:]
+    assert total >= MIN_TEST_CASES, f"only {total} test cases ran; rebuild: ninja -C {binary.parent}"
