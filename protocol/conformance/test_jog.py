@@ -1,0 +1,75 @@
+"""Conformance: jog — one actuator's command in idle only, index and range checks, refusals change nothing."""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from mantaray.protocol import messages as m
+from mantaray.protocol.conformance.harness import ACTUATOR_RANGE, COMMAND_TOL, f32_above, f32_below
+
+OUT, NOT_FINITE = m.ErrorCode.OUT_OF_RANGE, m.ErrorCode.NOT_FINITE
+
+
+def commands(dut) -> tuple[float, ...]:
+    return tuple(dut.probe().command)
+
+
+@pytest.mark.parametrize("actuator", range(4))
+@pytest.mark.parametrize("position", [0.1, -0.2, ACTUATOR_RANGE, -ACTUATOR_RANGE, 0.0])
+def test_jog_moves_one_actuator(dut, actuator, position):
+    ack = dut.command(m.Jog(actuator, position))
+    assert ack.ref_id == m.Jog.ID
+    expected = [0.0] * 4
+    expected[actuator] = position
+    assert commands(dut) == pytest.approx(expected, abs=COMMAND_TOL)
+
+
+def test_jogs_add_up_across_actuators(dut):
+    for i, p in enumerate((0.05, -0.1, 0.15, -0.2)):
+        dut.command(m.Jog(i, p))
+    dut.command(m.Jog(1, 0.01))
+    assert commands(dut) == pytest.approx((0.05, 0.01, 0.15, -0.2), abs=COMMAND_TOL)
+
+
+BAD = [
+    ((4, 0.1), OUT, 0),
+    ((255, 0.1), OUT, 0),
+    ((0, math.nan), NOT_FINITE, 1),
+    ((1, math.inf), NOT_FINITE, 1),
+    ((2, -math.inf), NOT_FINITE, 1),
+    ((3, f32_above(ACTUATOR_RANGE)), OUT, 1),
+    ((3, f32_below(-ACTUATOR_RANGE)), OUT, 1),
+    ((0, 1.0), OUT, 1),
+]
+
+
+@pytest.mark.parametrize("args,code,field", BAD, ids=[f"{a},{p:.9g}" for (a, p), _, _ in BAD])
+def test_bad_jog_is_refused_and_changes_nothing(dut, args, code, field):
+    for i, p in enumerate((0.05, -0.1, 0.15, -0.2)):
+        dut.command(m.Jog(i, p))
+    before = commands(dut)
+    dut.refuse(m.Jog(*args), code, field)
+    assert commands(dut) == before
+
+
+@pytest.mark.parametrize("state", ["running", "reached", "fault", "estop"])
+def test_jog_outside_idle_is_bad_state(dut, state):
+    before = dut.enter(state)
+    dut.refuse(m.Jog(0, 0.1), m.ErrorCode.BAD_STATE)
+    after = dut.probe()
+    assert (after.state, after.command) == (before.state, before.command)
+
+
+def test_stop_ends_a_jog(dut):
+    dut.command(m.Jog(3, -0.15))
+    assert commands(dut)[3] == pytest.approx(-0.15, abs=COMMAND_TOL)
+    dut.stop()
+    assert commands(dut) == (0.0, 0.0, 0.0, 0.0)
+
+
+def test_a_jog_holds_through_configure(dut):
+    dut.command(m.Jog(0, 0.12))
+    dut.configure(tolerance=0.05)
+    dut.configure_pid(m.Axis.X, kp=5.0)
+    assert commands(dut)[0] == pytest.approx(0.12, abs=COMMAND_TOL)

@@ -1,0 +1,60 @@
+"""Runs the protocol conformance suite against the virtual MCU, simulated and wall clock, as `mantaray conformance` does."""
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+
+import pytest
+
+from mantaray.paths import REPO, NotBuilt, native_artifact
+
+
+@pytest.fixture(scope="module")
+def vmcu_built() -> None:
+    try:
+        native_artifact("mantaray-vmcu")
+    except NotBuilt as exc:
+        pytest.skip(str(exc))
+
+
+def conformance(*args: str, timeout: float = 180) -> subprocess.CompletedProcess:
+    """`mantaray conformance ARGS` in a fresh interpreter (the suite needs its own pytest session)."""
+    return subprocess.run([sys.executable, "-m", "mantaray.cli", "conformance", *args], cwd=REPO,
+                          capture_output=True, text=True, timeout=timeout, env=os.environ.copy())
+
+
+def assert_suite_passed(result: subprocess.CompletedProcess, clock: str) -> None:
+    summary = result.stdout.strip().splitlines()[-1] if result.stdout.strip() else ""
+    assert result.returncode == 0, f"conformance suite failed ({clock} clock):\n{result.stdout[-6000:]}\n{result.stderr}"
+    assert re.search(r"\d+ passed", summary) and not re.search(r"\d+ (failed|errors?)\b", summary), summary
+    assert f"clock {clock}" in result.stdout  # the suite really ran against a firmware with that clock
+
+
+def test_suite_passes_on_the_simulated_clock(vmcu_built):
+    """No --port: the suite starts its own virtual MCU with the simulated clock."""
+    assert_suite_passed(conformance(), "simulated")
+
+
+def test_suite_passes_on_the_wall_clock_through_port(vmcu_built):
+    """--port: the way a real board or the AVR simulator is tested, here a wall-clock virtual MCU."""
+    from mantaray.host.vmcu import VirtualMcu
+
+    with VirtualMcu(clock="wall") as vmcu:
+        result = conformance("--port", vmcu.path)
+    assert_suite_passed(result, "wall")
+
+
+def test_a_missing_port_is_one_clear_line():
+    result = conformance("--port", "/dev/nonexistent", timeout=60)
+    assert result.returncode != 0
+    assert "Traceback" not in result.stdout + result.stderr
+    errors = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(errors) == 1 and "/dev/nonexistent" in errors[0] and errors[0].startswith("ERROR: conformance:")
+
+
+def test_help_lists_the_port_option():
+    result = conformance("--help", timeout=60)
+    assert result.returncode == 0
+    assert "--port" in result.stdout and "Traceback" not in result.stderr
