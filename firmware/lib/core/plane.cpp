@@ -15,8 +15,9 @@ Normal euclidean_normal(float theta_deg, float error_x, float error_y) {
   const float d = hypotf(error_x, error_y);  // no underflow or overflow of the squares
   if (!(d > 0.0f)) return Normal{0.0f, 0.0f, 1.0f};
   const float theta = theta_deg * kDegToRad;
-  const float s = sinf(theta) / d;
-  return Normal{error_x * s, error_y * s, cosf(theta)};
+  const float s = sinf(theta);
+  // Direction first: |e/d| <= 1 for any d > 0, whereas sin(theta) / d overflows for a subnormal d.
+  return Normal{(error_x / d) * s, (error_y / d) * s, cosf(theta)};
 }
 
 float actuator_x(uint8_t i, float module_x) { return (i & 1u) ? 0.5f * module_x : -0.5f * module_x; }

@@ -179,3 +179,18 @@ TEST_CASE("plane: Euclidean tilts towards the error direction; only the directio
   CHECK(n.y == Approx(-0.8f * sinf(deg(10.0f))));
   CHECK(n.z == Approx(cosf(deg(10.0f))));
 }
+
+TEST_CASE("plane: Euclidean with a subnormal error still gives a finite, in-range plane") {
+  // Found by hypothesis: sin(theta) / d overflows to inf for d = 4.2e-45, and 0 * inf is NaN.
+  const float limit = mr::max_tilt_deg(1.0f, 1.0f, mr::kActuatorRange);
+  for (float e : {4.2038954e-45f, 1.0e-40f, 1.1754944e-38f}) {
+    Commands a;
+    euclidean(limit, 0.0f, e, 1.0f, 1.0f, a);
+    for (float ai : a) {
+      CHECK(ai == ai);
+      CHECK(fabsf(ai) <= mr::kActuatorRange * (1.0f + 1e-5f));
+    }
+    euclidean(limit, e, -e, 1.0f, 1.0f, a);
+    for (float ai : a) CHECK(ai == ai);
+  }
+}
