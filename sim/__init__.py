@@ -1,0 +1,1 @@
+"""MuJoCo model of the MANTA-RAY rig: its description, the paper's objects, MJCF generation and scene helpers."""

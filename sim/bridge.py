@@ -1,0 +1,303 @@
+"""The plant bridge: a firmware drives the simulated rig over the protocol, camera frames in lock-step or real time.
+
+The bridge plays the host's part: it configures the firmware, streams the object's position at the
+camera rate (with optional noise, latency and dropped frames) and applies the actuator commands
+the firmware answers with to the simulated actuators. The firmware is whatever is on the link:
+the native virtual MCU on a pty, the AVR image in simavr, or a board on a serial port.
+
+Time: trial time t [s] starts at 0 when the controller starts. In lock-step the firmware's clock is
+set by sim_clock to the delivery time of each frame, so a run never depends on this machine's
+speed; in real time the firmware keeps its own wall clock and the bridge paces the physics to it.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from mantaray.host.link import Link, LinkError
+from mantaray.protocol import messages as m
+
+from . import model as M
+from .rig import Rig
+
+US_PER_S = 1_000_000
+U32 = 0xFFFFFFFF
+U16 = 0xFFFF
+CLOCK_GAP_US = 1_000_000   # [us] the firmware clock moves on this much between trials, so it never goes back
+
+
+@dataclass(frozen=True)
+class Tracking:
+    """The camera as the controller sees it: rate, latency, noise and lost frames (the paper: 12 Hz)."""
+    rate_hz: float = 12.0          # [Hz] frames per second
+    latency_s: float = 0.0         # [s] capture -> delivery to the firmware; below one frame period
+    noise_m: float = 0.0           # [m] standard deviation of Gaussian noise on x and on y
+    drop_rate: float = 0.0         # [-] probability that a frame never reaches the firmware
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.rate_hz) and 0.5 <= self.rate_hz <= 1000):
+            raise ValueError(f"camera rate must be 0.5..1000 Hz, got {self.rate_hz}")
+        if not (0 <= self.latency_s < 1 / self.rate_hz):
+            raise ValueError(f"camera latency must be at least 0 and below one frame period "
+                             f"({1 / self.rate_hz:.3f} s), got {self.latency_s}")
+        if not (0 <= self.noise_m <= 0.1):
+            raise ValueError(f"camera noise must be 0..0.1 m, got {self.noise_m}")
+        if not (0 <= self.drop_rate < 1):
+            raise ValueError(f"drop rate must be in [0, 1), got {self.drop_rate}")
+
+
+@dataclass(frozen=True)
+class Gains:
+    """One PID's gains, as configure_pid carries them (output in degrees of tilt)."""
+    kp: float                      # [deg/m]
+    ki: float                      # [deg/(m s)]
+    kd: float                      # [deg s/m]
+    integral_limit: float          # [deg]
+
+
+@dataclass(frozen=True)
+class TrialSpec:
+    """One target-reaching trial as the paper runs them (Results): success is judged at the end of duration_s."""
+    start_m: tuple[float, float]
+    target_m: tuple[float, float]
+    controller: str = "manhattan"          # manhattan | euclidean
+    duration_s: float = 10.0               # [s] T
+    alpha_m: float = 0.0                   # [m] noise amplitude
+    tolerance_m: float = 0.02              # [m] epsilon
+    seed: int = 1                          # camera noise, drops and the firmware's noise PRNG
+    gains: dict[str, Gains] = field(default_factory=dict)   # axis name (x, y, radial) -> gains; absent: firmware defaults
+
+    def __post_init__(self) -> None:
+        if self.controller not in ("manhattan", "euclidean"):
+            raise ValueError(f"controller must be manhattan or euclidean, got {self.controller!r}")
+        if not (0 < self.duration_s <= 3600):
+            raise ValueError(f"duration must be in (0, 3600] s, got {self.duration_s}")
+        for axis in self.gains:
+            if axis not in ("x", "y", "radial"):
+                raise ValueError(f"gains are for axes x, y and radial, got {axis!r}")
+
+
+@dataclass
+class LinkWatch:
+    """What the frame counters showed during a trial: each count is something the bridge reported."""
+    firmware_resets: int = 0        # boot messages: the firmware restarted
+    missed_replies: int = 0         # position frames whose telemetry never came
+    duplicate_replies: int = 0      # telemetry for a frame already answered
+    lost_firmware_frames: int = 0   # gaps in the firmware's sequence numbers
+    dropped_frames: int = 0         # camera frames dropped on purpose (Tracking.drop_rate)
+    messages: list[str] = field(default_factory=list)
+
+    def report(self, text: str) -> None:
+        self.messages.append(text)
+
+    @property
+    def clean(self) -> bool:
+        return not (self.firmware_resets or self.missed_replies or self.duplicate_replies or self.lost_firmware_frames)
+
+
+@dataclass
+class TrialResult:
+    """Outcome and trajectory of one trial; arrays have one row per camera frame."""
+    spec: TrialSpec
+    object_name: str
+    success: bool                   # within tolerance at the end, not fallen off
+    final_error_m: float            # [m] true distance to the target at the end
+    time_to_reach_s: float | None   # [s] first frame the true distance was within tolerance
+    fell_off: bool
+    sim_time_s: float               # [s] trial time simulated (shorter when the object fell off)
+    wall_time_s: float              # [s] the whole trial, settling included
+    physics_wall_s: float           # [s] of which MuJoCo stepping
+    link_wall_s: float              # [s] of which the protocol exchange with the firmware
+    t_s: np.ndarray                 # [s] capture times
+    true_xy_m: np.ndarray           # [m] object position (marker) at capture
+    measured_xy_m: np.ndarray       # [m] what the firmware was sent (NaN: dropped)
+    tilt_deg: np.ndarray            # [deg] theta_zx, theta_zy from telemetry (NaN: no answer)
+    command_m: np.ndarray           # [m] a_0..a_3 from telemetry
+    state: np.ndarray               # supervisor state per frame (-1: no answer)
+    watch: LinkWatch
+
+    def summary(self) -> dict:
+        """The machine-readable one-line result."""
+        return {"success": self.success, "final_error_m": round(self.final_error_m, 5),
+                "time_to_reach_s": None if self.time_to_reach_s is None else round(self.time_to_reach_s, 3),
+                "fell_off": self.fell_off, "sim_time_s": round(self.sim_time_s, 3),
+                "wall_time_s": round(self.wall_time_s, 3), "physics_share": round(self.physics_share, 3),
+                "link_share": round(self.link_wall_s / max(self.wall_time_s, 1e-9), 3),
+                "object": self.object_name, "controller": self.spec.controller,
+                "start_m": list(self.spec.start_m), "target_m": list(self.spec.target_m),
+                "seed": self.spec.seed, "link_clean": self.watch.clean}
+
+    @property
+    def physics_share(self) -> float:
+        return self.physics_wall_s / max(self.wall_time_s, 1e-9)
+
+
+class Bridge:
+    """The simulated rig and one firmware link. Reuse it for many trials: the model loads once.
+
+    lockstep=True needs a firmware on the simulated clock (identify says which); lockstep=False runs in
+    real time against a wall-clock firmware (a board, or `mantaray-vmcu --clock wall`).
+    """
+
+    def __init__(self, link: Link, rig: Rig, tracking: Tracking = Tracking(), lockstep: bool = True) -> None:
+        self.link, self.rig, self.tracking, self.lockstep = link, rig, tracking, lockstep
+        identity = link.identify()
+        simulated = identity.clock == m.Clock.SIMULATED
+        if lockstep and not simulated:
+            raise LinkError("lock-step needs a firmware on the simulated clock (mantaray-vmcu --clock sim); "
+                            "this one runs on its wall clock: use real-time mode")
+        if not lockstep and simulated:
+            raise LinkError("real-time mode needs a wall-clock firmware; this one is on the simulated clock")
+        self.model, self.data = M.load(rig)
+        self.clock_us = 0               # the firmware's sim clock, last value sent
+        self.frame = 0                  # camera frame counter, runs on across trials
+        self.link.on_message = self._watch_message
+        self._watch = LinkWatch()
+        self._answered: set[int] = set()
+        self.viewer = None              # set to a mujoco.viewer handle to draw each frame
+
+    def _watch_message(self, msg) -> None:
+        if isinstance(msg, m.Boot):
+            self._watch.firmware_resets += 1
+            self._watch.report(f"firmware reset ({msg.reset_cause.name.lower()}) during the trial")
+        elif isinstance(msg, m.Telemetry) and self.lockstep:
+            if msg.position_frame in self._answered:
+                self._watch.duplicate_replies += 1
+                self._watch.report(f"duplicate telemetry for camera frame {msg.position_frame}")
+
+    # ------------------------------------------------------------------------------- firmware set-up
+    def _set_clock(self, t_us: int) -> None:
+        self.clock_us = t_us & U32
+        self.link.command(m.SimClock(now=self.clock_us))
+
+    def _configure(self, spec: TrialSpec) -> None:
+        self.link.command(m.Stop())
+        self.link.command(m.Configure(
+            controller=m.Controller[spec.controller.upper()],
+            module_x=self.rig.frame.size_x_m, module_y=self.rig.frame.size_y_m,
+            tolerance=spec.tolerance_m, noise_amplitude=spec.alpha_m, noise_seed=spec.seed & U32 or 1,
+            telemetry_period=0 if self.lockstep else 100))
+        for axis in m.Axis:
+            g = spec.gains.get(axis.name.lower())
+            defaults = m.PID_DEFAULTS[axis]
+            self.link.command(m.ConfigurePid(axis=axis, **(vars(g) if g else defaults)))
+        self.link.command(m.SetTarget(x=spec.target_m[0], y=spec.target_m[1]))
+
+    # ----------------------------------------------------------------------------------------- trial
+    def run(self, spec: TrialSpec, progress=None) -> TrialResult:
+        """One trial: drop the object at the start, control it for spec.duration_s, judge the end.
+
+        progress, if given, is called with the trial time [s] after every camera frame.
+        """
+        wall0 = time.perf_counter()
+        physics_s = link_s = 0.0
+        self._watch, self._answered = LinkWatch(), set()
+        resets0, lost0 = self.link.resets, self.link.lost_frames
+        rng = np.random.default_rng(spec.seed)
+        model, data, fall = self.model, self.data, self.rig.fall
+        tracking = self.tracking
+        period_s = 1.0 / tracking.rate_hz
+
+        t = time.perf_counter()
+        self._configure(spec)
+        M.drop_object(model, data, *spec.start_m)
+        link_s += time.perf_counter() - t
+        t0_sim = data.time                                # physics time at trial time 0
+        base_us = (self.clock_us + CLOCK_GAP_US) & U32    # firmware time at trial time 0
+        t = time.perf_counter()
+        if self.lockstep:
+            self._set_clock(base_us)
+        self.link.command(m.Start())
+        link_s += time.perf_counter() - t
+        wall_start = time.perf_counter()                  # real time: trial time 0 on the wall
+
+        n_frames = int(math.floor(spec.duration_s * tracking.rate_hz + 1e-9)) + 1
+        rows_t, rows_true, rows_meas, rows_tilt, rows_cmd, rows_state = [], [], [], [], [], []
+        fell, reach_s = False, None
+        target = np.asarray(spec.target_m)
+
+        def advance(to_trial_s: float) -> bool:
+            """Step physics to trial time to_trial_s; True if the object fell off on the way."""
+            nonlocal physics_s
+            if not self.lockstep:   # hold the physics back to the wall clock
+                ahead = to_trial_s - (time.perf_counter() - wall_start)
+                if ahead > 0:
+                    time.sleep(ahead)
+            t = time.perf_counter()
+            end = t0_sim + to_trial_s - 0.5 * model.opt.timestep
+            while data.time < end:
+                mujoco.mj_step(model, data)
+            physics_s += time.perf_counter() - t
+            if self.viewer is not None:
+                self.viewer.sync()
+            return M.fell_off(model, data, fall)
+
+        for k in range(n_frames):
+            capture_s = k * period_s
+            if advance(capture_s):
+                fell = True
+                break
+            true_xy = M.object_xy(model, data)
+            distance = float(np.hypot(*(true_xy - target)))
+            if reach_s is None and distance < spec.tolerance_m:
+                reach_s = capture_s
+            dropped = rng.random() < tracking.drop_rate
+            measured = true_xy + (rng.normal(0.0, tracking.noise_m, 2) if tracking.noise_m else 0.0)
+            deliver_s = capture_s + tracking.latency_s
+            if tracking.latency_s and advance(deliver_s):
+                fell = True
+                break
+            frame = self.frame = (self.frame + 1) & U16
+            tilt, cmd, state = (math.nan, math.nan), (math.nan,) * 4, -1
+            if dropped:
+                self._watch.dropped_frames += 1
+                measured = np.full(2, math.nan)
+            else:
+                t = time.perf_counter()
+                if self.lockstep:
+                    self._set_clock(base_us + round(deliver_s * US_PER_S))
+                msg = m.ObjectPosition(frame=frame, capture_time=(base_us + round(capture_s * US_PER_S)) & U32,
+                                       x=float(measured[0]), y=float(measured[1]))
+                try:
+                    reply = self.link.position(msg)
+                except LinkError:
+                    self._watch.missed_replies += 1
+                    self._watch.report(f"no telemetry answered camera frame {frame}")
+                else:
+                    self._answered.add(frame)
+                    tilt, cmd, state = (reply.tilt_zx, reply.tilt_zy), reply.command, int(reply.state)
+                    M.set_commands(model, data, cmd)
+                link_s += time.perf_counter() - t
+            rows_t.append(capture_s)
+            rows_true.append(true_xy)
+            rows_meas.append(measured)
+            rows_tilt.append(tilt)
+            rows_cmd.append(cmd)
+            rows_state.append(state)
+            if progress is not None:
+                progress(capture_s)
+
+        t = time.perf_counter()
+        self.link.command(m.Stop())
+        link_s += time.perf_counter() - t
+        self._watch.firmware_resets = max(self._watch.firmware_resets, self.link.resets - resets0)
+        self._watch.lost_firmware_frames = self.link.lost_frames - lost0
+        if self._watch.lost_firmware_frames:
+            self._watch.report(f"{self._watch.lost_firmware_frames} firmware frames missing from its sequence")
+
+        final_xy = M.object_xy(model, data)
+        final_error = float(np.hypot(*(final_xy - target)))
+        sim_time = (data.time - t0_sim)
+        return TrialResult(
+            spec=spec, object_name=self.rig.object.name, success=(not fell) and final_error < spec.tolerance_m, final_error_m=final_error,
+            time_to_reach_s=reach_s, fell_off=fell, sim_time_s=sim_time,
+            wall_time_s=time.perf_counter() - wall0, physics_wall_s=physics_s, link_wall_s=link_s,
+            t_s=np.asarray(rows_t), true_xy_m=np.asarray(rows_true).reshape(-1, 2),
+            measured_xy_m=np.asarray(rows_meas, dtype=float).reshape(-1, 2),
+            tilt_deg=np.asarray(rows_tilt, dtype=float).reshape(-1, 2),
+            command_m=np.asarray(rows_cmd, dtype=float).reshape(-1, 4),
+            state=np.asarray(rows_state, dtype=int), watch=self._watch)
