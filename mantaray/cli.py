@@ -60,6 +60,9 @@ def build_parser() -> argparse.ArgumentParser:
     conf.add_argument("--port", help="serial device path of the firmware (board, simulator or pty)")
     conf.add_argument("pytest_args", nargs=argparse.REMAINDER, help=argparse.SUPPRESS)
     conf.set_defaults(func=cmd_conformance)
+
+    from mantaray.sim.cli import add_parser as add_sim
+    add_sim(sub)
     return parser
 
 
@@ -74,7 +77,8 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:  # a user-facing tool: one clear line, no traceback
         from mantaray.host.link import LinkError
         from mantaray.paths import NotBuilt
-        if isinstance(exc, (LinkError, NotBuilt, OSError)):
+        from mantaray.sim.bridge import SimulationUnstable
+        if isinstance(exc, (LinkError, NotBuilt, OSError, SimulationUnstable)):
             print(f"mantaray {args.command}: error: {exc}", file=sys.stderr)
             return 1
         raise

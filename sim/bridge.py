@@ -28,6 +28,13 @@ US_PER_S = 1_000_000
 U32 = 0xFFFFFFFF
 U16 = 0xFFFF
 CLOCK_GAP_US = 1_000_000   # [us] the firmware clock moves on this much between trials, so it never goes back
+# [s] In lock-step nothing is real-time (the firmware's clock waits for the bridge), so the link may wait this
+# long for each answer: it costs nothing when the firmware answers in ~0.1 ms, and rides out a loaded machine.
+LOCKSTEP_ACK_TIMEOUT_S = 1.0
+
+
+class SimulationUnstable(RuntimeError):
+    """MuJoCo reported a diverging step (and reset its state): the trial's physics cannot be trusted."""
 
 
 @dataclass(frozen=True)
@@ -145,6 +152,8 @@ class Bridge:
 
     def __init__(self, link: Link, rig: Rig, tracking: Tracking = Tracking(), lockstep: bool = True) -> None:
         self.link, self.rig, self.tracking, self.lockstep = link, rig, tracking, lockstep
+        if lockstep:
+            link.ack_timeout = max(link.ack_timeout, LOCKSTEP_ACK_TIMEOUT_S)
         identity = link.identify()
         simulated = identity.clock == m.Clock.SIMULATED
         if lockstep and not simulated:
@@ -158,7 +167,8 @@ class Bridge:
         self.link.on_message = self._watch_message
         self._watch = LinkWatch()
         self._answered: set[int] = set()
-        self.viewer = None              # set to a mujoco.viewer handle to draw each frame
+        self.viewer = None              # a mujoco.viewer handle: synced after every camera frame
+        self.recorder = None            # a video.Recorder: offered every physics step
 
     def _watch_message(self, msg) -> None:
         if isinstance(msg, m.Boot):
@@ -205,6 +215,7 @@ class Bridge:
         t = time.perf_counter()
         self._configure(spec)
         M.drop_object(model, data, *spec.start_m)
+        bad_steps0 = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
         link_s += time.perf_counter() - t
         t0_sim = data.time                                # physics time at trial time 0
         base_us = (self.clock_us + CLOCK_GAP_US) & U32    # firmware time at trial time 0
@@ -231,7 +242,12 @@ class Bridge:
             end = t0_sim + to_trial_s - 0.5 * model.opt.timestep
             while data.time < end:
                 mujoco.mj_step(model, data)
+                if self.recorder is not None:
+                    self.recorder.capture(data)
             physics_s += time.perf_counter() - t
+            if data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number != bad_steps0:
+                raise SimulationUnstable(f"the physics diverged (NaN or huge accelerations) before t = "
+                                         f"{to_trial_s:.3f} s; a smaller timestep or a softer fabric is needed")
             if self.viewer is not None:
                 self.viewer.sync()
             return M.fell_off(model, data, fall)

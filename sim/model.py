@@ -15,6 +15,7 @@ MODEL_FILE = "manta_ray.xml"
 FABRIC = "fabric"             # flexcomp name; its vertex bodies are fabric_<id>
 OBJECT = "object"             # the object's body, free joint and geom
 MARKER = "marker"             # site on top of the object: the point the overhead camera tracks
+OVERHEAD = "overhead"         # the scene's camera looking straight down at the fabric
 REST_KEY = "rest"             # keyframe filled by load(): fabric settled, commands zero, object parked
 N_ACTUATORS = 4
 # Corner signs (x, y) of actuators 0..3, PROTOCOL.md §5: 0 (-x,-y), 1 (+x,-y), 2 (-x,+y), 3 (+x,+y).
@@ -26,6 +27,7 @@ AT_REST_HOLD_S = 0.2           # [s] ... for this long without a break
 DROP_CLEARANCE_M = 0.002       # [m] gap left under the object when it is placed above the fabric
 POST_OFFSET_M = 0.03           # [m] visual frame posts stand this far outboard of each corner (no collisions)
 CARRIAGE_HALF_SIZE_M = (0.02, 0.02, 0.03)  # [m] visual carriage block (no collisions; mass from the rig)
+OFFSCREEN_PX = (1920, 1920)    # [px] offscreen framebuffer: the largest image the renderer can make
 PARK_OFFSET_M = 0.35           # [m] the object waits on the floor this far beyond the +x edge while the fabric settles
 
 
@@ -153,6 +155,7 @@ def scene_xml(rig: Rig) -> str:
   <include file="{MODEL_FILE}"/>
   <statistic center="{_v(0, 0, z0 - 0.2)}" extent="1.2"/>
   <visual>
+    <global offwidth="{OFFSCREEN_PX[0]}" offheight="{OFFSCREEN_PX[1]}"/>
     <headlight diffuse="0.6 0.6 0.6" ambient="0.3 0.3 0.3" specular="0 0 0"/>
   </visual>
   <asset>
@@ -164,7 +167,7 @@ def scene_xml(rig: Rig) -> str:
   <worldbody>
     <light pos="{_v(0, 0, z0 + 2)}" dir="0 0 -1" directional="true"/>
     <geom name="floor" type="plane" size="0 0 0.05" material="floor"/>
-    <camera name="overhead" pos="{_v(0, 0, z0 + cam.height_above_z0_m)}" xyaxes="1 0 0 0 1 0"
+    <camera name="{OVERHEAD}" pos="{_v(0, 0, z0 + cam.height_above_z0_m)}" xyaxes="1 0 0 0 1 0"
             fovy="{_v(cam.fovy_deg)}"/>
 {body}
   </worldbody>

@@ -1,0 +1,61 @@
+"""Figures of a trial in the style of the paper's Fig. 3: the object's path over the fabric and the tilt phase plot."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only: runs headless
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.patches import Circle, Rectangle  # noqa: E402
+
+from .bridge import TrialResult  # noqa: E402
+
+
+def trajectory_figure(result: TrialResult, module_m: tuple[float, float], tilt_limit_deg: float,
+                      path: str | Path) -> Path:
+    """Save the path (start, target with its tolerance circle, the module's outline) above the phase plot
+    theta_zx vs theta_zy with the tilt-limit square, as the paper draws them; returns the file written."""
+    spec = result.spec
+    hx, hy = module_m[0] / 2, module_m[1] / 2
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(4.2, 8.0))
+
+    top.add_patch(Rectangle((-hx, -hy), 2 * hx, 2 * hy, fill=False, lw=1.2, color="0.3"))
+    top.add_patch(Circle(spec.target_m, spec.tolerance_m, fill=False, ls="--", lw=1.2, color="tab:blue"))
+    xy = result.true_xy_m
+    if len(xy):
+        top.plot(xy[:, 0], xy[:, 1], color="tab:cyan", lw=1.5, label="object")
+        top.plot(*xy[-1], "o", color="tab:red", ms=6, label="end")
+    top.plot(*spec.start_m, "s", color="0.2", ms=6, label="start")
+    top.plot(*spec.target_m, "x", color="tab:blue", ms=8, label="target")
+    outcome = "fell off" if result.fell_off else ("reached" if result.success else "not reached")
+    top.set_title(f"{result.object_name}, {spec.controller}, α = {spec.alpha_m:g} m: {outcome}\n"
+                  f"final error {result.final_error_m * 100:.1f} cm (ε = {spec.tolerance_m * 100:g} cm)", fontsize=9)
+    top.set_xlim(-hx - 0.05, hx + 0.05)
+    top.set_ylim(-hy - 0.05, hy + 0.05)
+    top.set_aspect("equal")
+    top.set_xlabel("x [m]")
+    top.set_ylabel("y [m]")
+    top.legend(fontsize=7, loc="upper right")
+
+    lim = tilt_limit_deg
+    bottom.add_patch(Rectangle((-lim, -lim), 2 * lim, 2 * lim, fill=False, ls=":", lw=1.5, color="tab:red"))
+    tilt = result.tilt_deg[np.all(np.isfinite(result.tilt_deg), axis=1)]
+    if len(tilt):
+        bottom.plot(tilt[:, 0], tilt[:, 1], color="tab:purple", lw=1.0)
+        bottom.plot(*tilt[0], "s", color="0.2", ms=5)
+    span = max(lim * 1.15, float(np.abs(tilt).max()) * 1.1 if len(tilt) else 0.0)
+    bottom.set_xlim(-span, span)
+    bottom.set_ylim(-span, span)
+    bottom.set_aspect("equal")
+    bottom.set_xlabel("θ_zx [deg]")
+    bottom.set_ylabel("θ_zy [deg]")
+    bottom.set_title(f"controller output; red: ±{lim:.1f}° tilt limit", fontsize=9)
+
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

@@ -1,0 +1,198 @@
+"""The firmware in the loop: the native virtual MCU drives the MuJoCo rig over a pty (and in-process for fault tests)."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from mantaray.host.link import Link
+from mantaray.host.transport import InProcessTransport, SerialTransport
+from mantaray.host.vmcu import VirtualMcu
+from mantaray.paths import REPO
+from mantaray.protocol import messages as m
+from mantaray.protocol.framing import Frame, FrameDecoder, encode_packet
+from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
+from mantaray.sim.rig import Rig
+
+# Central trials of the calibration protocol (benchmarks/calibrate.py --seed 2026, the first three).
+CENTRAL = [((-0.027, -0.0326), (-0.047, 0.0497)),
+           ((0.015, -0.0577), (0.0419, 0.0854)),
+           ((-0.0241, 0.0771), (0.0861, -0.0475))]
+
+
+@pytest.fixture(scope="module")
+def sphere_bridge():
+    with VirtualMcu(clock="sim") as vmcu:
+        yield Bridge(Link(SerialTransport(vmcu.path)), Rig())
+
+
+@pytest.mark.parametrize("controller", ["manhattan", "euclidean"])
+def test_central_targets_are_reached(sphere_bridge, controller):
+    for i, (start, target) in enumerate(CENTRAL):
+        result = sphere_bridge.run(TrialSpec(start, target, controller=controller, seed=i + 1))
+        assert result.watch.clean, result.watch.messages
+        assert not result.fell_off
+        assert result.success, (controller, start, target, result.final_error_m)
+        assert result.time_to_reach_s is not None and result.time_to_reach_s <= 10.0
+        assert len(result.t_s) == 121                     # 12 Hz for 10 s, frames 0..120
+        assert np.all(np.abs(result.command_m) <= 0.25)   # what the firmware sent stays in range
+
+
+def test_same_seed_gives_the_same_trajectory(sphere_bridge):
+    spec = TrialSpec((0.05, -0.04), (-0.06, 0.03), duration_s=4.0, alpha_m=0.02, seed=5)
+    first, second = sphere_bridge.run(spec), sphere_bridge.run(spec)
+    assert np.array_equal(first.true_xy_m, second.true_xy_m)
+    assert np.array_equal(first.command_m, second.command_m)
+    other = sphere_bridge.run(TrialSpec(spec.start_m, spec.target_m, duration_s=4.0, alpha_m=0.02, seed=6))
+    assert not np.array_equal(first.command_m, other.command_m)   # the seed drives the firmware's noise
+
+
+def test_commands_from_telemetry_reach_the_simulated_actuators(sphere_bridge):
+    result = sphere_bridge.run(TrialSpec((0.0, 0.0), (0.1, 0.0), duration_s=1.0))
+    data, model = sphere_bridge.data, sphere_bridge.model
+    # After the stop that ends the trial the firmware levels the surface, but the last applied command stays
+    # on the simulated actuators: the controls equal the last telemetry's commands.
+    assert np.allclose(data.ctrl[:4], result.command_m[-1])
+    assert result.tilt_deg[-1, 0] > 0 and result.command_m[-1, 1] > 0   # target at +x: +x corners lowered
+
+
+def test_a_cube_with_noise_ends_closer_than_it_started():
+    """The paper's alpha for the cube (0.1 m): it slides toward the target instead of sticking."""
+    start, target = (0.06, 0.06), (-0.06, -0.04)
+    with VirtualMcu(clock="sim") as vmcu:
+        bridge = Bridge(Link(SerialTransport(vmcu.path)), Rig().with_object("cube"))
+        result = bridge.run(TrialSpec(start, target, alpha_m=0.1, seed=3))
+    initial = np.hypot(*(np.subtract(start, target)))
+    assert not result.fell_off
+    assert result.final_error_m < 0.6 * initial, (result.final_error_m, initial)
+
+
+def test_realtime_mode_runs_against_a_wall_clock_firmware():
+    with VirtualMcu(clock="wall") as vmcu:
+        bridge = Bridge(Link(SerialTransport(vmcu.path)), Rig(), lockstep=False)
+        result = bridge.run(TrialSpec((0.0, 0.0), (0.05, 0.0), duration_s=1.0))
+    assert result.wall_time_s >= 1.0                       # paced to the wall clock
+    assert len(result.t_s) == 13 and result.watch.clean
+    assert np.all(result.state >= 0)                       # every frame was answered
+
+
+def test_lockstep_refuses_a_wall_clock_firmware():
+    with VirtualMcu(clock="wall") as vmcu:
+        with pytest.raises(Exception, match="simulated clock"):
+            Bridge(Link(SerialTransport(vmcu.path)), Rig())
+
+
+class Tamper:
+    """A transport that passes frames through, except those a rule duplicates or drops (firmware -> host)."""
+
+    def __init__(self, inner, rule) -> None:
+        self.inner, self.rule, self.decoder = inner, rule, FrameDecoder()
+
+    def write(self, data: bytes) -> None:
+        self.inner.write(data)
+
+    def read(self, timeout: float) -> bytes:
+        out = b""
+        for item in self.decoder.feed(self.inner.read(timeout)):
+            if isinstance(item, Frame):
+                out += encode_packet(item.id, item.seq, item.payload) * self.rule(item.message())
+        return out
+
+    def close(self) -> None:
+        self.inner.close()
+
+
+def _telemetry_rule(frame_to_tamper: int, copies: int):
+    def rule(msg) -> int:
+        return copies if isinstance(msg, m.Telemetry) and msg.position_frame == frame_to_tamper else 1
+    return rule
+
+
+def _tampered_trial(rule) -> Bridge:
+    with VirtualMcu(clock="sim") as vmcu:
+        bridge = Bridge(Link(Tamper(SerialTransport(vmcu.path), rule)), Rig())
+        bridge.run(TrialSpec((0.0, 0.0), (0.05, 0.0), duration_s=1.0))
+        return bridge
+
+
+def test_duplicate_telemetry_is_reported():
+    result = _tampered_trial(_telemetry_rule(5, copies=2))._watch
+    assert result.duplicate_replies == 1 and not result.clean
+    assert any("duplicate telemetry for camera frame 5" in text for text in result.messages)
+
+
+def test_missed_telemetry_is_reported_and_the_trial_goes_on():
+    bridge = _tampered_trial(_telemetry_rule(5, copies=0))
+    assert bridge._watch.missed_replies == 1
+    assert any("no telemetry answered camera frame 5" in text for text in bridge._watch.messages)
+
+
+def test_a_firmware_reset_mid_trial_is_reported():
+    transport = InProcessTransport(simulated_clock=True)
+    writes = 0
+
+    class Rebooting:
+        def write(self, data: bytes) -> None:
+            nonlocal writes
+            writes += 1
+            if writes == 40:
+                transport._lib.mr_vmcu_boot(1)   # power cycle: the firmware boots afresh, idle, clock 0
+            transport.write(data)
+
+        def read(self, timeout: float) -> bytes:
+            return transport.read(timeout)
+
+        def close(self) -> None:
+            pass
+
+    bridge = Bridge(Link(Rebooting()), Rig())
+    result = bridge.run(TrialSpec((0.0, 0.0), (0.05, 0.0), duration_s=2.0))
+    assert result.watch.firmware_resets == 1 and not result.watch.clean
+    assert any("firmware reset" in text for text in result.watch.messages)
+    assert m.State.IDLE in result.state.tolist()           # what a reset firmware reports: it is idle again
+
+
+def test_dropped_camera_frames_are_counted_and_not_sent(sphere_bridge):
+    sphere_bridge.tracking = Tracking(drop_rate=0.3)
+    try:
+        result = sphere_bridge.run(TrialSpec((0.0, 0.0), (0.05, 0.0), duration_s=2.0, seed=4))
+    finally:
+        sphere_bridge.tracking = Tracking()
+    dropped = np.isnan(result.measured_xy_m[:, 0])
+    assert result.watch.dropped_frames == dropped.sum() > 0
+    assert np.all(result.state[dropped] == -1) and np.all(result.state[~dropped] >= 0)
+    assert result.watch.clean
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "run", *args], cwd=REPO,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_sim_run_prints_json_and_writes_the_figure(tmp_path):
+    proc = _cli("--duration", "2", "--json", "--out", str(tmp_path), "--start", "0.02,0", "--target", "0.0,0.0")
+    assert proc.returncode in (0, 1), proc.stderr
+    result = json.loads(proc.stdout)
+    for key in ("success", "final_error_m", "time_to_reach_s", "fell_off", "sim_time_s", "wall_time_s"):
+        assert key in result
+    assert result["sim_time_s"] == pytest.approx(2.0, abs=0.01)
+    assert (tmp_path / "sphere_manhattan_seed1.png").stat().st_size > 10_000
+    with np.load(tmp_path / "sphere_manhattan_seed1.npz") as saved:
+        assert saved["true_xy_m"].shape == (25, 2)
+
+
+@pytest.mark.parametrize("args, needle", [
+    (("--start", "0.4,0"), "outside the fabric"),
+    (("--target", "abc"), "expected two numbers"),
+    (("--rate", "0"), "camera rate"),
+    (("--latency", "0.2"), "camera latency"),
+    (("--duration", "-1"), "duration"),
+    (("--object", "teapot"), "invalid choice"),
+])
+def test_sim_run_refuses_bad_input_in_one_line(args, needle):
+    proc = _cli(*args)
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr and needle in proc.stderr
