@@ -24,6 +24,7 @@ from mantaray.host.link import Link
 from mantaray.host.transport import SerialTransport
 from mantaray.host.vmcu import VirtualMcu
 from mantaray.sim.bridge import Bridge, TrialSpec, Tracking
+from mantaray.sim.model import SimulationUnstable
 from mantaray.sim.rig import Rig
 
 RADIUS_M = 0.10   # [m] starts and targets within this distance of the centre (the central region)
@@ -67,12 +68,19 @@ def run_point(job: tuple) -> list[dict]:
         rig = with_setting(rig, key, value)
     rows = []
     with VirtualMcu(clock="sim") as vmcu:
-        bridge = Bridge(Link(SerialTransport(vmcu.path)), rig, Tracking(rate_hz=rate_hz, latency_s=latency_s))
+        try:
+            bridge = Bridge(Link(SerialTransport(vmcu.path)), rig, Tracking(rate_hz=rate_hz, latency_s=latency_s))
+        except SimulationUnstable as exc:
+            return [{"settings": dict(settings), "controller": c, "unstable": str(exc)} for c in controllers]
         for controller in controllers:
             t = time.perf_counter()
-            results = [bridge.run(TrialSpec(s, g, controller=controller, duration_s=duration_s, seed=i + 1))
-                       for i, (s, g) in enumerate(trials)]
-            rows.append({"settings": {k: v for k, v in settings}, "controller": controller,
+            try:
+                results = [bridge.run(TrialSpec(s, g, controller=controller, duration_s=duration_s, seed=i + 1))
+                           for i, (s, g) in enumerate(trials)]
+            except SimulationUnstable as exc:
+                rows.append({"settings": dict(settings), "controller": controller, "unstable": str(exc)})
+                continue
+            rows.append({"settings": dict(settings), "controller": controller,
                          "success": sum(r.success for r in results), "trials": len(results),
                          "fell": sum(r.fell_off for r in results),
                          "final_error_m": [round(r.final_error_m, 4) for r in results],
@@ -107,9 +115,12 @@ def main() -> int:
     with open(args.out, "a") as out, multiprocessing.Pool(args.jobs) as pool:
         for rows in pool.imap_unordered(run_point, jobs):
             for row in rows:
+                out.write(json.dumps(row) + "\n")
+                if "unstable" in row:
+                    print(f"{row['settings']} {row['controller']:9s} UNSTABLE: {row['unstable']}", flush=True)
+                    continue
                 print(f"{row['settings']} {row['controller']:9s} {row['success']}/{row['trials']} "
                       f"fell {row['fell']} median error {row['median_error_m']:.3f} m ({row['wall_s']} s)", flush=True)
-                out.write(json.dumps(row) + "\n")
     return 0
 
 

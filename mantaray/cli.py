@@ -77,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:  # a user-facing tool: one clear line, no traceback
         from mantaray.host.link import LinkError
         from mantaray.paths import NotBuilt
-        from mantaray.sim.bridge import SimulationUnstable
+        from mantaray.sim.model import SimulationUnstable
         if isinstance(exc, (LinkError, NotBuilt, OSError, SimulationUnstable)):
             print(f"mantaray {args.command}: error: {exc}", file=sys.stderr)
             return 1

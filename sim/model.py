@@ -192,6 +192,13 @@ def write_model(rig: Rig, directory: str | Path) -> Path:
     return scene
 
 
+class SimulationUnstable(RuntimeError):
+    """MuJoCo reported a diverging step (NaN or huge accelerations) and reset its state: the physics is not valid."""
+
+    def __init__(self, when: str) -> None:
+        super().__init__(f"{when}; the rig's parameters are too stiff for the timestep (see sim/README.md)")
+
+
 def load(rig: Rig, fabric_settle_s: float = 2.0) -> tuple[mujoco.MjModel, mujoco.MjData]:
     """Compile the scene through MjSpec with the alternating mesh, let the bare fabric settle, keep that as REST_KEY.
 
@@ -209,6 +216,8 @@ def load(rig: Rig, fabric_settle_s: float = 2.0) -> tuple[mujoco.MjModel, mujoco
     data.qpos[qadr:qadr + 7] = [park_x_m, 0.0, rig.object.half_height_m + 0.01, 1, 0, 0, 0]  # dropped 1 cm
     for _ in range(round(fabric_settle_s / model.opt.timestep)):
         mujoco.mj_step(model, data)
+    if data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number:
+        raise SimulationUnstable("the physics diverged while the bare fabric settled")
     key = model.key(REST_KEY).id
     model.key_time[key] = 0.0
     model.key_qpos[key] = data.qpos

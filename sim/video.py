@@ -11,7 +11,7 @@ from . import model as M
 class Recorder:
     """Renders the overhead camera every 1/fps simulated seconds; attach to Bridge.recorder, then save()."""
 
-    def __init__(self, model: mujoco.MjModel, fps: float = 30.0, width: int = 640, height: int = 640) -> None:
+    def __init__(self, model: mujoco.MjModel, fps: float = 30.0, width: int = 480, height: int = 480) -> None:
         if not 1 <= fps <= 240:
             raise ValueError(f"video fps must be 1..240, got {fps}")
         self.fps = fps

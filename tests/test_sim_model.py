@@ -90,3 +90,12 @@ def test_lowering_a_corner_rolls_the_sphere_toward_it(corner, sphere_scene):
     toward = np.array(M.CORNERS[corner], dtype=float) / np.sqrt(2)
     assert (M.object_xy(model, data) - start_xy) @ toward > 0.01   # see sim/README.md: 0.17 m here
     assert _warnings(data) == {} and not M.fell_off(model, data, RIG.fall)
+
+
+def test_a_fabric_too_stiff_for_the_timestep_is_refused_not_simulated():
+    """MuJoCo resets a diverging state and carries on; load() must say so instead of returning garbage."""
+    import dataclasses
+
+    stiff = dataclasses.replace(RIG, fabric=dataclasses.replace(RIG.fabric, young_pa=5e8))
+    with pytest.raises(M.SimulationUnstable, match="diverged"):
+        M.load(stiff)
