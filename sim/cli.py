@@ -2,8 +2,10 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -27,7 +29,9 @@ def _inside(parser: argparse.ArgumentParser, name: str, xy: tuple[float, float],
 
 
 def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
-    """One target-reaching trial: the native firmware on a pty drives the simulated rig in lock-step."""
+    """One target-reaching trial: the native firmware on a pty drives the simulated rig in lock-step.
+
+    With --port, the firmware on that serial device path (a board, the AVR simulator) drives it instead."""
     from mantaray.host.link import Link
     from mantaray.host.transport import SerialTransport
     from mantaray.host.vmcu import VirtualMcu
@@ -58,8 +62,13 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         def progress(t_s: float) -> None:
             bar.update(round(t_s - bar.n, 3))
 
-    with VirtualMcu(clock="wall" if args.realtime else "sim") as vmcu:
-        bridge = Bridge(Link(SerialTransport(vmcu.path)), rig, tracking, lockstep=not args.realtime)
+    if args.viewer and not os.environ.get("DISPLAY"):
+        parser.error("--viewer needs a display (DISPLAY is not set); use --video to record one instead")
+    with contextlib.ExitStack() as stack:
+        port = args.port or stack.enter_context(VirtualMcu(clock="wall" if args.realtime else "sim")).path
+        link = Link(SerialTransport(port))
+        stack.callback(link.close)
+        bridge = Bridge(link, rig, tracking, lockstep=not args.realtime)
         viewer = None
         if args.viewer:
             import mujoco.viewer
@@ -132,6 +141,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--json", action="store_true", help="print one JSON object instead of the sentence")
     run.add_argument("--video", action="store_true", help="also render an MP4 from the overhead camera")
     run.add_argument("--video-fps", type=float, default=30.0, help="video frame rate [1/s]")
+    run.add_argument("--port", help="serial device path of a firmware to use instead of starting the virtual MCU "
+                     "(a simulated-clock firmware runs in lock-step; a board needs --realtime)")
     run.add_argument("--realtime", action="store_true",
                      help="run in real time against a wall-clock virtual MCU instead of lock-step")
     run.add_argument("--viewer", action="store_true", help="show the MuJoCo viewer (needs a display; implies "

@@ -196,3 +196,18 @@ def test_sim_run_refuses_bad_input_in_one_line(args, needle):
     proc = _cli(*args)
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr and needle in proc.stderr
+
+
+def test_sim_run_drives_the_rig_from_a_firmware_on_a_given_port(tmp_path):
+    """--port: the way a board or the AVR simulator takes the virtual MCU's place."""
+    with VirtualMcu(clock="sim") as vmcu:
+        proc = _cli("--port", vmcu.path, "--duration", "1", "--json", "--out", str(tmp_path))
+    assert proc.returncode in (0, 1), proc.stderr
+    assert json.loads(proc.stdout)["sim_time_s"] == pytest.approx(1.0, abs=0.01)
+
+
+def test_sim_run_explains_a_clock_mismatch_in_one_line():
+    with VirtualMcu(clock="wall") as vmcu:
+        proc = _cli("--port", vmcu.path, "--duration", "1")
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr
+    assert "lock-step needs a firmware on the simulated clock" in proc.stderr
