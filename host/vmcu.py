@@ -1,12 +1,23 @@
 """Starts the native virtual MCU on a fresh pty and hands back the device path the host opens."""
 from __future__ import annotations
 
+import ctypes
+import signal
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 from mantaray.paths import native_artifact
+
+
+PR_SET_PDEATHSIG = 1  # prctl option (linux/prctl.h): a signal the child gets when its parent dies
+
+
+def _die_with_parent() -> None:
+    """In the child before exec: get SIGTERM when the parent dies, so no virtual MCU outlives its host."""
+    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 class VirtualMcu:
@@ -18,7 +29,8 @@ class VirtualMcu:
         self.clock = clock
         self.process = subprocess.Popen(
             [str(native_artifact("mantaray-vmcu")), "--pty", self.path, "--clock", clock],
-            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+            preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None)
         deadline = time.monotonic() + start_timeout
         while not Path(self.path).exists():
             if self.process.poll() is not None:
