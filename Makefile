@@ -5,7 +5,7 @@ setup:
 	bash scripts/setup.sh
 
 run: setup
-	python3 -m mantaray.cli vmcu --identify-only
+	python3 -m mantaray.cli sim run --video; test $$? -le 1  # 1 = target not reached: a result, not an error
 
 test: setup
 	python3 -m pytest
