@@ -161,6 +161,13 @@ class Bridge:
         self.model, self.data = M.load(rig)
         self.clock_us = 0               # the firmware's sim clock, last value sent
         self.frame = 0                  # camera frame counter, runs on across trials
+        if lockstep:
+            # The firmware may have run before (another bridge, another host): its clock must never go back.
+            # A not_visible frame steps nothing and feeds no deadman; its telemetry tells the time [ms].
+            self.frame = 1
+            probe = link.position(m.ObjectPosition(frame=self.frame, capture_time=0,
+                                                   flags=m.PositionFlags.NOT_VISIBLE))
+            self.clock_us = (probe.time + 1) * 1000   # telemetry truncates to whole ms
         self.link.on_message = self._watch_message
         self._watch = LinkWatch()
         self._answered: set[int] = set()

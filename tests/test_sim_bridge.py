@@ -217,3 +217,12 @@ def test_sim_run_explains_a_clock_mismatch_in_one_line():
         proc = _cli("--port", vmcu.path, "--duration", "1")
     assert proc.returncode == 1 and "Traceback" not in proc.stderr
     assert "lock-step needs a firmware on the simulated clock" in proc.stderr
+
+
+def test_a_second_bridge_on_a_used_firmware_picks_up_its_clock():
+    """The firmware's simulated clock never goes back: a new bridge starts after whatever ran before."""
+    with VirtualMcu(clock="sim") as vmcu:
+        link = Link(SerialTransport(vmcu.path))
+        spec = TrialSpec((0.0, 0.0), (0.05, 0.0), duration_s=1.0)
+        assert Bridge(link, Rig()).run(spec).watch.clean
+        assert Bridge(link, Rig()).run(spec).watch.clean
