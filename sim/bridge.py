@@ -219,7 +219,8 @@ class Bridge:
         t = time.perf_counter()
         self._configure(spec)
         M.drop_object(model, data, *spec.start_m)
-        bad_steps0 = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
+        bad_qacc = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]   # a live view of MuJoCo's counter
+        bad_steps0 = bad_qacc.number
         link_s += time.perf_counter() - t
         t0_sim = data.time                                # physics time at trial time 0
         base_us = (self.clock_us + CLOCK_GAP_US) & U32    # firmware time at trial time 0
@@ -248,9 +249,10 @@ class Bridge:
                 mujoco.mj_step(model, data)
                 if self.recorder is not None:
                     self.recorder.capture(data)
+                # Checked every step: MuJoCo resets a diverged state to time 0, so the loop would start over.
+                if bad_qacc.number != bad_steps0:
+                    raise SimulationUnstable(f"the physics diverged before trial time {to_trial_s:.3f} s")
             physics_s += time.perf_counter() - t
-            if data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number != bad_steps0:
-                raise SimulationUnstable(f"the physics diverged before trial time {to_trial_s:.3f} s")
             if self.viewer is not None:
                 self.viewer.sync()
             return M.fell_off(model, data, fall)

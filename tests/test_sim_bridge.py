@@ -5,6 +5,7 @@ import json
 import subprocess
 import sys
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -15,6 +16,7 @@ from mantaray.paths import REPO
 from mantaray.protocol import messages as m
 from mantaray.protocol.framing import Frame, FrameDecoder, encode_packet
 from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
+from mantaray.sim.model import SimulationUnstable
 from mantaray.sim.rig import Rig
 
 # Central trials of the calibration protocol (benchmarks/calibrate.py --seed 2026, the first three).
@@ -226,3 +228,19 @@ def test_a_second_bridge_on_a_used_firmware_picks_up_its_clock():
         spec = TrialSpec((0.0, 0.0), (0.05, 0.0), duration_s=1.0)
         assert Bridge(link, Rig()).run(spec).watch.clean
         assert Bridge(link, Rig()).run(spec).watch.clean
+
+
+def test_physics_diverging_mid_trial_is_refused_at_the_step_it_happens():
+    """MuJoCo resets a diverged state to time 0 and carries on; the trial must stop there, not step on from the reset."""
+    bridge = Bridge(Link(InProcessTransport(simulated_clock=True)), Rig())
+    bridge.model.opt.timestep = 0.05     # 50x the rig's step: the stiff fabric blows up within a few steps
+    warnings_per_step = []
+
+    class StepWatch:                     # the bridge offers every physics step to its recorder
+        def capture(self, data) -> None:
+            warnings_per_step.append(data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
+
+    bridge.recorder = StepWatch()
+    with pytest.raises(SimulationUnstable, match="diverged before trial time"):
+        bridge.run(TrialSpec((0.0, 0.0), (0.05, 0.0), duration_s=1.0))
+    assert warnings_per_step[-1] == 1 and warnings_per_step.count(1) == 1   # stopped on the first diverged step
