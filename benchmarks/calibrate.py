@@ -85,6 +85,9 @@ def run_point(job: tuple) -> list[dict]:
                          "fell": sum(r.fell_off for r in results),
                          "final_error_m": [round(r.final_error_m, 4) for r in results],
                          "median_error_m": round(float(np.median([r.final_error_m for r in results])), 4),
+                         "reached": sum(r.time_to_reach_s is not None for r in results),
+                         "sim_per_wall": round(sum(r.sim_time_s for r in results)
+                                               / sum(r.wall_time_s for r in results), 2),
                          "wall_s": round(time.perf_counter() - t, 1)})
     return rows
 
@@ -120,7 +123,8 @@ def main() -> int:
                     print(f"{row['settings']} {row['controller']:9s} UNSTABLE: {row['unstable']}", flush=True)
                     continue
                 print(f"{row['settings']} {row['controller']:9s} {row['success']}/{row['trials']} "
-                      f"fell {row['fell']} median error {row['median_error_m']:.3f} m ({row['wall_s']} s)", flush=True)
+                      f"(reached {row['reached']}) fell {row['fell']} median error {row['median_error_m']:.3f} m "
+                      f"({row['sim_per_wall']} sim s/wall s, {row['wall_s']} s)", flush=True)
     return 0
 
 
