@@ -112,7 +112,7 @@ def model_xml(rig: Rig) -> str:
               radius="{_v(fab.radius_m)}" mass="{_v(fab.mass_kg)}" rgba="0.25 0.45 0.85 1">
       <contact condim="{c.condim}" friction="{_v(*c.friction)}" solref="{_v(*c.solref)}"
                solimp="{_v(*c.solimp)}" selfcollide="none"/>
-      <edge equality="true" solref="{_v(*fab.edge_solref)}"/>
+      <edge equality="true" solref="{_v(*fab.edge_solref)}" solimp="{_v(*fab.edge_solimp)}"/>
       <elasticity young="{_v(fab.young_pa)}" poisson="{_v(fab.poisson)}" thickness="{_v(fab.thickness_m)}"
                   damping="{_v(fab.damping_s)}" elastic2d="bend"/>
     </flexcomp>
@@ -199,6 +199,20 @@ class SimulationUnstable(RuntimeError):
         super().__init__(f"{when}; the rig's parameters are too stiff for the timestep (see sim/README.md)")
 
 
+def _set_rolling_damping(model: mujoco.MjModel, rig: Rig) -> None:
+    """Damping on the object's three rotational dofs: rig.contact.rolling_damping_per_s x its inertia about its lowest point.
+
+    For a sphere rolling on a level sheet that makes its speed decay at exactly that rate (I + m r^2 is
+    the rolling inertia about the contact). MJCF cannot damp only the rotation of a free joint, so this
+    is set on the compiled model; the files write_model() writes leave it out.
+    """
+    body = model.body(OBJECT).id
+    mass_kg, inertia = model.body_mass[body], model.body_inertia[body]
+    about_contact = float(np.mean(inertia)) + mass_kg * rig.object.half_height_m ** 2   # [kg m^2]
+    dof = model.jnt_dofadr[model.joint(OBJECT).id]
+    model.dof_damping[dof + 3:dof + 6] = rig.contact.rolling_damping_per_s * about_contact
+
+
 def load(rig: Rig, fabric_settle_s: float = 2.0) -> tuple[mujoco.MjModel, mujoco.MjData]:
     """Compile the scene through MjSpec with the alternating mesh, let the bare fabric settle, keep that as REST_KEY.
 
@@ -210,6 +224,7 @@ def load(rig: Rig, fabric_settle_s: float = 2.0) -> tuple[mujoco.MjModel, mujoco
         spec.flexes[0].elem = alternating_elements(rig.fabric.resolution).ravel().tolist()
         spec.add_key(name=REST_KEY)
         model = spec.compile()
+    _set_rolling_damping(model, rig)
     data = mujoco.MjData(model)
     qadr = model.jnt_qposadr[model.joint(OBJECT).id]
     park_x_m = rig.frame.size_x_m / 2 + PARK_OFFSET_M

@@ -25,7 +25,7 @@ class Actuators:
     """
     range_m: float = 0.25                 # [m] travel each way from z0 (paper)
     motor_speed_rpm: float = 120.0        # [rev/min] RS Pro 834-7590, 12 V, no-load (paper)
-    pulley_circumference_m: float = 0.040  # [m/rev] GUESS: GT2 20-tooth pulley (2 mm x 20); not in the paper
+    pulley_circumference_m: float = 0.10   # [m/rev] CALIBRATED (sim/README.md): e.g. a GT2 50-tooth pulley; not in the paper
     kp_n_per_m: float = 2000.0            # [N/m] servo stiffness (SIM-NOTES); the real loop is on the Uno
     damping_ratio: float = 1.0            # [-] servo damping as a fraction of critical (SIM-NOTES)
     carriage_mass_kg: float = 0.2         # [kg] GUESS: V-slot carriage plate, wheels and clamp; gravity-compensated
@@ -39,9 +39,10 @@ class Actuators:
 @dataclass(frozen=True)
 class Fabric:
     """The polyester sheet: a MuJoCo flexcomp grid (dim 2, full dofs), welded at its four corners to the carriages."""
-    size_m: float = 0.6                   # [m] side of the square sheet (paper, hardware: 0.6 x 0.6)
+    size_m: float = 0.52                  # [m] side of the square sheet, CALIBRATED slack (sim/README.md): the paper's
+                                          # simulation used 0.5 m, its hardware 0.6 m
     resolution: int = 15                  # [vertices per side] odd, so the alternating mesh is mirror-symmetric
-    mass_kg: float = 0.05                 # [kg] GUESS: 0.36 m^2 at ~140 g/m^2 polyester (SIM-NOTES value)
+    mass_kg: float = 0.05                 # [kg] GUESS (SIM-NOTES value): 0.6 x 0.6 m at ~140 g/m^2 polyester
     young_pa: float = 5e6                 # [Pa] GUESS (SIM-NOTES): sets bending stiffness with thickness
     poisson: float = 0.3                  # [-] GUESS (SIM-NOTES)
     thickness_m: float = 3e-4             # [m] GUESS (SIM-NOTES): typical woven polyester
@@ -50,6 +51,9 @@ class Fabric:
     radius_m: float = 0.002               # [m] collision thickness of the triangles (SIM-NOTES)
     edge_solref: tuple[float, float] = (0.002, 1.0)  # [s, -] edge-length equality: time constant, damping ratio
                                                      # (SIM-NOTES: 0.4-1.5 % strain; default solref gave 8-12 %)
+    edge_solimp: tuple[float, float, float] = (0.999, 0.9999, 0.001)  # [-, -, m] edge constraints' impedance d0,
+                                          # dmax, width: polyester barely stretches; MuJoCo's default (0.9, 0.95) lets
+                                          # each edge give ~50x more under load (sim/README.md, Calibration)
     corner_weld_solref: tuple[float, float] = (0.002, 1.0)  # [s, -] corner-to-carriage welds: MuJoCo's default
                                                             # (0.02 s) leaves the corners ~18 mm off; this, 0.3 mm
 
@@ -71,14 +75,18 @@ class Contact:
     condim: int = 6                                              # 6: sliding, torsional and rolling (3: sliding only)
     solref: tuple[float, float] = (0.005, 1.0)                   # [s, -] (SIM-NOTES)
     solimp: tuple[float, float, float] = (0.95, 0.99, 0.0001)    # [-, -, m] (SIM-NOTES)
+    rolling_damping_per_s: float = 4.0    # [1/s] CALIBRATED: viscous rolling resistance of the soft fabric, the
+                                          # rate at which a rolling sphere's speed decays on a level sheet; damping
+                                          # on the object's rotational dofs (MuJoCo's own rolling friction is
+                                          # Coulomb-like, the same at any speed)
 
 
 @dataclass(frozen=True)
 class Solver:
-    """Integration: Euler (flex elasticity is refused under the implicit integrators), CG, 1 kHz as in the paper."""
+    """Integration: Euler (flex elasticity is refused under the implicit integrators), Newton, 1 kHz as in the paper."""
     timestep_s: float = 0.001             # [s] paper: 1000 Hz
     integrator: str = "Euler"
-    solver: str = "CG"
+    solver: str = "Newton"                # CG stalls on the stiff edges (iteration cap) and diverged in some settings
     tolerance: float = 1e-6               # [-] solver stopping tolerance (SIM-NOTES)
 
 
