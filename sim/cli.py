@@ -113,6 +113,147 @@ def _save_trajectory(result, path: Path) -> Path:
     return path
 
 
+def _gains(text: str) -> tuple[float, float, float, float]:
+    try:
+        values = tuple(float(v) for v in text.replace(",", " ").split())
+    except ValueError:
+        values = ()
+    if len(values) == 3:
+        values += (26.565051,)
+    if len(values) != 4 or not all(math.isfinite(v) and v >= 0 for v in values):
+        raise argparse.ArgumentTypeError(f"expected KP,KI,KD or KP,KI,KD,ILIMIT (numbers >= 0), got {text!r}")
+    return values
+
+
+def _cells(text: str) -> tuple[int, ...]:
+    try:
+        return tuple(int(v) for v in text.replace(",", " ").split())
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected cell indices like 0,21,210, got {text!r}") from None
+
+
+def _heatmap_outputs(results, out: Path, title: str) -> dict:
+    """Write per-cell rates (CSV), the summary (JSON) and the figure beside the results file; return the summary."""
+    import numpy as np
+
+    from .heatmap import summarize
+    from .plots import heatmap_figure
+
+    s = summarize(results)
+    p = results.protocol
+    f = p.rig().frame
+    rows = ["cell,ix,iy,x_lo_m,y_lo_m,trials,success_rate,reach_rate,fell_rate"]
+    counts = np.zeros(p.cells ** 2, dtype=int)
+    for r in results.records.values():
+        counts[r["cell"]] += 1
+    for cell in p.cell_ids():
+        ix, iy = cell % p.cells, cell // p.cells
+        rows.append(f"{cell},{ix},{iy},{-f.size_x_m / 2 + ix * f.size_x_m / p.cells:.4f},"
+                    f"{-f.size_y_m / 2 + iy * f.size_y_m / p.cells:.4f},{counts[cell]},{s.rates[iy, ix]:.3f},"
+                    f"{s.reach_rates[iy, ix]:.3f},{s.fell_rates[iy, ix]:.3f}")
+    (out / "cells.csv").write_text("\n".join(rows) + "\n")
+    summary = {"protocol": p.to_json(), **s.to_json()}
+    summary["figure"] = str(heatmap_figure(s.rates, (f.size_x_m, f.size_y_m),
+                                           f"{title}\nscore {s.score:.1f} of {len(p.cell_ids())} "
+                                           f"(within ε at any frame: {s.reach_score:.1f})", out / "heatmap.png"))
+    (out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
+    return summary
+
+
+def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """The paper's evaluation (Fig. 2): success rate per cell of the workspace, trials in parallel.
+
+    Each cell gets N trials with a random target inside the cell and a random start anywhere on the fabric;
+    a trial succeeds if the object ends within ε of its target at the end of T without falling off. The
+    firmware core runs in-process (the same C++ as the virtual MCU). Results go to OUT/results.jsonl, one
+    line per trial as it finishes: interrupt the run and the same command continues where it stopped."""
+    from .heatmap import Protocol, ProtocolMismatch, ResultsFile, run, run_local, run_ray
+
+    try:
+        protocol = Protocol(object_name=args.object, controller=args.controller, cells=args.cells,
+                            trials_per_cell=args.trials, tolerance_m=args.tolerance, duration_s=args.duration,
+                            alpha_m=args.alpha, seed=args.seed, gains=args.gains, resolution=args.resolution,
+                            timestep_s=args.timestep, only_cells=args.only_cells)
+    except ValueError as exc:
+        parser.error(str(exc))
+    if args.jobs is not None and args.jobs < 1:
+        parser.error(f"--jobs must be at least 1, got {args.jobs}")
+    out = Path(args.out or f"out/heatmap/{args.object}_{args.controller}_alpha{args.alpha:g}")
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        results = ResultsFile.open(out / "results.jsonl", protocol)
+    except (ProtocolMismatch, ValueError) as exc:
+        print(f"mantaray sim heatmap: {exc}", file=sys.stderr)
+        return 2
+    todo = results.missing()
+    total = len(protocol.cell_ids()) * protocol.trials_per_cell
+    if len(todo) < total:
+        print(f"continuing {out / 'results.jsonl'}: {total - len(todo)} of {total} trials already done",
+              file=sys.stderr)
+    from tqdm import tqdm
+
+    bar = tqdm(total=total, initial=total - len(todo), unit="trial", disable=args.json or None,
+               file=sys.stderr, smoothing=0.05)
+    try:
+        if args.executor == "ray":
+            try:
+                import ray  # noqa: F401  (only to say clearly when it is missing)
+            except ImportError:
+                bar.close()
+                print("mantaray sim heatmap: --executor ray needs Ray: pip install 'mantaray[ray]'", file=sys.stderr)
+                return 2
+            records = run_ray(protocol, todo, args.jobs, args.ray_address)
+        else:
+            records = run_local(protocol, todo, args.jobs or os.cpu_count() or 1)
+        run(results, records, progress=lambda record: bar.update(1))
+    except KeyboardInterrupt:
+        bar.close()
+        print(f"\ninterrupted: {len(results.records)} of {total} trials are in {out / 'results.jsonl'}; "
+              f"the same command continues the run", file=sys.stderr)
+        return 130
+    bar.close()
+    title = (f"{args.object}, {args.controller}, α = {args.alpha:g} m, ε = {args.tolerance:g} m, T = {args.duration:g} s, "
+             f"{protocol.trials_per_cell} trials/cell")
+    summary = _heatmap_outputs(results, out, title)
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        regions = summary["regions"]
+        print(f"{args.object}, {args.controller}: score {summary['score']:.1f} of {len(protocol.cell_ids())} cells "
+              f"(within ε at any frame: {summary['reach_score']:.1f}); regions: "
+              + ", ".join(f"{name} {r['cells']} cells ({r['area_m2']:.4f} m²)" for name, r in regions.items())
+              + f"; {out}/results.jsonl, cells.csv, summary.json, heatmap.png")
+    return 0
+
+
+def cmd_compare(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """The difference map of two heatmap runs (first minus second), like the paper's Euclidean - Manhattan."""
+    from .heatmap import ResultsFile, summarize
+    from .plots import heatmap_figure
+
+    runs = []
+    for given in (args.first, args.second):
+        path = Path(given)
+        path = path / "results.jsonl" if path.is_dir() else path
+        if not path.exists():
+            parser.error(f"no heatmap results at {given}")
+        try:
+            runs.append(ResultsFile.load(path))
+        except ValueError as exc:
+            parser.error(str(exc))
+    (a, b), (pa, pb) = [summarize(r) for r in runs], [r.protocol for r in runs]
+    if pa.cells != pb.cells:
+        parser.error(f"the runs have different cell grids ({pa.cells} and {pb.cells} per side)")
+    f = pa.rig().frame
+    label = [f"{p.object_name} {p.controller} α={p.alpha_m:g}" for p in (pa, pb)]
+    diff = a.rates - b.rates
+    figure = heatmap_figure(diff, (f.size_x_m, f.size_y_m), f"{label[0]} − {label[1]}\nscores {a.score:.1f} − "
+                            f"{b.score:.1f} = {a.score - b.score:+.1f}", args.out, difference=True)
+    print(f"{label[0]}: score {a.score:.1f}; {label[1]}: score {b.score:.1f}; difference {a.score - b.score:+.1f} "
+          f"({(a.score - b.score) / max(b.score, 1e-9):+.0%} of the second); figure {figure}")
+    return 0
+
+
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Register `sim` and its subcommands on the top-level parser's subparsers."""
     sim = sub.add_parser("sim", help="the MuJoCo rig with the firmware in the loop",
@@ -148,4 +289,36 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--viewer", action="store_true", help="show the MuJoCo viewer (needs a display; implies "
                      "nothing about pacing: add --realtime to watch at real speed)")
     run.set_defaults(func=lambda args: cmd_run(args, run))
+
+    heat = sim_sub.add_parser(
+        "heatmap", help="the paper's success heatmap (Fig. 2) over the workspace", description=cmd_heatmap.__doc__,
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    heat.add_argument("--object", choices=sorted(OBJECTS), default="sphere", help="the paper's object (Table I)")
+    heat.add_argument("--controller", choices=["manhattan", "euclidean"], default="manhattan")
+    heat.add_argument("--cells", type=int, default=20, help="cells per side of the workspace (paper: 20)")
+    heat.add_argument("--trials", type=int, default=10, help="trials per cell, N (paper: 10)")
+    heat.add_argument("--tolerance", type=float, default=0.02, help="ε [m]")
+    heat.add_argument("--duration", type=float, default=10.0, help="runtime T [s] (paper: 10)")
+    heat.add_argument("--alpha", type=float, default=0.0, help="noise amplitude α [m] (paper: 0.1 cube, 0.05 bunny)")
+    heat.add_argument("--gains", type=_gains, metavar="KP,KI,KD[,ILIM]",
+                      help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
+    heat.add_argument("--seed", type=int, default=2026, help="seed of the whole run: starts, targets and noise")
+    heat.add_argument("--resolution", type=int, default=15, help="fabric vertices per side (odd; see sim/README.md)")
+    heat.add_argument("--timestep", type=float, default=0.001, help="physics step [s] (paper: 0.001)")
+    heat.add_argument("--only-cells", type=_cells, metavar="I,J,...", help="run only these cells (index ix + iy*cells)")
+    heat.add_argument("--jobs", type=int, help="parallel workers (default: every core; with ray: every CPU of the cluster)")
+    heat.add_argument("--executor", choices=["local", "ray"], default="local",
+                      help="local processes, or Ray actors (a local Ray instance, or --ray-address)")
+    heat.add_argument("--ray-address", help="address of a running Ray cluster (e.g. ray://head:10001)")
+    heat.add_argument("--out", help="directory for results.jsonl, cells.csv, summary.json and heatmap.png "
+                      "(default out/heatmap/OBJECT_CONTROLLER_alphaA)")
+    heat.add_argument("--json", action="store_true", help="print the summary as JSON (and no progress bar)")
+    heat.set_defaults(func=lambda args: cmd_heatmap(args, heat))
+
+    compare = sim_sub.add_parser("compare", help="difference map of two heatmap runs (first minus second)",
+                                 description=cmd_compare.__doc__, formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    compare.add_argument("first", help="results.jsonl of a heatmap run, or its directory")
+    compare.add_argument("second", help="the run to subtract")
+    compare.add_argument("--out", default="out/heatmap/difference.png", help="figure to write")
+    compare.set_defaults(func=lambda args: cmd_compare(args, compare))
     sim.set_defaults(func=lambda args: (sim.print_help(), 2)[1])

@@ -59,3 +59,26 @@ def trajectory_figure(result: TrialResult, module_m: tuple[float, float], tilt_l
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def heatmap_figure(rates: np.ndarray, module_m: tuple[float, float], title: str, path: str | Path,
+                   difference: bool = False) -> Path:
+    """Save a per-cell map like the paper's Fig. 2: success rate [%] per cell ([iy, ix], NaN: not run), or with
+    difference=True a signed difference of two rates in percentage points; returns the file written."""
+    hx, hy = module_m[0] / 2, module_m[1] / 2
+    fig, ax = plt.subplots(figsize=(5.2, 4.4))
+    cmap = plt.get_cmap("RdBu" if difference else "viridis").copy()
+    cmap.set_bad("0.85")
+    limits = (-100, 100) if difference else (0, 100)
+    image = ax.imshow(rates * 100, origin="lower", extent=(-hx, hx, -hy, hy), cmap=cmap, vmin=limits[0],
+                      vmax=limits[1], interpolation="nearest")
+    fig.colorbar(image, ax=ax, label="difference [percentage points]" if difference else "success rate [%]")
+    ax.set_xlabel("target x [m]")
+    ax.set_ylabel("target y [m]")
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

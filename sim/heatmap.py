@@ -1,0 +1,340 @@
+"""The paper's evaluation (Results, Fig. 2): success rate per cell of the workspace, trials in parallel, resumable.
+
+The workspace (the module, m x n) is split into cells x cells squares. Each cell gets N trials; trial k
+of cell c has its target uniform inside the cell and its start uniform over the whole workspace,
+drawn from a generator seeded with (seed, c, k) alone, so a run is reproducible from its seed
+whatever order or machine its trials run on. A trial succeeds if and only if the object ends within
+epsilon of the target at the end of T without having fallen off (issue 4); whether it was within
+epsilon at any frame before T (where the paper's algorithms stop) is recorded too.
+
+Every finished trial is one line of the results file (JSON lines, after a header line holding the
+protocol). Running the same protocol on the same file skips the trials already there, so an
+interrupted run continues where it stopped and loses nothing.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Iterable, Iterator
+
+import numpy as np
+
+from .bridge import Gains, TrialSpec
+from .objects import OBJECTS
+from .rig import Fabric, Rig
+
+RESULTS_FORMAT = "mantaray-heatmap/1"
+SUCCESS_REGION_AT = 0.9    # [-] cells with at least this success rate form the success region ...
+FAILURE_REGION_AT = 0.1    # [-] ... at most this the failure region; those between are uncertain
+
+
+class ProtocolMismatch(ValueError):
+    """The results file was written by a different protocol: continuing it would mix two experiments."""
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """Everything that decides a heatmap's trials and how they run."""
+    object_name: str = "sphere"
+    controller: str = "manhattan"
+    cells: int = 20                         # [-] per side: the paper's 20 x 20 cells of 2.5 cm
+    trials_per_cell: int = 10               # [-] N (the paper: 10)
+    tolerance_m: float = 0.02               # [m] epsilon
+    duration_s: float = 10.0                # [s] T (the paper: 10 s)
+    alpha_m: float = 0.0                    # [m] noise amplitude
+    seed: int = 2026
+    gains: tuple[float, float, float, float] | None = None   # (kp, ki, kd, integral limit); None: the paper's
+    resolution: int = 15                    # [vertices per side] of the fabric (sim/README.md: 15 is the reference)
+    timestep_s: float = 0.001               # [s] physics step (the paper: 1 ms)
+    only_cells: tuple[int, ...] | None = None   # run just these cell indices (samples, tests); None: all
+
+    def __post_init__(self) -> None:
+        checks = [
+            (self.object_name in OBJECTS, f"object must be one of {', '.join(OBJECTS)}, got {self.object_name!r}"),
+            (self.controller in ("manhattan", "euclidean"), f"controller must be manhattan or euclidean, "
+                                                            f"got {self.controller!r}"),
+            (1 <= self.cells <= 200, f"cells per side must be 1..200, got {self.cells}"),
+            (1 <= self.trials_per_cell <= 1000, f"trials per cell must be 1..1000, got {self.trials_per_cell}"),
+            (0 < self.tolerance_m <= 0.5, f"tolerance must be in (0, 0.5] m, got {self.tolerance_m}"),
+            (0 < self.duration_s <= 600, f"runtime T must be in (0, 600] s, got {self.duration_s}"),
+            (0 <= self.alpha_m <= 0.25, f"alpha must be 0..0.25 m, got {self.alpha_m}"),
+            (0 < self.timestep_s <= 0.01, f"timestep must be in (0, 0.01] s, got {self.timestep_s}"),
+            (self.gains is None or (len(self.gains) == 4 and all(math.isfinite(g) and g >= 0 for g in self.gains)),
+             f"gains must be four finite numbers >= 0 (kp, ki, kd, integral limit), got {self.gains}"),
+            (self.only_cells is None or all(0 <= c < self.cells ** 2 for c in self.only_cells),
+             f"cell indices must be 0..{self.cells ** 2 - 1}"),
+        ]
+        for ok, message in checks:
+            if not ok:
+                raise ValueError(message)
+        Fabric(resolution=self.resolution)      # refuses an even or too small resolution
+
+    def rig(self) -> Rig:
+        """The simulated rig this protocol runs on."""
+        rig = Rig().with_object(self.object_name)
+        return dataclasses.replace(rig, fabric=dataclasses.replace(rig.fabric, resolution=self.resolution),
+                                   solver=dataclasses.replace(rig.solver, timestep_s=self.timestep_s))
+
+    def cell_ids(self) -> list[int]:
+        return list(self.only_cells) if self.only_cells is not None else list(range(self.cells ** 2))
+
+    def to_json(self) -> dict:
+        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in dataclasses.asdict(self).items()}
+
+    @classmethod
+    def from_json(cls, data: dict) -> Protocol:
+        return cls(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in data.items()})
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One trial of the protocol: where it starts and what it aims at."""
+    cell: int                     # cell index: ix + iy * cells (ix along x from -m/2, iy along y from -n/2)
+    k: int                        # trial number within the cell
+    start_m: tuple[float, float]
+    target_m: tuple[float, float]
+    seed: int                     # the trial's seed for the firmware's noise and the camera model
+
+    @property
+    def key(self) -> str:
+        return f"{self.cell}:{self.k}"
+
+
+def cell_bounds(protocol: Protocol, module_m: tuple[float, float], cell: int) -> tuple[float, float, float, float]:
+    """(x_lo, x_hi, y_lo, y_hi) [m] of a cell in the fabric frame."""
+    ix, iy = cell % protocol.cells, cell // protocol.cells
+    wx, wy = module_m[0] / protocol.cells, module_m[1] / protocol.cells
+    x0, y0 = -module_m[0] / 2, -module_m[1] / 2
+    return x0 + ix * wx, x0 + (ix + 1) * wx, y0 + iy * wy, y0 + (iy + 1) * wy
+
+
+def make_trial(protocol: Protocol, module_m: tuple[float, float], cell: int, k: int) -> Trial:
+    """Trial k of a cell: target uniform in the cell, start uniform over the workspace, from (seed, cell, k) alone."""
+    rng = np.random.default_rng([protocol.seed, cell, k])
+    x_lo, x_hi, y_lo, y_hi = cell_bounds(protocol, module_m, cell)
+    target = (float(rng.uniform(x_lo, x_hi)), float(rng.uniform(y_lo, y_hi)))
+    hx, hy = module_m[0] / 2, module_m[1] / 2
+    start = (float(rng.uniform(-hx, hx)), float(rng.uniform(-hy, hy)))
+    return Trial(cell, k, start, target, int(rng.integers(1, 2 ** 31)))
+
+
+def trials(protocol: Protocol) -> list[Trial]:
+    """Every trial of the protocol, cell by cell."""
+    f = protocol.rig().frame
+    module = (f.size_x_m, f.size_y_m)
+    return [make_trial(protocol, module, c, k) for c in protocol.cell_ids() for k in range(protocol.trials_per_cell)]
+
+
+def trial_spec(protocol: Protocol, trial: Trial) -> TrialSpec:
+    gains = {}
+    if protocol.gains is not None:
+        g = Gains(*protocol.gains)
+        gains = {"x": g, "y": g} if protocol.controller == "manhattan" else {"radial": g}
+    return TrialSpec(trial.start_m, trial.target_m, controller=protocol.controller, duration_s=protocol.duration_s,
+                     alpha_m=protocol.alpha_m, tolerance_m=protocol.tolerance_m, seed=trial.seed, gains=gains)
+
+
+def is_success(fell_off: bool, final_error_m: float, tolerance_m: float) -> bool:
+    """The heatmap's rule: within epsilon at the end of T, and never fallen off."""
+    return (not fell_off) and final_error_m < tolerance_m
+
+
+# ------------------------------------------------------------------------------------------- results file
+@dataclass
+class ResultsFile:
+    """The JSON-lines results of one protocol: a header line, then one line per finished trial."""
+    path: Path
+    protocol: Protocol
+    records: dict[str, dict] = field(default_factory=dict)   # trial key -> record
+
+    @classmethod
+    def open(cls, path: str | Path, protocol: Protocol) -> ResultsFile:
+        """Open for this protocol: create the file, or read what an earlier run of the same protocol left."""
+        path = Path(path)
+        results = cls(path, protocol)
+        if not path.exists() or path.stat().st_size == 0:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(json.dumps({"format": RESULTS_FORMAT, "protocol": protocol.to_json()}) + "\n")
+            return results
+        stored, records, good_bytes = _read(path)
+        if stored != protocol:
+            changed = sorted(k for k, v in protocol.to_json().items() if stored.to_json().get(k) != v)
+            raise ProtocolMismatch(f"{path} holds a run with other options ({', '.join(changed)} differ); "
+                                   f"use another --out, or the same options to continue it")
+        if good_bytes != path.stat().st_size:   # a line cut off by an interruption: drop it, its trial reruns
+            with open(path, "r+b") as f:
+                f.truncate(good_bytes)
+        results.records = records
+        return results
+
+    @classmethod
+    def load(cls, path: str | Path) -> ResultsFile:
+        """Read a results file whatever its protocol (for figures and comparisons)."""
+        protocol, records, _ = _read(Path(path))
+        return cls(Path(path), protocol, records)
+
+    def append(self, record: dict) -> None:
+        with open(self.path, "a") as f:
+            f.write(json.dumps(record) + "\n")
+        self.records[record["key"]] = record
+
+    def missing(self) -> list[Trial]:
+        return [t for t in trials(self.protocol) if t.key not in self.records]
+
+
+def _read(path: Path) -> tuple[Protocol, dict[str, dict], int]:
+    """(protocol, records by key, bytes of complete lines) of a results file."""
+    raw = path.read_bytes()
+    lines = raw.split(b"\n")
+    try:
+        header = json.loads(lines[0])
+    except json.JSONDecodeError:
+        raise ValueError(f"{path} is not a heatmap results file (its first line is not JSON)") from None
+    if not isinstance(header, dict) or header.get("format") != RESULTS_FORMAT:
+        raise ValueError(f"{path} is not a heatmap results file ({RESULTS_FORMAT})")
+    protocol = Protocol.from_json(header["protocol"])
+    records: dict[str, dict] = {}
+    good = len(lines[0]) + 1
+    for line in lines[1:-1]:           # the last element follows the final newline: empty, or a cut-off line
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError:
+            break
+        records[record["key"]] = record
+        good += len(line) + 1
+    return protocol, records, good
+
+
+# ------------------------------------------------------------------------------------------- aggregation
+@dataclass(frozen=True)
+class Summary:
+    """Per-cell rates and the paper's totals for one results file."""
+    rates: np.ndarray            # [cells, cells] success rate per cell, [iy, ix]; NaN where no trial ran
+    reach_rates: np.ndarray      # the same under the paper's stopping rule (within epsilon at any frame)
+    fell_rates: np.ndarray       # share of trials that fell off
+    trials: int                  # trials counted
+    score: float                 # sum of per-cell success rates (the paper: 171.3 Manhattan, 108.2 Euclidean)
+    reach_score: float
+    region_cells: dict[str, int]  # success / uncertain / failure: cells in each region
+    cell_area_m2: float
+
+    def region_area_m2(self, region: str) -> float:
+        return self.region_cells[region] * self.cell_area_m2
+
+    def to_json(self) -> dict:
+        return {"trials": self.trials, "score": round(self.score, 2), "reach_score": round(self.reach_score, 2),
+                "cells_run": int(np.isfinite(self.rates).sum()),
+                "regions": {name: {"cells": n, "area_m2": round(self.region_area_m2(name), 5)}
+                            for name, n in self.region_cells.items()},
+                "thresholds": {"success_at": SUCCESS_REGION_AT, "failure_at": FAILURE_REGION_AT}}
+
+
+def summarize(results: ResultsFile) -> Summary:
+    p = results.protocol
+    n = p.cells
+    counts = np.zeros((3, n * n))                  # successes, reaches, falls
+    totals = np.zeros(n * n)
+    for r in results.records.values():
+        totals[r["cell"]] += 1
+        counts[:, r["cell"]] += (r["success"], r["reached"], r["fell_off"])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rates = np.where(totals > 0, counts / np.maximum(totals, 1), np.nan).reshape(3, n, n)
+    done = np.isfinite(rates[0])
+    regions = {"success": int((rates[0][done] >= SUCCESS_REGION_AT).sum()),
+               "failure": int((rates[0][done] <= FAILURE_REGION_AT).sum())}
+    regions["uncertain"] = int(done.sum()) - regions["success"] - regions["failure"]
+    f = p.rig().frame
+    return Summary(rates=rates[0], reach_rates=rates[1], fell_rates=rates[2], trials=int(totals.sum()),
+                   score=float(np.nansum(rates[0])), reach_score=float(np.nansum(rates[1])),
+                   region_cells=regions, cell_area_m2=f.size_x_m * f.size_y_m / n ** 2)
+
+
+# ------------------------------------------------------------------------------------------- running
+def trial_record(trial: Trial, result) -> dict:
+    """The results-file line of a finished trial (result: a bridge.TrialResult)."""
+    final = result.true_xy_m[-1] if len(result.true_xy_m) else np.full(2, np.nan)
+    return {"key": trial.key, "cell": trial.cell, "k": trial.k, "seed": trial.seed,
+            "start_m": [round(v, 5) for v in trial.start_m], "target_m": [round(v, 5) for v in trial.target_m],
+            "final_m": [round(float(v), 5) for v in final], "final_error_m": round(result.final_error_m, 5),
+            "success": bool(result.success), "reached": result.time_to_reach_s is not None,
+            "time_to_reach_s": result.time_to_reach_s, "fell_off": bool(result.fell_off),
+            "sim_time_s": round(result.sim_time_s, 3), "wall_time_s": round(result.wall_time_s, 3)}
+
+
+def unplaceable_record(trial: Trial, why: str) -> dict:
+    """A trial whose start is not over the fabric (only at the very corners): it counts as fallen off."""
+    return {"key": trial.key, "cell": trial.cell, "k": trial.k, "seed": trial.seed,
+            "start_m": list(trial.start_m), "target_m": list(trial.target_m), "final_m": [None, None],
+            "final_error_m": None, "success": False, "reached": False, "time_to_reach_s": None,
+            "fell_off": True, "sim_time_s": 0.0, "wall_time_s": 0.0, "unplaceable": why}
+
+
+class TrialRunner:
+    """Runs trials of one protocol in this process: the firmware core in-process (no pty), one MuJoCo model."""
+
+    def __init__(self, protocol: Protocol) -> None:
+        from mantaray.host.link import Link
+        from mantaray.host.transport import InProcessTransport
+
+        from .bridge import Bridge
+        self.protocol = protocol
+        self.bridge = Bridge(Link(InProcessTransport(simulated_clock=True)), protocol.rig())
+
+    def run(self, trial: Trial) -> dict:
+        try:
+            result = self.bridge.run(trial_spec(self.protocol, trial))
+        except ValueError as exc:        # model.fabric_height: the start is not over the fabric
+            if "not over the fabric" not in str(exc):
+                raise
+            return unplaceable_record(trial, str(exc))
+        return trial_record(trial, result)
+
+
+_worker: TrialRunner | None = None
+
+
+def _init_worker(protocol_json: dict) -> None:
+    global _worker
+    _worker = TrialRunner(Protocol.from_json(protocol_json))
+
+
+def _run_in_worker(trial: Trial) -> dict:
+    return _worker.run(trial)
+
+
+def run_local(protocol: Protocol, todo: list[Trial], jobs: int) -> Iterator[dict]:
+    """Records of the trials as they finish, on `jobs` processes of this machine (1: this process)."""
+    if jobs == 1:
+        runner = TrialRunner(protocol)
+        for trial in todo:
+            yield runner.run(trial)
+        return
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("forkserver")
+    with ctx.Pool(jobs, initializer=_init_worker, initargs=(protocol.to_json(),)) as pool:
+        yield from pool.imap_unordered(_run_in_worker, todo, chunksize=1)
+
+
+def run_ray(protocol: Protocol, todo: list[Trial], jobs: int | None, address: str | None) -> Iterator[dict]:
+    """Records of the trials as they finish, on Ray actors (a cluster at address, or a local Ray instance)."""
+    import ray
+    from ray.util import ActorPool
+
+    if not ray.is_initialized():
+        ray.init(address=address, include_dashboard=False, logging_level="ERROR", log_to_driver=False)
+    actors_n = jobs or max(1, int(ray.cluster_resources().get("CPU", 1)))
+    Actor = ray.remote(num_cpus=1)(TrialRunner)
+    pool = ActorPool([Actor.remote(protocol) for _ in range(actors_n)])
+    yield from pool.map_unordered(lambda actor, trial: actor.run.remote(trial), todo)
+
+
+def run(results: ResultsFile, records: Iterable[dict], progress: Callable[[dict], None] | None = None) -> None:
+    """Append every record to the results file as it arrives (the file is the only state a resumption needs)."""
+    for record in records:
+        results.append(record)
+        if progress is not None:
+            progress(record)

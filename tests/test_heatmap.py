@@ -1,0 +1,209 @@
+"""The heatmap evaluation: sampling of starts and targets, the success rule, resumption, executors, CLI end to end."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mantaray.host.link import Link
+from mantaray.host.transport import InProcessTransport, SerialTransport
+from mantaray.host.vmcu import VirtualMcu
+from mantaray.paths import REPO
+from mantaray.sim import heatmap as H
+from mantaray.sim.bridge import Bridge, TrialSpec
+from mantaray.sim.rig import Rig
+
+MODULE = (0.5, 0.5)
+SMALL = H.Protocol(cells=2, trials_per_cell=2, duration_s=0.5)   # four cells, eight short trials
+
+
+# ------------------------------------------------------------------------------------------- sampling
+@settings(max_examples=200, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), cells=st.integers(1, 40), data=st.data())
+def test_targets_lie_in_their_cell_and_starts_on_the_workspace(seed, cells, data):
+    protocol = H.Protocol(cells=cells, seed=seed)
+    cell = data.draw(st.integers(0, cells ** 2 - 1))
+    k = data.draw(st.integers(0, 50))
+    trial = H.make_trial(protocol, MODULE, cell, k)
+    x_lo, x_hi, y_lo, y_hi = H.cell_bounds(protocol, MODULE, cell)
+    assert x_lo <= trial.target_m[0] <= x_hi and y_lo <= trial.target_m[1] <= y_hi
+    assert all(abs(v) <= 0.25 for v in trial.start_m)
+    assert trial == H.make_trial(protocol, MODULE, cell, k)             # from (seed, cell, k) alone
+
+
+def test_cells_tile_the_workspace_in_x_then_y():
+    protocol = H.Protocol()
+    assert H.cell_bounds(protocol, MODULE, 0) == pytest.approx((-0.25, -0.225, -0.25, -0.225))
+    assert H.cell_bounds(protocol, MODULE, 1) == pytest.approx((-0.225, -0.2, -0.25, -0.225))
+    assert H.cell_bounds(protocol, MODULE, 20) == pytest.approx((-0.25, -0.225, -0.225, -0.2))
+    assert H.cell_bounds(protocol, MODULE, 399) == pytest.approx((0.225, 0.25, 0.225, 0.25))
+
+
+def test_starts_are_uniform_over_the_workspace_and_the_seed_decides_them():
+    protocol = H.Protocol()                     # the paper's 4,000 trials
+    starts = np.array([t.start_m for t in H.trials(protocol)])
+    assert len(starts) == 4000
+    counts, _, _ = np.histogram2d(starts[:, 0], starts[:, 1], bins=4, range=[[-0.25, 0.25], [-0.25, 0.25]])
+    assert counts.min() > 250 - 4 * np.sqrt(250) and counts.max() < 250 + 4 * np.sqrt(250)   # 16 bins of 250
+    again = np.array([t.start_m for t in H.trials(H.Protocol())])
+    other = np.array([t.start_m for t in H.trials(H.Protocol(seed=7))])
+    assert np.array_equal(starts, again) and not np.array_equal(starts, other)
+
+
+def test_a_subset_of_cells_draws_the_same_trials_as_the_full_run():
+    full = {t.key: t for t in H.trials(H.Protocol())}
+    subset = H.trials(H.Protocol(only_cells=(210, 3)))
+    assert [t.key for t in subset] == [f"{c}:{k}" for c in (210, 3) for k in range(10)]
+    assert all(full[t.key] == t for t in subset)
+
+
+@pytest.mark.parametrize("kwargs, needle", [
+    ({"cells": 0}, "cells per side"), ({"controller": "pid"}, "controller"), ({"object_name": "teapot"}, "object"),
+    ({"tolerance_m": 0}, "tolerance"), ({"duration_s": -1}, "runtime"), ({"gains": (1, 2, float("nan"), 3)}, "gains"),
+    ({"resolution": 14}, "odd"), ({"only_cells": (400,)}, "cell indices"), ({"timestep_s": 0.1}, "timestep"),
+])
+def test_a_bad_protocol_is_refused_with_a_reason(kwargs, needle):
+    with pytest.raises(ValueError, match=needle):
+        H.Protocol(**kwargs)
+
+
+# ------------------------------------------------------------------------------------------- success rule
+def test_success_needs_the_end_within_tolerance_and_no_fall():
+    assert H.is_success(False, 0.019, 0.02)
+    assert not H.is_success(False, 0.02, 0.02)
+    assert not H.is_success(True, 0.0, 0.02)          # within tolerance but fallen off: a failure
+
+
+def _record(cell: int, k: int, success: bool, reached: bool = False, fell: bool = False) -> dict:
+    return {"key": f"{cell}:{k}", "cell": cell, "k": k, "success": success, "reached": reached or success,
+            "fell_off": fell}
+
+
+def test_summary_rates_score_and_regions():
+    results = H.ResultsFile(path=None, protocol=H.Protocol(cells=2, trials_per_cell=10))
+    for k in range(10):
+        results.records[f"0:{k}"] = _record(0, k, success=True)               # cell 0: 100 %
+        results.records[f"1:{k}"] = _record(1, k, success=k < 5, fell=k >= 8)  # cell 1: 50 %, 20 % fell
+        results.records[f"2:{k}"] = _record(2, k, success=False, reached=k == 0)  # cell 2: 0 %, reached 10 %
+    s = H.summarize(results)                                                   # cell 3 never ran
+    assert s.rates[0, 0] == 1.0 and s.rates[0, 1] == 0.5 and s.rates[1, 0] == 0.0 and np.isnan(s.rates[1, 1])
+    assert s.fell_rates[0, 1] == pytest.approx(0.2) and s.reach_rates[1, 0] == pytest.approx(0.1)
+    assert s.score == pytest.approx(1.5) and s.reach_score == pytest.approx(1.6) and s.trials == 30
+    assert s.region_cells == {"success": 1, "uncertain": 1, "failure": 1}
+    assert s.region_area_m2("success") == pytest.approx(0.0625)               # a quarter of 0.25 m^2
+
+
+# ------------------------------------------------------------------------------------------- results file, resumption
+def test_an_interrupted_run_continues_where_it_stopped_and_loses_nothing(tmp_path):
+    reference = H.ResultsFile.open(tmp_path / "whole.jsonl", SMALL)
+    H.run(reference, H.run_local(SMALL, reference.missing(), jobs=1))
+
+    path = tmp_path / "interrupted.jsonl"
+    first = H.ResultsFile.open(path, SMALL)
+
+    def interrupted():
+        for i, record in enumerate(H.run_local(SMALL, first.missing(), jobs=1)):
+            if i == 3:
+                raise KeyboardInterrupt
+            yield record
+
+    with pytest.raises(KeyboardInterrupt):
+        H.run(first, interrupted())
+    with open(path, "a") as f:
+        f.write('{"key": "3:1", "cell": 3, "k"')        # a line the interruption cut off
+    again = H.ResultsFile.open(path, SMALL)
+    assert len(again.records) == 3 and len(again.missing()) == 5
+    H.run(again, H.run_local(SMALL, again.missing(), jobs=1))
+    final = H.ResultsFile.load(path)
+    assert len(final.records) == 8 and not H.ResultsFile.open(path, SMALL).missing()
+    for key, record in reference.records.items():       # the same trials, the same outcomes, to the digit
+        assert {k: v for k, v in final.records[key].items() if k != "wall_time_s"} == \
+               {k: v for k, v in record.items() if k != "wall_time_s"}
+    assert len(path.read_text().splitlines()) == 9      # header + 8 trials: nothing twice, the cut line gone
+
+
+def test_a_results_file_of_other_options_is_not_continued(tmp_path):
+    H.ResultsFile.open(tmp_path / "r.jsonl", SMALL)
+    with pytest.raises(H.ProtocolMismatch, match="duration_s"):
+        H.ResultsFile.open(tmp_path / "r.jsonl", H.Protocol(cells=2, trials_per_cell=2, duration_s=1.0))
+    (tmp_path / "other.jsonl").write_text("not json\n")
+    with pytest.raises(ValueError, match="not a heatmap results file"):
+        H.ResultsFile.open(tmp_path / "other.jsonl", SMALL)
+
+
+# ------------------------------------------------------------------------------------------- the in-process core
+def test_in_process_core_gives_the_same_commands_as_the_virtual_mcu_over_the_pty():
+    spec = TrialSpec((0.08, -0.06), (-0.05, 0.04), duration_s=3.0, alpha_m=0.03, seed=11)
+    with VirtualMcu(clock="sim") as vmcu:
+        over_pty = Bridge(Link(SerialTransport(vmcu.path)), Rig()).run(spec)
+    in_process = Bridge(Link(InProcessTransport(simulated_clock=True)), Rig()).run(spec)
+    assert len(over_pty.command_m) == 37 and np.all(np.isfinite(over_pty.command_m))
+    assert np.array_equal(over_pty.command_m, in_process.command_m)
+    assert np.array_equal(over_pty.tilt_deg, in_process.tilt_deg)
+    assert np.array_equal(over_pty.true_xy_m, in_process.true_xy_m)
+
+
+def test_ray_runs_the_same_trials_as_local_processes():
+    todo = H.trials(SMALL)
+    local = {r["key"]: r for r in H.run_local(SMALL, todo, jobs=2)}
+    on_ray = {r["key"]: r for r in H.run_ray(SMALL, todo, jobs=2, address=None)}
+    assert local.keys() == on_ray.keys() == {t.key for t in todo}
+    for key in local:
+        assert local[key]["final_m"] == on_ray[key]["final_m"] and local[key]["success"] == on_ray[key]["success"]
+
+
+# ------------------------------------------------------------------------------------------- CLI end to end
+def _cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", *args], cwd=REPO, capture_output=True,
+                          text=True, timeout=600)
+
+
+def test_reduced_heatmap_end_to_end_with_figures_and_difference_map(tmp_path):
+    runs = {}
+    for controller in ("manhattan", "euclidean"):
+        out = tmp_path / controller
+        proc = _cli("heatmap", "--controller", controller, "--cells", "3", "--trials", "1", "--duration", "2",
+                    "--only-cells", "3,4,5", "--jobs", "2", "--json", "--out", str(out))
+        assert proc.returncode == 0, proc.stderr
+        summary = json.loads(proc.stdout)
+        assert summary["trials"] == 3 and summary["cells_run"] == 3
+        assert sum(r["cells"] for r in summary["regions"].values()) == 3
+        lines = (out / "results.jsonl").read_text().splitlines()
+        assert len(lines) == 4
+        for record in map(json.loads, lines[1:]):
+            assert set(record) >= {"start_m", "target_m", "final_m", "success", "fell_off", "reached"}
+        cells = (out / "cells.csv").read_text().splitlines()
+        assert cells[0].startswith("cell,ix,iy") and len(cells) == 4
+        assert (out / "heatmap.png").stat().st_size > 10_000
+        runs[controller] = summary
+    again = _cli("heatmap", "--cells", "3", "--trials", "1", "--duration", "2", "--only-cells", "3,4,5",
+                 "--json", "--out", str(tmp_path / "manhattan"))
+    assert again.returncode == 0 and "3 of 3 trials already done" in again.stderr
+    proc = _cli("compare", str(tmp_path / "euclidean"), str(tmp_path / "manhattan"), "--out", str(tmp_path / "d.png"))
+    assert proc.returncode == 0, proc.stderr
+    assert "difference" in proc.stdout and (tmp_path / "d.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("args, needle", [
+    (("--cells", "0"), "cells per side"),
+    (("--gains", "1,x,2"), "expected KP,KI,KD"),
+    (("--resolution", "14"), "odd"),
+    (("--jobs", "0"), "--jobs"),
+    (("--only-cells", "a"), "expected cell indices"),
+])
+def test_heatmap_refuses_bad_input_in_one_line(args, needle):
+    proc = _cli("heatmap", *args)
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr and needle in proc.stderr
+
+
+def test_heatmap_refuses_to_mix_two_experiments_in_one_results_file(tmp_path):
+    first = _cli("heatmap", "--cells", "1", "--trials", "1", "--duration", "0.2", "--jobs", "1", "--out", str(tmp_path))
+    assert first.returncode == 0, first.stderr
+    proc = _cli("heatmap", "--cells", "1", "--trials", "1", "--duration", "0.3", "--jobs", "1", "--out", str(tmp_path))
+    assert proc.returncode == 2 and "duration_s" in proc.stderr and "Traceback" not in proc.stderr
