@@ -303,8 +303,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     heat.add_argument("--gains", type=_gains, metavar="KP,KI,KD[,ILIM]",
                       help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
     heat.add_argument("--seed", type=int, default=2026, help="seed of the whole run: starts, targets and noise")
-    heat.add_argument("--resolution", type=int, default=15, help="fabric vertices per side (odd; see sim/README.md)")
-    heat.add_argument("--timestep", type=float, default=0.001, help="physics step [s] (paper: 0.001)")
+    heat.add_argument("--resolution", type=int, default=11, help="fabric vertices per side (odd); the reference "
+                      "model is 15 at 0.001 s, 4x slower: 11 at 0.002 s keeps its per-cell success (docs/results.md)")
+    heat.add_argument("--timestep", type=float, default=0.002, help="physics step [s] (paper and reference: 0.001)")
     heat.add_argument("--only-cells", type=_cells, metavar="I,J,...", help="run only these cells (index ix + iy*cells)")
     heat.add_argument("--jobs", type=int, help="parallel workers (default: every core; with ray: every CPU of the cluster)")
     heat.add_argument("--executor", choices=["local", "ray"], default="local",

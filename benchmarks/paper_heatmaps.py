@@ -1,0 +1,81 @@
+"""The paper's full simulation protocol (Fig. 2) with our stack: five heatmap runs, their difference map, the figures.
+
+Run: python3 benchmarks/paper_heatmaps.py [--runs sphere_manhattan,sphere_euclidean] [--jobs 2]
+Each run is `mantaray sim heatmap` with the paper's protocol (20 x 20 cells, 10 trials, T = 10 s,
+eps = 0.02 m) into out/heatmap/<run>/; runs are resumable, so an interrupted script continues where it
+stopped. The wall time of every session of a run is appended to out/heatmap/<run>/wall_times.json, so
+the total a run took is known even when it was split. At the end the figures are copied to
+docs/figures/ and the scores, regions and wall times are written to docs/figures/heatmaps.json.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+RUNS = {   # name: (object, controller, alpha [m]) as in the paper's Fig. 2
+    "sphere_manhattan": ("sphere", "manhattan", 0.0),
+    "sphere_euclidean": ("sphere", "euclidean", 0.0),
+    "cube_manhattan_alpha0.1": ("cube", "manhattan", 0.1),
+    "bunny_manhattan_alpha0.1": ("bunny", "manhattan", 0.1),
+    "bunny_manhattan_alpha0.05": ("bunny", "manhattan", 0.05),
+}
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs", default=",".join(RUNS), help="comma-separated names of: " + ", ".join(RUNS))
+    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--out", default="out/heatmap")
+    parser.add_argument("--figures", default="docs/figures")
+    args = parser.parse_args()
+    names = args.runs.split(",")
+    unknown = [n for n in names if n not in RUNS]
+    if unknown:
+        parser.error(f"unknown run(s) {', '.join(unknown)}; known: {', '.join(RUNS)}")
+
+    figures = REPO / args.figures
+    figures.mkdir(parents=True, exist_ok=True)
+    table_path = figures / "heatmaps.json"
+    table = json.loads(table_path.read_text()) if table_path.exists() else {}
+    for name in names:
+        obj, controller, alpha = RUNS[name]
+        out = REPO / args.out / name
+        out.mkdir(parents=True, exist_ok=True)
+        t0 = time.perf_counter()
+        proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--object", obj,
+                               "--controller", controller, "--alpha", str(alpha), "--jobs", str(args.jobs),
+                               "--out", str(out), "--json"], cwd=REPO, stdout=subprocess.PIPE)
+        wall = time.perf_counter() - t0
+        if proc.returncode != 0:
+            print(f"{name}: heatmap failed (exit {proc.returncode})", file=sys.stderr)
+            return proc.returncode
+        times_path = out / "wall_times.json"
+        times = json.loads(times_path.read_text()) if times_path.exists() else []
+        times.append(round(wall, 1))
+        times_path.write_text(json.dumps(times) + "\n")
+        summary = json.loads(proc.stdout)
+        shutil.copyfile(out / "heatmap.png", figures / f"heatmap_{name}.png")
+        table[name] = {"object": obj, "controller": controller, "alpha_m": alpha, "score": summary["score"],
+                       "reach_score": summary["reach_score"], "regions": summary["regions"],
+                       "trials": summary["trials"], "wall_s_sessions": times, "jobs": args.jobs}
+        table_path.write_text(json.dumps(table, indent=1) + "\n")
+        print(f"{name}: score {summary['score']:.1f} (reach {summary['reach_score']:.1f}), "
+              f"{summary['trials']} trials, this session {wall / 60:.1f} min", flush=True)
+    if {"sphere_manhattan", "sphere_euclidean"} <= table.keys():
+        proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "compare",
+                               str(REPO / args.out / "sphere_euclidean"), str(REPO / args.out / "sphere_manhattan"),
+                               "--out", str(figures / "heatmap_sphere_euclidean_minus_manhattan.png")], cwd=REPO)
+        if proc.returncode != 0:
+            return proc.returncode
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
