@@ -9,7 +9,7 @@ from typing import ClassVar
 from .codec import FieldSpec, Message
 
 PROTOCOL_VERSION = 1
-SCHEMA_HASH = 0x163C8F28
+SCHEMA_HASH = 0xA7E052E0
 MAX_PACKET = 44  # [bytes] id + seq + payload + CRC
 MAX_WIRE = 46  # [bytes] COBS packet + delimiter
 NO_FIELD = 255
@@ -94,6 +94,8 @@ class Faults(enum.IntFlag):
 
     POSITION_TIMEOUT = 1 << 0
     ESTOP = 1 << 1
+    STALL = 1 << 2
+    ENCODER = 1 << 3
 
 
 # Boot gains of each PID: kp [deg/m], ki [deg/(m s)], kd [deg s/m], integral_limit [deg].
@@ -265,6 +267,22 @@ class SimClock(Message):
 
 
 @dataclass(frozen=True)
+class Zero(Message):
+    """Homing: take the present position of each actuator in the mask as 0 m, the reference height z0. Only in idle."""
+
+    ID: ClassVar[int] = 0x0A
+    NAME: ClassVar[str] = 'zero'
+    DIRECTION: ClassVar[str] = 'host_to_mcu'
+    REPLY: ClassVar[str | None] = 'ack'
+    SIZE: ClassVar[int] = 1  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('actuators', 'B', 1, None, None, 1, 15, ''),
+    )
+
+    actuators: int = 0  # Bit i set: zero actuator i (PROTOCOL.md, geometry).
+
+
+@dataclass(frozen=True)
 class ObjectPosition(Message):
     """One camera measurement. Answered by telemetry (or a nack); one controller step when running."""
 
@@ -408,4 +426,4 @@ class Boot(Message):
     reset_cause: ResetCause = ResetCause.POWER_ON  # Why it started. (enum reset_cause)
 
 
-MESSAGES: dict[int, type[Message]] = {m.ID: m for m in (Identify, Configure, ConfigurePid, SetTarget, Start, Stop, EmergencyStop, Jog, SimClock, ObjectPosition, IdentifyReply, Ack, Nack, Telemetry, Boot)}
+MESSAGES: dict[int, type[Message]] = {m.ID: m for m in (Identify, Configure, ConfigurePid, SetTarget, Start, Stop, EmergencyStop, Jog, SimClock, Zero, ObjectPosition, IdentifyReply, Ack, Nack, Telemetry, Boot)}

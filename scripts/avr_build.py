@@ -245,6 +245,21 @@ class Plan:
         return [u.command for u in self.units] + archiving + [self.link, self.ihex]
 
 
+INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]', re.MULTILINE)
+
+
+def framework_libraries(roots: list[Path]) -> list[Path]:
+    """The Arduino core's bundled libraries (Wire, SPI, ...) whose headers our sources include: PlatformIO's
+    library dependency finder (lib_ldf_mode = chain) picks these up the same way."""
+    wanted = {name for root in roots for source in sources(root) if source.suffix != ".S"
+              for name in INCLUDE.findall(source.read_text(errors="replace"))}
+    wanted |= {name for root in roots for header in root.rglob("*.h")
+               for name in INCLUDE.findall(header.read_text(errors="replace"))}
+    libraries = ARDUINO_AVR / "libraries"
+    return sorted(lib for lib in libraries.iterdir()
+                  if (lib / "src").is_dir() and any((lib / "src" / name).is_file() for name in wanted))
+
+
 def plan_build(project: Project, out: Path) -> Plan:
     flags = project.flags
     # Debian's core needs DECIMAL_DIG, which avr-libc's float.h does not define (gcc's value for AVR floats).
@@ -258,6 +273,14 @@ def plan_build(project: Project, out: Path) -> Plan:
     lib_roots = sorted(p for p in project.lib_dir.iterdir() if p.is_dir()) if project.lib_dir.is_dir() else []
     lib_includes = [(root / "src" if (root / "src").is_dir() else root) for root in lib_roots]
     libs: dict[str, list[Unit]] = {}
+    for library in framework_libraries([project.src_dir, *lib_includes]):
+        include = library / "src"
+        units = [Unit(s, out / "framework_lib" / library.name / f"{s.relative_to(include)}.o", False)
+                 for s in sources(include)]
+        for unit in units:
+            unit.command = compile_command(unit, flags, core_defines, [include, include / "utility"])
+        libs[library.name] = units
+        lib_includes.append(include)
     for root, include in zip(lib_roots, lib_includes):
         units = [Unit(s, out / "lib" / root.name / f"{s.relative_to(include)}.o", True) for s in sources(include)]
         for unit in units:

@@ -1,4 +1,4 @@
-"""Runs the firmware core's C++ unit tests (doctest, <build dir>/core_tests) so pytest's summary includes them."""
+"""Runs the firmware's C++ unit tests (doctest: core_tests, board_tests in the build dir) so pytest's summary includes them."""
 from __future__ import annotations
 
 import re
@@ -8,12 +8,14 @@ import pytest
 
 from mantaray.paths import NotBuilt, native_artifact
 
-MIN_TEST_CASES = 100  # [test cases] fewer means the binary is stale or lost test files
+# [test cases] fewer means the binary is stale or lost test files
+MIN_TEST_CASES = {"core_tests": 108, "board_tests": 10}
 
 
-def test_core_unit_tests_pass() -> None:
+@pytest.mark.parametrize("name", MIN_TEST_CASES)
+def test_cpp_unit_tests_pass(name: str) -> None:
     try:
-        binary = native_artifact("core_tests")
+        binary = native_artifact(name)
     except NotBuilt as exc:
         pytest.fail(f"the C++ unit tests are not built: {exc}")
     proc = subprocess.run([str(binary), "--no-colors"], capture_output=True, text=True, timeout=300)
@@ -23,4 +25,4 @@ def test_core_unit_tests_pass() -> None:
     assert summary, f"no doctest summary in the output of {binary}:\n{output[-2000:]}"
     total, passed, failed = (int(g) for g in summary.groups())
     assert failed == 0 and passed == total, output[-6000:]
-    assert total >= MIN_TEST_CASES, f"only {total} test cases ran; rebuild: ninja -C {binary.parent}"
+    assert total >= MIN_TEST_CASES[name], f"only {total} test cases ran; rebuild: ninja -C {binary.parent}"

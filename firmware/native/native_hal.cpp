@@ -5,7 +5,8 @@
 
 #include <deque>  // output queue
 
-#include "hal.h"  // the interface implemented here
+#include "hal.h"              // the interface implemented here
+#include "ideal_actuators.h"  // IdealActuators, SimulatedClock
 
 namespace mr {
 
@@ -13,9 +14,10 @@ namespace {
 
 proto::Clock g_clock = proto::Clock::kWall;
 uint64_t g_wall_origin_ns = 0;
-uint32_t g_sim_now_us = 0;
+SimulatedClock g_sim_clock;
 std::deque<uint8_t> g_tx;
-float g_measured[kActuatorCount] = {};
+IdealActuators g_actuators;
+uint16_t g_injected_faults = 0;
 bool g_power = true;
 
 uint64_t monotonic_ns() {
@@ -31,9 +33,10 @@ namespace native {
 void reset(proto::Clock kind) {
   g_clock = kind;
   g_wall_origin_ns = monotonic_ns();
-  g_sim_now_us = 0;
+  g_sim_clock = SimulatedClock();
   g_tx.clear();
-  for (float& m : g_measured) m = 0.0f;
+  g_actuators = IdealActuators();
+  g_injected_faults = 0;
   g_power = true;
 }
 
@@ -48,36 +51,38 @@ size_t take_tx(uint8_t* out, size_t cap) {
 
 size_t tx_pending() { return g_tx.size(); }
 
+void inject_actuator_faults(uint16_t faults) { g_injected_faults |= faults; }
+
 }  // namespace native
 
 namespace hal {
 
 uint32_t now_us() {
-  if (g_clock == proto::Clock::kSimulated) return g_sim_now_us;
+  if (g_clock == proto::Clock::kSimulated) return g_sim_clock.now_us();
   return static_cast<uint32_t>((monotonic_ns() - g_wall_origin_ns) / 1000u);
 }
 
 void serial_write(const uint8_t* data, uint8_t len) { g_tx.insert(g_tx.end(), data, data + len); }
 
-// Ideal actuators: with power on they are where they are told, at once; with power off they stay put.
-void actuators_command(const float (&command)[kActuatorCount]) {
-  if (!g_power) return;
-  for (uint8_t i = 0; i < kActuatorCount; ++i) g_measured[i] = command[i];
+void actuators_command(const float (&command)[kActuatorCount]) { g_actuators.command(command); }
+
+void actuators_measured(float (&measured)[kActuatorCount]) { g_actuators.measured(measured); }
+
+void actuators_power(bool on) {
+  if (on && !g_power) g_injected_faults = 0;  // as a board's bank clears its latched faults
+  g_power = on;
+  g_actuators.power(on);
 }
 
-void actuators_measured(float (&measured)[kActuatorCount]) {
-  for (uint8_t i = 0; i < kActuatorCount; ++i) measured[i] = g_measured[i];
-}
+void actuators_zero(uint8_t mask) { g_actuators.zero(mask); }
 
-void actuators_power(bool on) { g_power = on; }
+uint16_t actuator_faults() { return g_injected_faults; }
 
 proto::Clock clock_kind() { return g_clock; }
 
 proto::ErrorCode sim_clock_set(uint32_t t_us) {
   if (g_clock != proto::Clock::kSimulated) return proto::ErrorCode::kUnsupported;
-  if (static_cast<int32_t>(t_us - g_sim_now_us) < 0) return proto::ErrorCode::kOutOfRange;
-  g_sim_now_us = t_us;
-  return proto::ErrorCode::kOk;
+  return g_sim_clock.set(t_us);
 }
 
 }  // namespace hal

@@ -17,6 +17,9 @@ void reset(proto::Clock kind);
 size_t take_tx(uint8_t* out, size_t cap);
 // Bytes waiting in the output queue.
 size_t tx_pending();
+// Fault injection: the ideal actuators report these proto::faults bits (stall, encoder) as a board's
+// loops would, until actuator power next comes back on.
+void inject_actuator_faults(uint16_t faults);
 
 }  // namespace native
 }  // namespace mr

@@ -1,21 +1,55 @@
-// Protocol-only Uno HAL until the actuator layer exists: real clock and serial; no motors, measured = last command.
-#include <Arduino.h>  // micros(), Serial
+// The Uno's HAL: micros() clock, the serial TX buffer, and the four actuator loops (or, in bench mode, none).
+#include <Arduino.h>  // micros(), Serial, pinMode, digitalRead
 
-#include "hal.h"  // the interface implemented here
+#include "actuators.h"     // ActuatorBank
+#include "board.h"         // this board's entry points (setup and loop)
+#include "board_config.h"  // kActuator, kLoopPeriodUs, kBenchPin
+#include "hal.h"           // the interface implemented here
+#include "ideal_actuators.h"  // IdealActuators, SimulatedClock: bench mode
+#include "uno_io.h"        // UnoActuatorIo
 
 namespace mr {
-namespace hal {
 
 namespace {
 
-// Stand-in for the actuators: where they were last told to be [m], frozen while the power is off.
-float g_measured[kActuatorCount] = {};
-bool g_power = true;
+board::UnoActuatorIo g_io;
+board::Probe g_probe_actuators;   // high while the four loops run
+ActuatorBank g_bank(g_io, board::kActuator, board::kLoopPeriodUs);
+bool g_bench = false;        // bench mode: external actuators (setpoints reported back), simulated clock
+IdealActuators g_external;   // bench mode's actuators
+SimulatedClock g_sim_clock;  // bench mode's clock
 
 }  // namespace
 
+namespace board {
+
+bool begin() {
+  pinMode(kBenchPin, INPUT_PULLUP);
+  g_bench = digitalRead(kBenchPin) == LOW;
+  g_probe_actuators.begin(kProbeActuatorPin);
+  if (!g_bench) {
+    g_io.begin();
+    g_bank.begin(micros());
+  }
+  return g_bench;
+}
+
+void actuators_tick() {
+  const uint32_t now = micros();
+  if (g_bench || !g_bank.due(now)) return;
+  g_probe_actuators.high();
+  g_bank.tick(now);
+  g_probe_actuators.low();
+}
+
+uint32_t actuator_overruns() { return g_bank.overruns(); }
+
+}  // namespace board
+
+namespace hal {
+
 // micros() has a 4 us resolution at 16 MHz and wraps like the HAL's clock (2^32 us).
-uint32_t now_us() { return micros(); }
+uint32_t now_us() { return g_bench ? g_sim_clock.now_us() : micros(); }
 
 // A frame goes out only if the whole of it fits in the serial TX buffer (SERIAL_TX_BUFFER_SIZE bytes);
 // otherwise it is dropped, never waited for: a blocking write would stall the control loop.
@@ -25,20 +59,33 @@ void serial_write(const uint8_t* data, uint8_t len) {
 }
 
 void actuators_command(const float (&command)[kActuatorCount]) {
-  if (!g_power) return;
-  for (uint8_t i = 0; i < kActuatorCount; ++i) g_measured[i] = command[i];
+  if (g_bench) return g_external.command(command);
+  g_bank.set_setpoints(command);
 }
 
 void actuators_measured(float (&measured)[kActuatorCount]) {
-  for (uint8_t i = 0; i < kActuatorCount; ++i) measured[i] = g_measured[i];
+  if (g_bench) return g_external.measured(measured);
+  g_bank.measured(measured);
 }
 
-void actuators_power(bool on) { g_power = on; }
+void actuators_power(bool on) {
+  if (g_bench) return g_external.power(on);
+  g_bank.power(on);
+}
 
-proto::Clock clock_kind() { return proto::Clock::kWall; }
+void actuators_zero(uint8_t mask) {
+  if (g_bench) return g_external.zero(mask);
+  g_bank.zero(mask);
+}
 
-// The Uno only has its wall clock.
-proto::ErrorCode sim_clock_set(uint32_t /*t_us*/) { return proto::ErrorCode::kUnsupported; }
+uint16_t actuator_faults() { return g_bench ? 0 : g_bank.faults(); }
+
+proto::Clock clock_kind() { return g_bench ? proto::Clock::kSimulated : proto::Clock::kWall; }
+
+proto::ErrorCode sim_clock_set(uint32_t t_us) {
+  if (!g_bench) return proto::ErrorCode::kUnsupported;
+  return g_sim_clock.set(t_us);
+}
 
 }  // namespace hal
 }  // namespace mr

@@ -1,36 +1,87 @@
-// Uno entry point (protocol-only board build): serial bytes into the core, the core polled on every loop pass.
-#include <Arduino.h>  // setup()/loop() contract, Serial
-#include <avr/io.h>   // MCUSR and its reset flags
+// Uno entry point: serial bytes into the core, the actuator loops at their rate, the watchdog, timing probes.
+//
+// The main loop never blocks: each pass drains the serial receive buffer (64 bytes, filled by interrupt;
+// at 115200 baud it takes 5.6 ms to overflow), runs the actuator loops if their 4 ms period is due,
+// and polls the core (deadman, periodic telemetry). The controller runs inside the core on each
+// object_position frame. A pass that hangs for 250 ms trips the watchdog: its interrupt cuts every
+// motor, and the MCU resets 250 ms later; the next boot reports reset_cause watchdog.
+#include <Arduino.h>        // setup()/loop() contract, Serial, pin helpers
+#include <avr/interrupt.h>  // ISR, cli, sei
+#include <avr/io.h>         // MCUSR, WDTCSR
+#include <avr/wdt.h>        // wdt_reset, wdt_disable
 
+#include "board.h"         // board::begin, board::actuators_tick
+#include "board_config.h"  // probe pins
 #include "firmware.h"      // mr::Firmware
 #include "protocol_gen.h"  // mr::proto::ResetCause
+#include "uno_io.h"        // board::on_watchdog_timeout, board::Probe
 
 namespace {
 
 mr::Firmware g_firmware;
 
-// Why the MCU started, from MCUSR, which is then cleared so that the next reset reports its own cause.
-// Several flags can be set at once (a power-on ramp also trips the brown-out detector): the first listed
-// wins. The stock Uno bootloader (Optiboot) clears MCUSR before it starts the sketch, so behind it this
-// reads kUnknown; flashed without a bootloader (ISP) the cause comes through.
-mr::proto::ResetCause take_reset_cause() {
-  const uint8_t flags = MCUSR;
+// MCUSR as the reset left it, saved before anything else runs (a watchdog reset leaves the watchdog
+// running with its shortest timeout, so it is stopped here too, before the C runtime's start-up).
+uint8_t g_reset_flags __attribute__((section(".noinit")));
+
+void save_reset_flags() __attribute__((naked, used, section(".init3")));
+void save_reset_flags() {
+  g_reset_flags = MCUSR;
   MCUSR = 0;
-  if (flags & _BV(PORF)) return mr::proto::ResetCause::kPowerOn;
-  if (flags & _BV(BORF)) return mr::proto::ResetCause::kBrownOut;
-  if (flags & _BV(WDRF)) return mr::proto::ResetCause::kWatchdog;
-  if (flags & _BV(EXTRF)) return mr::proto::ResetCause::kExternal;
+  wdt_disable();
+}
+
+// Why the MCU started. Several flags can be set at once (a power-on ramp also trips the brown-out
+// detector): the first listed wins. The stock Uno bootloader (Optiboot) clears MCUSR before it starts
+// the sketch, so behind it this reads kUnknown; flashed without a bootloader (ISP) the cause comes through.
+mr::proto::ResetCause reset_cause() {
+  if (g_reset_flags & _BV(PORF)) return mr::proto::ResetCause::kPowerOn;
+  if (g_reset_flags & _BV(BORF)) return mr::proto::ResetCause::kBrownOut;
+  if (g_reset_flags & _BV(WDRF)) return mr::proto::ResetCause::kWatchdog;
+  if (g_reset_flags & _BV(EXTRF)) return mr::proto::ResetCause::kExternal;
   return mr::proto::ResetCause::kUnknown;
 }
 
+// Interrupt-then-reset mode, 250 ms: the first timeout runs the interrupt, the second resets.
+void watchdog_start() {
+  cli();
+  wdt_reset();
+  WDTCSR = _BV(WDCE) | _BV(WDE);
+  WDTCSR = _BV(WDIE) | _BV(WDE) | _BV(WDP2);
+  sei();
+}
+
+// Each pass restarts the count and re-arms the interrupt (the hardware clears WDIE when it fires).
+void watchdog_kick() {
+  wdt_reset();
+  WDTCSR |= _BV(WDIE);
+}
+
+mr::board::Probe g_probe_frame;
+mr::board::Probe g_probe_loop;
+
 }  // namespace
+
+ISR(WDT_vect) { mr::board::on_watchdog_timeout(); }
 
 void setup() {
   Serial.begin(115200);  // [baud] the host link's rate (platformio.ini monitor_speed)
-  g_firmware.boot(take_reset_cause());
+  g_probe_frame.begin(mr::board::kProbeControllerPin);
+  g_probe_loop.begin(mr::board::kProbeLoopPin);
+  mr::board::begin();
+  g_firmware.boot(reset_cause());
+  watchdog_start();
 }
 
 void loop() {
-  while (Serial.available() > 0) g_firmware.rx_byte(static_cast<uint8_t>(Serial.read()));
+  g_probe_loop.toggle();
+  watchdog_kick();
+  while (Serial.available() > 0) {
+    const uint8_t byte = static_cast<uint8_t>(Serial.read());
+    g_probe_frame.high();  // long only for the byte that completes a frame: the controller step and reply
+    g_firmware.rx_byte(byte);
+    g_probe_frame.low();
+  }
+  mr::board::actuators_tick();
   g_firmware.poll();
 }

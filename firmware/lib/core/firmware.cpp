@@ -44,6 +44,8 @@ void Firmware::rx_byte(uint8_t byte) {
 void Firmware::poll() {
   const uint32_t now = hal::now_us();
   supervisor_.tick(now);
+  const uint16_t actuator_faults = hal::actuator_faults();
+  if (actuator_faults & ~supervisor_.faults()) supervisor_.shutdown(actuator_faults);
   apply_outputs();
   const uint32_t period_us = static_cast<uint32_t>(supervisor_.config().telemetry_period) * 1000u;
   if (period_us != 0 && now - last_telemetry_us_ >= period_us) send_telemetry(now);
@@ -108,6 +110,12 @@ ErrorCode Firmware::handle_command(uint8_t& field) {
       return ErrorCode::kOk;
     case proto::Jog::kId:
       return supervisor_.jog(decoded<proto::Jog>(payload), field);
+    case proto::Zero::kId: {
+      const proto::Zero msg = decoded<proto::Zero>(payload);
+      const ErrorCode code = supervisor_.zero(msg, field);
+      if (code == ErrorCode::kOk) hal::actuators_zero(msg.actuators);
+      return code;
+    }
     case proto::SimClock::kId: {
       const ErrorCode code = hal::sim_clock_set(decoded<proto::SimClock>(payload).now);
       if (code == ErrorCode::kOk) poll();  // what is due at the new time happens before the ack

@@ -20,8 +20,12 @@ void serial_write(const uint8_t* data, uint8_t len);
 void actuators_command(const float (&command)[kActuatorCount]);
 // Measured actuator positions [m], same convention.
 void actuators_measured(float (&measured)[kActuatorCount]);
-// false cuts every actuator output at once (emergency stop); true restores them.
+// false cuts every actuator output at once (emergency stop, faults); true restores them.
 void actuators_power(bool on);
+// The actuators in the mask (bit i: actuator i) now stand at 0 m (homing).
+void actuators_zero(uint8_t mask);
+// proto::faults bits the actuators latched (stall, encoder); cleared when power comes back on.
+uint16_t actuator_faults();
 
 // Which clock now_us() reads.
 proto::Clock clock_kind();

@@ -9,7 +9,7 @@ namespace mr {
 namespace proto {
 
 constexpr uint16_t kProtocolVersion = 1;
-constexpr uint32_t kSchemaHash = 0x163C8F28u;
+constexpr uint32_t kSchemaHash = 0xA7E052E0u;
 constexpr uint8_t kMaxPacket = 44;  // [bytes] id + seq + payload + CRC
 constexpr uint8_t kMaxWire = 46;  // [bytes] COBS packet + delimiter
 constexpr uint8_t kNoField = 255;  // nack.field when no single field is at fault
@@ -72,6 +72,8 @@ constexpr uint16_t kNotVisible = 1u << 0;
 namespace faults {
 constexpr uint16_t kPositionTimeout = 1u << 0;
 constexpr uint16_t kEstop = 1u << 1;
+constexpr uint16_t kStall = 1u << 2;
+constexpr uint16_t kEncoder = 1u << 3;
 }  // namespace faults
 
 // Boot gains of each PID, indexed by Axis: {kp [deg/m], ki [deg/(m s)], kd [deg s/m], integral_limit [deg]}.
@@ -295,6 +297,24 @@ inline ErrorCode validate(const SimClock& /*m*/, uint8_t& /*field*/) {
   return ErrorCode::kOk;
 }
 
+// Homing: take the present position of each actuator in the mask as 0 m, the reference height z0. Only in idle.
+struct Zero {
+  static constexpr uint8_t kId = 0x0A;
+  static constexpr uint8_t kSize = 1;  // [bytes] payload
+  uint8_t actuators;  // Bit i set: zero actuator i (PROTOCOL.md, geometry).
+};
+inline void encode(const Zero& m, uint8_t* out) {
+  put_u8(out + 0, m.actuators);
+}
+inline void decode(const uint8_t* in, Zero& m) {
+  m.actuators = get_u8(in + 0);
+}
+// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
+inline ErrorCode validate(const Zero& m, uint8_t& field) {
+  if ((m.actuators < 1) || (m.actuators > 15)) { field = 0; return ErrorCode::kOutOfRange; }
+  return ErrorCode::kOk;
+}
+
 // One camera measurement. Answered by telemetry (or a nack); one controller step when running.
 struct ObjectPosition {
   static constexpr uint8_t kId = 0x10;
@@ -479,6 +499,7 @@ inline int8_t host_to_mcu_size(uint8_t id) {
     case EmergencyStop::kId: return EmergencyStop::kSize;
     case Jog::kId: return Jog::kSize;
     case SimClock::kId: return SimClock::kSize;
+    case Zero::kId: return Zero::kSize;
     case ObjectPosition::kId: return ObjectPosition::kSize;
     default: return -1;
   }

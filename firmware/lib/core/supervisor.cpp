@@ -106,10 +106,17 @@ void Supervisor::stop() {
   level();
 }
 
-void Supervisor::emergency_stop() {
-  state_ = State::kEstop;
-  faults_ |= proto::faults::kEstop;
+void Supervisor::emergency_stop() { shutdown(proto::faults::kEstop); }
+
+void Supervisor::shutdown(uint16_t faults) {
+  faults_ |= faults;
+  state_ = (faults_ & proto::faults::kEstop) ? State::kEstop : State::kFault;
   level();
+}
+
+bool Supervisor::actuator_power() const {
+  constexpr uint16_t kPowerCut = proto::faults::kEstop | proto::faults::kStall | proto::faults::kEncoder;
+  return !(faults_ & kPowerCut);
 }
 
 ErrorCode Supervisor::jog(const proto::Jog& msg, uint8_t& field) {
@@ -122,6 +129,17 @@ ErrorCode Supervisor::jog(const proto::Jog& msg, uint8_t& field) {
     return ErrorCode::kOutOfRange;
   }
   output_.command[msg.actuator] = msg.position;
+  return ErrorCode::kOk;
+}
+
+ErrorCode Supervisor::zero(const proto::Zero& msg, uint8_t& field) {
+  field = proto::kNoField;
+  if (state_ != State::kIdle) return ErrorCode::kBadState;
+  const ErrorCode local = proto::validate(msg, field);
+  if (local != ErrorCode::kOk) return local;
+  for (uint8_t i = 0; i < kActuatorCount; ++i) {
+    if (msg.actuators & (1u << i)) output_.command[i] = 0.0f;
+  }
   return ErrorCode::kOk;
 }
 
@@ -167,9 +185,7 @@ ErrorCode Supervisor::position(const proto::ObjectPosition& msg, uint32_t now_us
 void Supervisor::tick(uint32_t now_us) {
   if (!running(state_)) return;
   if (now_us - deadman_from_us_ > static_cast<uint32_t>(config_.deadman) * 1000u) {
-    state_ = State::kFault;
-    faults_ |= proto::faults::kPositionTimeout;
-    level();
+    shutdown(proto::faults::kPositionTimeout);
   }
 }
 

@@ -1,8 +1,9 @@
 // Supervisor: states, configuration validation, deadman, and the controller step at each position frame.
 //
 // States: idle (surface level, jog allowed) -> start -> running <-> reached (within tolerance; control
-// goes on so the object stays) ; a deadman timeout -> fault (surface level, latched) ; emergency_stop
-// -> estop (actuator power cut, latched) ; stop -> idle from anywhere, clearing faults.
+// goes on so the object stays) ; a fault -> fault (latched): a deadman timeout levels the surface, a stalled
+// or silent actuator cuts actuator power ; emergency_stop -> estop (actuator power cut, latched) ; stop ->
+// idle from anywhere, clearing faults. Every fault, the emergency stop included, goes through shutdown().
 // Every command is validated whole before anything changes: a refused command changes nothing.
 #pragma once
 
@@ -26,6 +27,11 @@ class Supervisor {
   void stop();
   void emergency_stop();
   proto::ErrorCode jog(const proto::Jog& msg, uint8_t& field);
+  // Homing: the actuators in the mask now stand at 0 m; their commands become 0 (hold there). Only in idle.
+  proto::ErrorCode zero(const proto::Zero& msg, uint8_t& field);
+  // The one shutdown path: latches the fault bits (proto::faults), levels the commands, and enters estop
+  // (for kEstop) or fault. Actuator power stays off while estop, stall or encoder is latched.
+  void shutdown(uint16_t faults);
   // A camera frame received at now_us (firmware clock); runs one controller step when running.
   proto::ErrorCode position(const proto::ObjectPosition& msg, uint32_t now_us, uint8_t& field);
   // Forgets the camera's frame counter and capture-time history (a new host or a new run).
@@ -35,7 +41,7 @@ class Supervisor {
 
   proto::State state() const { return state_; }
   uint16_t faults() const { return faults_; }
-  bool actuator_power() const { return state_ != proto::State::kEstop; }
+  bool actuator_power() const;
   const ControllerOutput& output() const { return output_; }  // tilts and commands to apply now
   const proto::Configure& config() const { return config_; }
   uint16_t last_frame() const { return last_frame_; }

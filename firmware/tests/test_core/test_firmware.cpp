@@ -529,3 +529,57 @@ TEST_CASE("firmware: a whole session in one byte stream gives one reply per fram
   CHECK(frames[8].id == +proto::Ack::kId);
   CHECK(h.fw.supervisor().state() == State::kIdle);
 }
+
+TEST_CASE("firmware: an actuator fault from the board goes through the one shutdown path: fault, power cut") {
+  for (uint16_t fault : {proto::faults::kStall, proto::faults::kEncoder}) {
+    Host h;
+    h.take();
+    h.send_msg(proto::SetTarget{0.1f, 0.0f}, 1);
+    h.expect_ack(proto::SetTarget::kId, 1);
+    h.send_msg(proto::Start{}, 2);
+    h.expect_ack(proto::Start::kId, 2);
+    h.send_msg(pos(1, 1000, 0.0f, 0.0f), 3);
+    const proto::Telemetry driving = h.expect_telemetry();
+    CHECK(driving.command[1] > 0);  // the controller lowers the +x corners
+    mr::native::inject_actuator_faults(fault);
+    h.fw.poll();
+    h.send_msg(pos(2, 84000, 0.05f, 0.0f), 4);
+    proto::Telemetry t = h.expect_telemetry();
+    CHECK(t.state == static_cast<uint8_t>(State::kFault));
+    CHECK(t.faults == fault);
+    CHECK(t.command[1] == 0);                      // levelled ...
+    CHECK(t.measured[1] == driving.measured[1]);   // ... but with power cut nothing moves
+    h.send_msg(proto::Start{}, 5);
+    h.expect_nack(proto::Start::kId, 5, ErrorCode::kBadState, proto::kNoField);
+    h.send_msg(proto::Stop{}, 6);
+    h.expect_ack(proto::Stop::kId, 6);
+    h.fw.poll();
+    h.send_msg(pos(3, 168000, 0.0f, 0.0f), 7);
+    t = h.expect_telemetry();
+    CHECK(t.state == static_cast<uint8_t>(State::kIdle));
+    CHECK(t.faults == 0);
+    CHECK(t.measured[1] == 0);  // power back: level
+  }
+}
+
+TEST_CASE("firmware: zero makes the masked actuators stand at 0 m, in idle only") {
+  Host h;
+  h.take();
+  h.send_msg(proto::Jog{0, 0.1f}, 1);
+  h.expect_ack(proto::Jog::kId, 1);
+  h.send_msg(proto::Jog{3, -0.05f}, 2);
+  h.expect_ack(proto::Jog::kId, 2);
+  h.send_msg(proto::Zero{0b0001}, 3);
+  h.expect_ack(proto::Zero::kId, 3);
+  h.send_msg(pos(1, 1, 0.0f, 0.0f), 4);
+  const proto::Telemetry t = h.expect_telemetry();
+  CHECK(t.command[0] == 0);
+  CHECK(t.measured[0] == 0);
+  CHECK(t.command[3] == -5000);  // not in the mask: untouched
+  h.send_msg(proto::Zero{0}, 5);
+  h.expect_nack(proto::Zero::kId, 5, ErrorCode::kOutOfRange, 0);
+  h.send_msg(proto::EmergencyStop{}, 6);
+  h.expect_ack(proto::EmergencyStop::kId, 6);
+  h.send_msg(proto::Zero{0b1111}, 7);
+  h.expect_nack(proto::Zero::kId, 7, ErrorCode::kBadState, proto::kNoField);
+}

@@ -1,0 +1,312 @@
+// The Uno firmware's ELF in simavr, cycle-accurate, its UART bridged to a pty; probe timing and stack use on exit.
+//
+// Usage: mantaray-simavr FIRMWARE.elf [--bench] [--realtime] [--paint-from ADDR] [--stats FILE] [--run-for S]
+// Prints "pty PATH" on stdout once the serial port exists; the host talks to the firmware there.
+//   --bench       hold the bench pin (D2) low: external actuators and a simulated clock (board_config.h);
+//                 without it D2 is held high, as the board's pull-up leaves it on the rig
+//   --realtime    never let simulated time run ahead of the wall clock (simavr is faster than the Uno):
+//                 a wall-clock firmware then keeps the host's time, as a board does
+//   --paint-from  fill RAM from ADDR (the ELF's _end) up to RAMEND with 0xC5 before the firmware starts,
+//                 so the untouched bytes above the data show the stack's high-water mark
+//   --stats FILE  on exit (SIGTERM, SIGINT, or --run-for elapsed), write the probe statistics as JSON
+//   --run-for S   stop after S seconds of simulated time
+// The probes are the firmware's timing pins (board_config.h): D13 high while a received byte is handled
+// (the byte that completes an object_position frame runs the controller), D10 high while the four actuator
+// loops run, D11 toggled once per main-loop pass.
+// On the rig side (no --bench) the harness also plays the hardware of board_config.h: a TCA9548A at 0x70
+// with an AS5600 (0x36, ANGLE register 0x0E) on channels 0..3, and four geared motors whose shafts turn
+// at 2 rev/s times the PWM duty of pins 3, 5, 6, 9 in the direction of pins 4, 7, 8, 12 (HIGH: +).
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "avr_ioport.h"
+#include "avr_twi.h"
+#include "sim_cycle_timers.h"
+#include "sim_time.h"
+#include "sim_avr.h"
+#include "sim_elf.h"
+#include "uart_pty.h"
+
+#define PAINT 0xC5            // stack paint byte
+#define RAMEND_328P 0x08FF    // last RAM address of the ATmega328P
+
+typedef struct {
+  const char* name;
+  avr_cycle_count_t since;    // cycle of the last rising edge (or toggle)
+  int high;
+  unsigned long count;
+  avr_cycle_count_t min, max, sum;
+} probe_t;
+
+// ---------------------------------------------------------------- the rig's hardware, modelled
+#define MUX_ADDRESS 0x70
+#define ENCODER_ADDRESS 0x36
+#define ANGLE_REGISTER 0x0E
+#define MOTOR_REV_PER_S 2.0   // [rev/s] 120 rev/min at full drive
+#define MOTOR_STEP_US 500     // [us] motor model update period
+// ATmega328P data-space addresses of the registers the model reads.
+enum { PORTB_ = 0x25, PORTD_ = 0x2B, TCCR0A_ = 0x44, OCR0A_ = 0x47, OCR0B_ = 0x48, TCCR1A_ = 0x80,
+       OCR1AL_ = 0x88, TCCR2A_ = 0xB0, OCR2B_ = 0xB4 };
+
+typedef struct {
+  avr_irq_t* irq;          // [0] from the master (TWI_IRQ_OUTPUT), [1] to it (TWI_IRQ_INPUT)
+  int selected;            // 0 none, 1 the multiplexer, 2 an encoder
+  uint8_t mux_mask;        // channels the multiplexer connects
+  uint8_t pointer[4];      // each AS5600's register pointer
+  int read_index;          // byte of the current read
+  double angle_rev[4];     // shaft angles [rev]
+} rig_t;
+
+static rig_t g_rig;
+
+static int encoder_channel(void) {  // the one channel 0..3 connected, or -1
+  int channel = -1;
+  for (int c = 0; c < 8; ++c) {
+    if (g_rig.mux_mask & (1u << c)) {
+      if (channel >= 0 || c > 3) return -1;
+      channel = c;
+    }
+  }
+  return channel;
+}
+
+static uint16_t encoder_angle(int channel) {
+  double turns = g_rig.angle_rev[channel] - floor(g_rig.angle_rev[channel]);
+  return (uint16_t)(turns * 4096.0) & 0x0FFF;
+}
+
+static void answer(uint8_t msg, uint8_t addr, uint8_t data) {
+  avr_raise_irq(g_rig.irq + 1, avr_twi_irq_msg(msg, addr, data));
+}
+
+// The bus as the devices see it: START with an address, data bytes written or read, STOP.
+static void on_twi(struct avr_irq_t* irq, uint32_t value, void* param) {
+  (void)irq;
+  (void)param;
+  avr_twi_msg_irq_t v;
+  v.u.v = value;
+  if (v.u.twi.msg & TWI_COND_STOP) g_rig.selected = 0;
+  if (v.u.twi.msg & TWI_COND_START) {
+    const uint8_t device = v.u.twi.addr >> 1;
+    g_rig.selected = 0;
+    g_rig.read_index = 0;
+    if (device == MUX_ADDRESS) {
+      g_rig.selected = 1;
+    } else if (device == ENCODER_ADDRESS && encoder_channel() >= 0) {
+      g_rig.selected = 2;
+    }
+    if (g_rig.selected) answer(TWI_COND_ACK, v.u.twi.addr, 1);
+    return;
+  }
+  if (!g_rig.selected) return;
+  if (v.u.twi.msg & TWI_COND_WRITE) {
+    if (g_rig.selected == 1) {
+      g_rig.mux_mask = v.u.twi.data;
+    } else {
+      g_rig.pointer[encoder_channel()] = v.u.twi.data;
+    }
+    answer(TWI_COND_ACK, v.u.twi.addr, 1);
+  }
+  if ((v.u.twi.msg & TWI_COND_READ) && g_rig.selected == 2) {
+    const int channel = encoder_channel();
+    const uint16_t angle = g_rig.pointer[channel] == ANGLE_REGISTER ? encoder_angle(channel) : 0;
+    const uint8_t data = g_rig.read_index++ == 0 ? (uint8_t)(angle >> 8) : (uint8_t)(angle & 0xFF);
+    answer(TWI_COND_READ, v.u.twi.addr, data);
+  }
+}
+
+// Duty 0..1 of a PWM pin: its compare register while the timer drives the pin, else the pin's level.
+static double duty(avr_t* avr, int tccr, uint8_t com_bit, int ocr, int port, uint8_t port_bit) {
+  if (avr->data[tccr] & com_bit) return avr->data[ocr] / 255.0;
+  return (avr->data[port] & port_bit) ? 1.0 : 0.0;
+}
+
+static avr_cycle_count_t step_motors(avr_t* avr, avr_cycle_count_t when, void* param) {
+  (void)param;
+  const double d[4] = {duty(avr, TCCR2A_, 1u << 5, OCR2B_, PORTD_, 1u << 3),   // pin 3: OC2B
+                       duty(avr, TCCR0A_, 1u << 5, OCR0B_, PORTD_, 1u << 5),   // pin 5: OC0B
+                       duty(avr, TCCR0A_, 1u << 7, OCR0A_, PORTD_, 1u << 6),   // pin 6: OC0A
+                       duty(avr, TCCR1A_, 1u << 7, OCR1AL_, PORTB_, 1u << 1)};  // pin 9: OC1A
+  const int dir[4] = {avr->data[PORTD_] & (1u << 4), avr->data[PORTD_] & (1u << 7),   // pins 4, 7
+                      avr->data[PORTB_] & (1u << 0), avr->data[PORTB_] & (1u << 4)};  // pins 8, 12
+  for (int i = 0; i < 4; ++i) {
+    g_rig.angle_rev[i] += (dir[i] ? 1.0 : -1.0) * d[i] * MOTOR_REV_PER_S * MOTOR_STEP_US * 1e-6;
+  }
+  return when + avr_usec_to_cycles(avr, MOTOR_STEP_US);
+}
+
+static void rig_attach(avr_t* avr) {
+  static const char* names[2] = {"32<rig.twi_in", "8>rig.twi_out"};
+  memset(&g_rig, 0, sizeof g_rig);
+  for (int i = 0; i < 4; ++i) g_rig.angle_rev[i] = 0.1 + 0.2 * i;  // arbitrary magnet positions
+  g_rig.irq = avr_alloc_irq(&avr->irq_pool, 0, 2, names);
+  avr_irq_register_notify(g_rig.irq + 0, on_twi, NULL);
+  avr_connect_irq(avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_OUTPUT), g_rig.irq + 0);
+  avr_connect_irq(g_rig.irq + 1, avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_INPUT));
+  avr_cycle_timer_register_usec(avr, MOTOR_STEP_US, step_motors, NULL);
+}
+
+// ---------------------------------------------------------------- harness
+static volatile sig_atomic_t g_stop = 0;
+static avr_t* g_avr;
+static probe_t g_frame = {.name = "byte_handling"}, g_actuators = {.name = "actuator_loops"},
+               g_pass = {.name = "main_loop_pass"};
+
+static void on_signal(int sig) {
+  (void)sig;
+  g_stop = 1;
+}
+
+static void record(probe_t* p, avr_cycle_count_t width) {
+  if (p->count == 0 || width < p->min) p->min = width;
+  if (width > p->max) p->max = width;
+  p->sum += width;
+  p->count++;
+}
+
+// High-while-working probes: a pulse's width is the work's cycle count.
+static void on_pulse(struct avr_irq_t* irq, uint32_t value, void* param) {
+  (void)irq;
+  probe_t* p = param;
+  if (value && !p->high) {
+    p->since = g_avr->cycle;
+  } else if (!value && p->high) {
+    record(p, g_avr->cycle - p->since);
+  }
+  p->high = value != 0;
+}
+
+// Toggled probe: every edge ends one main-loop pass.
+static void on_toggle(struct avr_irq_t* irq, uint32_t value, void* param) {
+  (void)irq;
+  (void)value;
+  probe_t* p = param;
+  if (p->high) record(p, g_avr->cycle - p->since);
+  p->high = 1;
+  p->since = g_avr->cycle;
+}
+
+static void watch(char port, int bit, avr_irq_notify_t hook, probe_t* probe) {
+  avr_irq_register_notify(avr_io_getirq(g_avr, AVR_IOCTL_IOPORT_GETIRQ(port), bit), hook, probe);
+}
+
+static void write_probe(FILE* f, const probe_t* p, const char* tail) {
+  fprintf(f, "  \"%s\": {\"count\": %lu, \"min_cycles\": %llu, \"max_cycles\": %llu, \"mean_cycles\": %.1f}%s\n",
+          p->name, p->count, (unsigned long long)p->min, (unsigned long long)p->max,
+          p->count ? (double)p->sum / (double)p->count : 0.0, tail);
+}
+
+int main(int argc, char** argv) {
+  const char* elf = NULL;
+  const char* stats = NULL;
+  long paint_from = -1;
+  double run_for_s = -1.0;
+  int bench = 0;
+  int realtime = 0;
+  for (int i = 1; i < argc; ++i) {
+    if (!strcmp(argv[i], "--bench")) {
+      bench = 1;
+    } else if (!strcmp(argv[i], "--realtime")) {
+      realtime = 1;
+    } else if (!strcmp(argv[i], "--stats") && i + 1 < argc) {
+      stats = argv[++i];
+    } else if (!strcmp(argv[i], "--paint-from") && i + 1 < argc) {
+      paint_from = strtol(argv[++i], NULL, 0);
+    } else if (!strcmp(argv[i], "--run-for") && i + 1 < argc) {
+      run_for_s = atof(argv[++i]);
+    } else if (argv[i][0] != '-' && !elf) {
+      elf = argv[i];
+    } else {
+      fprintf(stderr, "usage: %s FIRMWARE.elf [--bench] [--realtime] [--paint-from ADDR] [--stats FILE] "
+                      "[--run-for S]\n",
+              argv[0]);
+      return 2;
+    }
+  }
+  if (!elf) {
+    fprintf(stderr, "mantaray-simavr: no firmware ELF given\n");
+    return 2;
+  }
+
+  elf_firmware_t firmware;
+  memset(&firmware, 0, sizeof firmware);
+  if (elf_read_firmware(elf, &firmware) != 0) {
+    fprintf(stderr, "mantaray-simavr: cannot read %s\n", elf);
+    return 1;
+  }
+  g_avr = avr_make_mcu_by_name("atmega328p");
+  if (!g_avr) {
+    fprintf(stderr, "mantaray-simavr: simavr has no atmega328p\n");
+    return 1;
+  }
+  avr_init(g_avr);
+  g_avr->frequency = 16000000;  // [Hz] the Uno's crystal
+  avr_load_firmware(g_avr, &firmware);
+  if (paint_from >= 0) {
+    for (long a = paint_from; a <= RAMEND_328P; ++a) g_avr->data[a] = PAINT;
+  }
+
+  // The bench pin, held by a jumper (low) or left to the pull-up (high): an external level that the
+  // firmware's own pin settings do not override.
+  avr_ioport_external_t bench_pin = {.name = 'D', .mask = 1u << 2, .value = bench ? 0u : 1u << 2};
+  avr_ioctl(g_avr, AVR_IOCTL_IOPORT_SET_EXTERNAL('D'), &bench_pin);
+  if (!bench) rig_attach(g_avr);
+  watch('B', 5, on_pulse, &g_frame);      // D13
+  watch('B', 2, on_pulse, &g_actuators);  // D10
+  watch('B', 3, on_toggle, &g_pass);      // D11
+
+  uart_pty_t pty;
+  uart_pty_init(g_avr, &pty);
+  uart_pty_connect(&pty, '0');
+  printf("pty %s\n", pty.pty.slavename);
+  fflush(stdout);
+
+  signal(SIGTERM, on_signal);
+  signal(SIGINT, on_signal);
+  const avr_cycle_count_t limit = run_for_s >= 0 ? (avr_cycle_count_t)(run_for_s * g_avr->frequency) : 0;
+  int state = cpu_Running;
+  struct timespec t0;
+  clock_gettime(CLOCK_MONOTONIC, &t0);
+  const avr_cycle_count_t pace_every = g_avr->frequency / 1000;  // check the wall clock every 1 ms simulated
+  avr_cycle_count_t next_pace = pace_every;
+  while (!g_stop && state != cpu_Done && state != cpu_Crashed) {
+    state = avr_run(g_avr);
+    if (limit && g_avr->cycle >= limit) break;
+    if (realtime && g_avr->cycle >= next_pace) {
+      next_pace += pace_every;
+      struct timespec now;
+      clock_gettime(CLOCK_MONOTONIC, &now);
+      const double wall_s = (double)(now.tv_sec - t0.tv_sec) + 1e-9 * (double)(now.tv_nsec - t0.tv_nsec);
+      const double ahead_s = (double)g_avr->cycle / g_avr->frequency - wall_s;
+      if (ahead_s > 0) usleep((useconds_t)(ahead_s * 1e6));
+    }
+  }
+
+  if (stats) {
+    FILE* f = fopen(stats, "w");
+    if (!f) {
+      fprintf(stderr, "mantaray-simavr: cannot write %s: %s\n", stats, strerror(errno));
+      return 1;
+    }
+    long untouched = 0;
+    if (paint_from >= 0) {
+      for (long a = paint_from; a <= RAMEND_328P && g_avr->data[a] == PAINT; ++a) untouched++;
+    }
+    fprintf(f, "{\n  \"cycles\": %llu,\n  \"frequency_hz\": %u,\n  \"state\": %d,\n",
+            (unsigned long long)g_avr->cycle, g_avr->frequency, state);
+    fprintf(f, "  \"never_used_ram_bytes\": %ld,\n", paint_from >= 0 ? untouched : -1L);
+    write_probe(f, &g_frame, ",");
+    write_probe(f, &g_actuators, ",");
+    write_probe(f, &g_pass, "");
+    fprintf(f, "}\n");
+    fclose(f);
+  }
+  // No uart_pty_stop(): it joins the pty's reader thread, which may sit in a read; exiting ends it.
+  return state == cpu_Crashed ? 1 : 0;
+}

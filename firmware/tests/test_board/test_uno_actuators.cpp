@@ -1,0 +1,220 @@
+// The Uno's actuator stack on the host: the board I/O (uno_io.cpp) and the core's loops against modelled motors.
+#include <doctest/doctest.h>
+
+#include <math.h>  // fabs
+
+#include "Arduino.h"
+#include "Wire.h"
+#include "actuators.h"
+#include "board_config.h"
+#include "protocol_gen.h"
+#include "uno_io.h"
+
+namespace {
+
+using mr::ActuatorBank;
+using mr::board::kActuator;
+
+// A geared DC motor on an H-bridge turning an AS5600's magnet: speed follows the PWM with a time constant.
+struct Rig {
+  static constexpr float kTopSpeedRevPerS = 2.0f;  // [rev/s] 120 rev/min at full drive
+  static constexpr float kTimeConstantS = 0.03f;   // [s]
+  float angle_rev[4] = {};                          // shaft angle [rev] since the start
+  float speed_rev_per_s[4] = {};
+  bool blocked[4] = {};
+  uint16_t offset_counts[4] = {};                   // encoder reading at angle 0
+
+  explicit Rig(uint16_t offset = 1000) {
+    fake::reset();
+    for (int i = 0; i < 4; ++i) offset_counts[i] = static_cast<uint16_t>(offset + 700 * i);
+    publish();
+  }
+
+  float duty(int i) const {
+    const int pwm = fake::pins.pwm[mr::board::kPwmPin[i]];
+    const float sign = fake::pins.digital[mr::board::kDirPin[i]] == HIGH ? 1.0f : -1.0f;
+    return sign * static_cast<float>(pwm) / mr::board::kPwmMax;
+  }
+
+  void publish() {
+    for (int i = 0; i < 4; ++i) {
+      const float counts = angle_rev[i] * mr::kEncoderCounts + offset_counts[i];
+      const long wrapped = static_cast<long>(floorf(counts)) % mr::kEncoderCounts;
+      fake::bus.angle[mr::board::kMuxChannel[i]] =
+          static_cast<uint16_t>(wrapped < 0 ? wrapped + mr::kEncoderCounts : wrapped);
+    }
+  }
+
+  void advance(float dt_s) {
+    for (int i = 0; i < 4; ++i) {
+      const float target = blocked[i] ? 0.0f : duty(i) * kTopSpeedRevPerS;
+      speed_rev_per_s[i] += (target - speed_rev_per_s[i]) * dt_s / kTimeConstantS;
+      angle_rev[i] += speed_rev_per_s[i] * dt_s;
+    }
+    publish();
+  }
+
+  float position_m(int i) const { return angle_rev[i] * mr::board::kPulleyCircumferenceM; }
+  bool all_pwm_zero() const {
+    for (int i = 0; i < 4; ++i) {
+      if (fake::pins.pwm[mr::board::kPwmPin[i]] != 0) return false;
+    }
+    return true;
+  }
+};
+
+struct Stack {
+  Rig rig;
+  mr::board::UnoActuatorIo io;
+  ActuatorBank bank{io, kActuator, mr::board::kLoopPeriodUs};
+
+  explicit Stack(uint16_t offset = 1000) : rig(offset) {
+    io.begin();
+    bank.begin(fake::now_us);
+  }
+  // Runs the main loop for s seconds in 250 us passes, the motors following the PWM.
+  void run(float s) {
+    const uint32_t end = fake::now_us + static_cast<uint32_t>(s * 1e6f);
+    while (fake::now_us < end) {
+      bank.tick(fake::now_us);
+      rig.advance(250e-6f);
+      fake::now_us += 250;
+    }
+  }
+  float measured(int i) const {
+    float m[4];
+    bank.measured(m);
+    return m[i];
+  }
+};
+
+}  // namespace
+
+TEST_CASE("the loops bring every carriage to its setpoint and hold it within the deadband") {
+  Stack s;
+  const float setpoints[4] = {0.1f, -0.05f, 0.2f, -0.15f};
+  s.bank.set_setpoints(setpoints);
+  s.run(4.0f);
+  for (int i = 0; i < 4; ++i) {
+    CHECK(fabs(s.rig.position_m(i) - setpoints[i]) < 0.002f);
+    CHECK(fabs(s.measured(i) - s.rig.position_m(i)) < 2 * kActuator.metres_per_count + 1e-6f);
+  }
+  CHECK(s.bank.faults() == 0);
+  CHECK(s.bank.overruns() == 0);
+}
+
+TEST_CASE("a positive duty lowers the corner: DIR high, encoder counting up, measured position positive") {
+  Stack s;
+  const float down[4] = {0.05f, 0.0f, 0.0f, 0.0f};
+  s.bank.set_setpoints(down);
+  s.run(0.05f);
+  CHECK(fake::pins.digital[mr::board::kDirPin[0]] == HIGH);
+  CHECK(fake::pins.pwm[mr::board::kPwmPin[0]] > 0);
+  s.run(2.0f);
+  CHECK(s.measured(0) > 0.045f);
+}
+
+TEST_CASE("unwrapping stays right over many turns, across the wrap point, both ways") {
+  Stack s(4090);  // the encoder starts six counts below its wrap
+  const float far[4] = {0.24f, -0.24f, 0.24f, -0.24f};  // 6 turns of the 0.04 m pulley each way
+  s.bank.set_setpoints(far);
+  s.run(8.0f);
+  for (int i = 0; i < 4; ++i) {
+    CHECK(fabs(s.rig.angle_rev[i]) > 5.5f);
+    CHECK(fabs(s.measured(i) - s.rig.position_m(i)) < 2 * kActuator.metres_per_count + 1e-6f);
+  }
+  const float home[4] = {};
+  s.bank.set_setpoints(home);
+  s.run(8.0f);
+  for (int i = 0; i < 4; ++i) CHECK(fabs(s.rig.position_m(i)) < 0.002f);
+}
+
+TEST_CASE("EncoderUnwrap: every step under half a turn is counted exactly, wherever the wrap falls") {
+  mr::EncoderUnwrap u;
+  u.reset(4095);
+  long expected = 0;
+  uint16_t raw = 4095;
+  const int steps[] = {1, -1, -2, 3, 2047, -2047, 1500, 1500, 1500, -800, 5, -4000 % 2048};
+  for (int round = 0; round < 200; ++round) {
+    for (int step : steps) {
+      raw = static_cast<uint16_t>((raw + step + 4096) % 4096);
+      expected += step;
+      CHECK(u.update(raw) == expected);
+    }
+  }
+}
+
+TEST_CASE("a blocked carriage is a stall: fault latched and every PWM at zero") {
+  Stack s;
+  s.rig.blocked[2] = true;
+  const float setpoints[4] = {0.05f, 0.05f, 0.05f, 0.05f};
+  s.bank.set_setpoints(setpoints);
+  s.run(kActuator.stall_time_s * 0.5f);
+  CHECK(s.bank.faults() == 0);
+  s.run(kActuator.stall_time_s);
+  CHECK((s.bank.faults() & mr::proto::faults::kStall) != 0);
+  CHECK(s.rig.all_pwm_zero());
+  s.run(0.5f);
+  CHECK(s.rig.all_pwm_zero());
+}
+
+TEST_CASE("a silent encoder is an encoder fault after three missed readings, and cuts every motor") {
+  Stack s;
+  const float setpoints[4] = {0.05f, 0.05f, 0.05f, 0.05f};
+  s.bank.set_setpoints(setpoints);
+  s.run(0.1f);
+  fake::bus.silent[mr::board::kMuxChannel[1]] = true;
+  int periods = 0;
+  while (s.bank.faults() == 0 && periods < 10) {
+    s.run(1e-6f * mr::board::kLoopPeriodUs);  // one loop run per period
+    ++periods;
+  }
+  CHECK(periods == ActuatorBank::kReadFailuresForFault);
+  CHECK((s.bank.faults() & mr::proto::faults::kEncoder) != 0);
+  CHECK(s.rig.all_pwm_zero());
+}
+
+TEST_CASE("the emergency-stop path (power off) zeroes every PWM at once and keeps them there") {
+  Stack s;
+  const float setpoints[4] = {0.2f, -0.2f, 0.2f, -0.2f};
+  s.bank.set_setpoints(setpoints);
+  s.run(0.2f);
+  CHECK_FALSE(s.rig.all_pwm_zero());
+  s.bank.power(false);
+  CHECK(s.rig.all_pwm_zero());  // before any further loop run
+  s.run(1.0f);
+  CHECK(s.rig.all_pwm_zero());
+  s.bank.power(true);
+  s.run(0.1f);
+  CHECK_FALSE(s.rig.all_pwm_zero());
+}
+
+TEST_CASE("the watchdog interrupt's path zeroes every PWM") {
+  Stack s;
+  const float setpoints[4] = {0.2f, -0.2f, 0.2f, -0.2f};
+  s.bank.set_setpoints(setpoints);
+  s.run(0.2f);
+  CHECK_FALSE(s.rig.all_pwm_zero());
+  mr::board::on_watchdog_timeout();
+  CHECK(s.rig.all_pwm_zero());
+}
+
+TEST_CASE("soft limits: a setpoint beyond the travel stops the carriage at the limit") {
+  Stack s;
+  const float beyond[4] = {0.4f, -0.4f, 0.3f, -0.3f};
+  s.bank.set_setpoints(beyond);
+  s.run(6.0f);
+  for (int i = 0; i < 4; ++i) CHECK(fabs(s.rig.position_m(i)) < kActuator.soft_limit_m + 0.003f);
+  CHECK(s.bank.faults() == 0);
+}
+
+TEST_CASE("zeroing: the masked actuators' present positions become 0 m") {
+  Stack s;
+  const float setpoints[4] = {0.1f, 0.1f, 0.1f, 0.1f};
+  s.bank.set_setpoints(setpoints);
+  s.run(3.0f);
+  s.bank.zero(0b0101);
+  CHECK(fabs(s.measured(0)) < 1e-6f);
+  CHECK(fabs(s.measured(2)) < 1e-6f);
+  CHECK(s.measured(1) > 0.09f);
+}

@@ -1,0 +1,82 @@
+// Uno actuator I/O: analogWrite/digitalWrite for the H-bridges, Wire for the multiplexed encoders.
+#include "uno_io.h"
+
+#include <Arduino.h>  // pinMode, digitalWrite, analogWrite, analogRead
+#include <Wire.h>     // TwoWire: the TCA9548A and the AS5600s
+
+#include "board_config.h"  // pins, addresses, signs
+
+namespace mr {
+namespace board {
+
+namespace {
+
+constexpr uint16_t kAdcFullScale = 1023;  // 10-bit ADC
+
+void all_pwm_off() {
+  for (uint8_t i = 0; i < 4; ++i) analogWrite(kPwmPin[i], 0);
+}
+
+bool select_mux_channel(uint8_t channel) {
+  Wire.beginTransmission(kMuxAddress);
+  Wire.write(static_cast<uint8_t>(1u << channel));
+  return Wire.endTransmission() == 0;
+}
+
+bool read_as5600(uint16_t& raw) {
+  Wire.beginTransmission(kEncoderAddress);
+  Wire.write(kEncoderAngleRegister);
+  if (Wire.endTransmission(false) != 0) return false;  // repeated start: the register pointer stays
+  if (Wire.requestFrom(kEncoderAddress, static_cast<uint8_t>(2)) != 2) return false;
+  const uint8_t high = static_cast<uint8_t>(Wire.read());
+  const uint8_t low = static_cast<uint8_t>(Wire.read());
+  raw = static_cast<uint16_t>(((high & 0x0Fu) << 8) | low);
+  return true;
+}
+
+}  // namespace
+
+void UnoActuatorIo::begin() {
+  for (uint8_t i = 0; i < 4; ++i) {
+    pinMode(kPwmPin[i], OUTPUT);
+    pinMode(kDirPin[i], OUTPUT);
+  }
+  motors_off();
+  if (kEncoderSource == EncoderSource::kI2cMux) {
+    Wire.begin();
+    Wire.setClock(kI2cClockHz);
+    Wire.setWireTimeout(kI2cTimeoutUs, true);
+  }
+}
+
+bool UnoActuatorIo::encoder_read(uint8_t actuator, uint16_t& raw) {
+  uint16_t angle = 0;
+  if (kEncoderSource == EncoderSource::kAnalog) {
+    angle = static_cast<uint16_t>(static_cast<uint32_t>(analogRead(kAnalogPin[actuator])) * (kEncoderCounts - 1) /
+                                  kAdcFullScale);
+  } else if (!select_mux_channel(kMuxChannel[actuator]) || !read_as5600(angle)) {
+    return false;
+  }
+  raw = kEncoderSign[actuator] > 0 ? angle : static_cast<uint16_t>((kEncoderCounts - angle) % kEncoderCounts);
+  return true;
+}
+
+void UnoActuatorIo::motor_write(uint8_t actuator, float duty) {
+  duty *= kMotorSign[actuator];
+  digitalWrite(kDirPin[actuator], duty >= 0.0f ? HIGH : LOW);
+  const float magnitude = duty >= 0.0f ? duty : -duty;
+  analogWrite(kPwmPin[actuator], static_cast<int>(magnitude * kPwmMax + 0.5f));
+}
+
+void UnoActuatorIo::motors_off() { all_pwm_off(); }
+
+void on_watchdog_timeout() { all_pwm_off(); }
+
+void Probe::begin(uint8_t pin) {
+  pinMode(pin, OUTPUT);
+  port = portOutputRegister(digitalPinToPort(pin));
+  mask = digitalPinToBitMask(pin);
+}
+
+}  // namespace board
+}  // namespace mr

@@ -1,0 +1,93 @@
+"""Starts the Uno's ELF in simavr (mantaray-simavr) with its UART on a pty, and reads its timing report on exit."""
+from __future__ import annotations
+
+import json
+import os
+import select
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from mantaray.paths import REPO, native_artifact
+
+from .vmcu import _die_with_parent
+
+DEFAULT_ELF = REPO / "build" / "avr" / "firmware.elf"   # where scripts/avr_build.py puts the Uno image
+
+
+def end_of_data(elf: Path) -> int:
+    """Address of _end (first byte above .data and .bss) in the ELF, from avr-nm: where the stack paint starts."""
+    out = subprocess.run(["avr-nm", str(elf)], capture_output=True, text=True, check=True).stdout
+    for line in out.splitlines():
+        parts = line.split()
+        if len(parts) == 3 and parts[2] == "_end":
+            return int(parts[0], 16) & 0xFFFF    # data addresses carry avr-gcc's 0x800000 offset
+    raise RuntimeError(f"{elf} has no _end symbol")
+
+
+class SimulatedUno:
+    """The Uno firmware running cycle-accurately in simavr; a context manager. `path` is its serial device path.
+
+    bench=True holds the bench pin low (external actuators, simulated clock: lock-step with the MuJoCo
+    rig); bench=False is the rig, whose motors and multiplexed encoders the harness models. realtime=True
+    keeps simulated time from running ahead of the wall clock (simavr is faster than the Uno), which a
+    wall-clock firmware needs to keep the host's time. After close(),
+    `stats` holds the probe timings in cycles and the RAM the stack never reached.
+    """
+
+    def __init__(self, elf: Path = DEFAULT_ELF, bench: bool = True, realtime: bool = False,
+                 start_timeout: float = 10.0) -> None:
+        self.elf = Path(elf)
+        if not self.elf.exists():
+            raise FileNotFoundError(f"{self.elf} does not exist; build it first: python3 scripts/avr_build.py")
+        self._dir = tempfile.TemporaryDirectory(prefix="mantaray-simavr-")
+        self._stats_path = Path(self._dir.name) / "stats.json"
+        self.stats: dict | None = None
+        command = [str(native_artifact("mantaray-simavr")), str(self.elf), "--stats", str(self._stats_path),
+                   "--paint-from", hex(end_of_data(self.elf))] + (["--bench"] if bench else []) + \
+                  (["--realtime"] if realtime else [])
+        self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                        preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None)
+        self.path = self._read_pty(start_timeout)
+
+    def _read_pty(self, timeout: float) -> str:
+        """The path from the harness's "pty PATH" line (read unbuffered: the line may share a read with others)."""
+        fd, seen = self.process.stdout.fileno(), b""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            ready, _, _ = select.select([fd], [], [], 0.1)
+            chunk = os.read(fd, 4096) if ready else b""
+            seen += chunk
+            for line in seen.decode(errors="replace").splitlines():
+                if line.startswith("pty ") and seen.endswith(b"\n"):
+                    return line.split()[1]
+            if ready and not chunk:    # end of file: the harness exited
+                break
+        err = self.process.stderr.read() if self.process.poll() is not None else b""
+        self.close()
+        raise RuntimeError(f"mantaray-simavr did not report its pty within {timeout} s: "
+                           f"{err.decode(errors='replace').strip()}")
+
+    def close(self) -> None:
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGTERM)
+            try:
+                self.process.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        if self._stats_path.exists():
+            self.stats = json.loads(self._stats_path.read_text())
+        for stream in (self.process.stdout, self.process.stderr):
+            if stream is not None:
+                stream.close()
+        self._dir.cleanup()
+
+    def __enter__(self) -> "SimulatedUno":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
