@@ -1,0 +1,102 @@
+"""The Uno's ELF in the AVR simulator: conformance over a pty, the actuator loops on modelled motors, the closed loop."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+
+import pytest
+
+from mantaray.host.link import Link
+from mantaray.host.simavr import DEFAULT_ELF, SimulatedUno
+from mantaray.host.transport import SerialTransport
+from mantaray.paths import REPO
+from mantaray.protocol import messages as m
+
+RX_BUFFER_CYCLES = 64 * 10 * 16_000_000 // 115_200   # [cycles] 64 bytes of 10 bits at 115200 baud: 5.6 ms
+LOOP_PERIOD_CYCLES = 4000 * 16                          # [cycles] the 250 Hz actuator loop period
+
+
+@pytest.fixture(scope="module")
+def elf():
+    proc = subprocess.run([sys.executable, str(REPO / "scripts" / "avr_build.py")], capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    return DEFAULT_ELF
+
+
+def _conformance(port: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "mantaray.cli", "conformance", "--port", port], cwd=REPO,
+                          capture_output=True, text=True, timeout=600)
+
+
+@pytest.mark.parametrize("bench, clock", [(True, "simulated"), (False, "wall")], ids=["bench", "rig"])
+def test_the_protocol_conformance_suite_passes_against_the_avr_binary(elf, bench, clock):
+    with SimulatedUno(elf, bench=bench, realtime=not bench) as uno:
+        proc = _conformance(uno.path)
+    assert proc.returncode == 0, proc.stdout[-4000:]
+    assert f"clock {clock}" in proc.stdout and " passed" in proc.stdout
+
+
+class Probe:
+    """Telemetry on demand, through not-visible positions (they step nothing and feed no deadman)."""
+
+    def __init__(self, link: Link) -> None:
+        self.link, self.frame = link, 0
+
+    def __call__(self) -> m.Telemetry:
+        self.frame += 1
+        return self.link.position(m.ObjectPosition(frame=self.frame, capture_time=self.frame * 1000,
+                                                   flags=m.PositionFlags.NOT_VISIBLE))
+
+    def until(self, done, timeout_s: float = 5.0) -> m.Telemetry:
+        deadline = time.monotonic() + timeout_s
+        while not done(t := self()) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        return t
+
+
+def test_the_rig_build_drives_modelled_motors_to_their_setpoints_and_stops_them(elf):
+    with SimulatedUno(elf, bench=False, realtime=True) as uno:
+        link = Link(SerialTransport(uno.path), ack_timeout=1.0)
+        assert link.identify().clock == m.Clock.WALL
+        link.command(m.Configure(telemetry_period=0))
+        link.command(m.Jog(actuator=0, position=0.05))
+        link.command(m.Jog(actuator=3, position=-0.03))
+        probe = Probe(link)
+        t = probe.until(lambda t: abs(t.measured[0] - 0.05) < 1e-3 and abs(t.measured[3] + 0.03) < 1e-3)
+        assert t.faults == 0 and t.measured[0] == pytest.approx(0.05, abs=1e-3)
+        assert t.measured[3] == pytest.approx(-0.03, abs=1e-3)
+        link.command(m.EmergencyStop())
+        stopped = probe().measured[0]
+        time.sleep(0.5)
+        t = probe()
+        assert m.State(t.state) == m.State.ESTOP and t.measured[0] == pytest.approx(stopped, abs=2e-4)
+        link.command(m.Stop())
+        link.command(m.Jog(actuator=1, position=0.02))
+        probe.until(lambda t: abs(t.measured[1] - 0.02) < 1e-3)
+        link.command(m.Zero(actuators=0b0010))
+        t = probe()
+        assert t.measured[1] == pytest.approx(0.0, abs=1e-4) and t.command[1] == 0.0
+        link.close()
+    stats = uno.stats
+    assert stats["actuator_loops"]["count"] > 100
+    assert stats["actuator_loops"]["max_cycles"] < LOOP_PERIOD_CYCLES          # the loops fit their period
+    assert stats["main_loop_pass"]["max_cycles"] < RX_BUFFER_CYCLES            # no pass lets the RX buffer fill
+    assert 0 < stats["never_used_ram_bytes"] < 2048                            # the stack never met the data
+
+
+def test_a_closed_loop_trial_runs_with_the_avr_binary_in_place_of_the_virtual_mcu(elf, tmp_path):
+    with SimulatedUno(elf, bench=True) as uno:
+        proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "run", "--port", uno.path, "--duration",
+                               "4", "--json", "--out", str(tmp_path)], cwd=REPO, capture_output=True, text=True,
+                              timeout=300)
+    assert proc.returncode in (0, 1), proc.stderr
+    result = json.loads(proc.stdout)
+    assert result["sim_time_s"] == pytest.approx(4.0, abs=0.01) and result["link_clean"]
+    assert not result["fell_off"]
+    start, target = result["start_m"], result["target_m"]
+    initial = ((start[0] - target[0]) ** 2 + (start[1] - target[1]) ** 2) ** 0.5
+    assert result["final_error_m"] < 0.5 * initial                    # the AVR's controller steered it there
+    assert uno.stats["byte_handling"]["count"] > 0
