@@ -34,12 +34,13 @@ class SimulatedUno:
     bench=True holds the bench pin low (external actuators, simulated clock: lock-step with the MuJoCo
     rig); bench=False is the rig, whose motors and multiplexed encoders the harness models. realtime=True
     keeps simulated time from running ahead of the wall clock (simavr is faster than the Uno), which a
-    wall-clock firmware needs to keep the host's time. After close(),
+    wall-clock firmware needs to keep the host's time. run_for_s stops the simulation by itself after
+    that much simulated time (wait() for it). After close(),
     `stats` holds the probe timings in cycles and the RAM the stack never reached.
     """
 
     def __init__(self, elf: Path = DEFAULT_ELF, bench: bool = True, realtime: bool = False,
-                 start_timeout: float = 10.0) -> None:
+                 run_for_s: float | None = None, start_timeout: float = 10.0) -> None:
         self.elf = Path(elf)
         if not self.elf.exists():
             raise FileNotFoundError(f"{self.elf} does not exist; build it first: python3 scripts/avr_build.py")
@@ -48,7 +49,8 @@ class SimulatedUno:
         self.stats: dict | None = None
         command = [str(native_artifact("mantaray-simavr")), str(self.elf), "--stats", str(self._stats_path),
                    "--paint-from", hex(end_of_data(self.elf))] + (["--bench"] if bench else []) + \
-                  (["--realtime"] if realtime else [])
+                  (["--realtime"] if realtime else []) + \
+                  (["--run-for", str(run_for_s)] if run_for_s is not None else [])
         self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                         preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None)
         self.path = self._read_pty(start_timeout)
@@ -70,6 +72,11 @@ class SimulatedUno:
         self.close()
         raise RuntimeError(f"mantaray-simavr did not report its pty within {timeout} s: "
                            f"{err.decode(errors='replace').strip()}")
+
+    def wait(self, timeout: float) -> None:
+        """Waits for a run_for_s simulation to end by itself, then closes."""
+        self.process.wait(timeout=timeout)
+        self.close()
 
     def close(self) -> None:
         if self.process.poll() is None:
