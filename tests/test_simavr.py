@@ -100,3 +100,24 @@ def test_a_closed_loop_trial_runs_with_the_avr_binary_in_place_of_the_virtual_mc
     initial = ((start[0] - target[0]) ** 2 + (start[1] - target[1]) ** 2) ** 0.5
     assert result["final_error_m"] < 0.5 * initial                    # the AVR's controller steered it there
     assert uno.stats["byte_handling"]["count"] > 0
+
+
+def test_positions_as_fast_as_the_link_allows_lose_no_byte_while_the_loops_run(elf):
+    """Running on the rig side (loops on modelled motors), one position in flight at a time, back to back."""
+    with SimulatedUno(elf, bench=False, realtime=True) as uno:
+        link = Link(SerialTransport(uno.path), ack_timeout=1.0)
+        link.identify()
+        link.command(m.Configure(telemetry_period=0))
+        link.command(m.SetTarget(x=0.1, y=-0.05))
+        link.command(m.Start())
+        t0, answered, frame = time.monotonic(), 0, 0
+        while time.monotonic() - t0 < 3.0:
+            frame += 1
+            t = link.position(m.ObjectPosition(frame=frame, capture_time=frame * 8000, x=0.0, y=0.0))
+            answered += t.position_frame == frame
+        rate_hz = frame / (time.monotonic() - t0)
+        link.close()
+    assert answered == frame                                  # every position answered by its telemetry
+    assert t.crc_errors == 0 and t.frame_errors == 0          # nothing lost or overrun on the way in
+    assert m.State(t.state) in (m.State.RUNNING, m.State.REACHED) and t.faults == 0
+    assert rate_hz > 60                                       # several times the camera's 12 Hz
