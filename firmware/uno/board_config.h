@@ -19,7 +19,10 @@ constexpr uint8_t kPwmMax = 255;                     // analogWrite() full scale
 enum class EncoderSource : uint8_t { kI2cMux, kAnalog };
 // All AS5600 answer at one I2C address, so by default each sits on its own channel of a TCA9548A
 // multiplexer (SDA A4, SCL A5). kAnalog reads their OUT pins (analog mode) with the ADC instead.
-constexpr EncoderSource kEncoderSource = EncoderSource::kI2cMux;
+#ifndef MR_ENCODERS_ANALOG
+#define MR_ENCODERS_ANALOG 0  // build flag -DMR_ENCODERS_ANALOG=1 selects the ADC
+#endif
+constexpr EncoderSource kEncoderSource = MR_ENCODERS_ANALOG ? EncoderSource::kAnalog : EncoderSource::kI2cMux;
 constexpr uint8_t kMuxAddress = 0x70;                // TCA9548A with A0..A2 low
 constexpr uint8_t kMuxChannel[4] = {0, 1, 2, 3};     // multiplexer channel of each actuator's encoder
 constexpr uint8_t kEncoderAddress = 0x36;            // AS5600 (fixed)
