@@ -39,7 +39,8 @@ def cmd_conformance(args: argparse.Namespace) -> int:
                    "-q", "-p", "no:cacheprovider"]
     if args.port:
         pytest_args += ["--port", args.port]
-    return int(pytest.main(pytest_args + args.pytest_args))
+    extra = args.pytest_args[1:] if args.pytest_args[:1] == ["--"] else args.pytest_args
+    return int(pytest.main(pytest_args + extra))
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -58,7 +59,8 @@ def build_parser() -> argparse.ArgumentParser:
                           description=cmd_conformance.__doc__ + " Without --port, a virtual MCU is started "
                           "on a pty. Arguments after -- go to pytest.")
     conf.add_argument("--port", help="serial device path of the firmware (board, simulator or pty)")
-    conf.add_argument("pytest_args", nargs=argparse.REMAINDER, help=argparse.SUPPRESS)
+    conf.add_argument("pytest_args", nargs=argparse.REMAINDER,
+                      help="after --, options for pytest (e.g. -- -m 'not wall_timing' -k deadman)")
     conf.set_defaults(func=cmd_conformance)
 
     from mantaray.sim.cli import add_parser as add_sim

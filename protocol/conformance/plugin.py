@@ -27,6 +27,10 @@ def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line(
         "markers", "clock(kind): run only against a firmware whose identify_reply.clock is kind "
                    "('simulated' or 'wall'); skipped otherwise")
+    config.addinivalue_line(
+        "markers", "wall_timing: times the firmware's clock against the host's wall clock, so it needs a firmware "
+                   "that keeps real time (a board, the virtual MCU; not an emulator on a busy machine): "
+                   "deselect with -m 'not wall_timing' where that does not hold")
 
 
 class ConnectError(Exception):

@@ -107,6 +107,7 @@ def test_each_valid_position_restarts_the_deadman(dut):
 
 
 @pytest.mark.clock("wall")
+@pytest.mark.wall_timing
 def test_deadman_fires_on_time(dut, advance):
     start_steering(dut, deadman=100)
     advance(0.03)

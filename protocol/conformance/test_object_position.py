@@ -173,6 +173,7 @@ def test_position_age_counts_from_the_last_valid_position(dut, advance):
 
 
 @pytest.mark.clock("wall")
+@pytest.mark.wall_timing
 def test_position_age_counts_from_the_last_valid_position_wall(dut, advance):
     assert dut.position(0.0, 0.0).position_age <= 5
     advance(0.1)

@@ -25,6 +25,7 @@ def test_periodic_telemetry_on_a_simulated_clock(dut, advance):
 
 
 @pytest.mark.clock("wall")
+@pytest.mark.wall_timing
 def test_periodic_telemetry_on_a_wall_clock(dut, advance):
     dut.configure(telemetry_period=20)
     got = advance(0.3)
