@@ -1,0 +1,186 @@
+"""The overhead camera as a position sensor: ArUco (or a colour blob) -> object (x, y) [m] in the fabric frame.
+
+The four corner markers define the fabric frame. Without a camera calibration the tracker fits the
+homography from the image to the corner markers' plane (z = 0 of the fabric frame, at the carriages'
+reference height z0) and corrects the object's marker for its height above that plane with the camera
+straight above camera_xy_m at camera_height_m. With a calibration (camera matrix and distortion) it
+solves the camera's full pose from the corner markers and intersects the ray through the object's
+marker with the plane of the marker's height. Either way nothing is guessed: a frame without all four
+corner markers, or without the object, is reported as such (Observation.status).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .markers import MarkerLayout, dictionary
+
+OK = "ok"
+NO_FRAME = "no fabric frame"        # fewer than the four corner markers, and no earlier frame fit to reuse
+NO_OBJECT = "object not seen"
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """A pinhole camera: intrinsics K (3 x 3) [px] and OpenCV's distortion coefficients."""
+    camera_matrix: np.ndarray
+    distortion: np.ndarray
+
+    @classmethod
+    def load(cls, path: str | Path) -> Calibration:
+        data = np.load(path)
+        return cls(data["camera_matrix"], data["distortion"])
+
+    def save(self, path: str | Path) -> None:
+        np.savez(path, camera_matrix=self.camera_matrix, distortion=self.distortion)
+
+
+@dataclass(frozen=True)
+class Observation:
+    """One camera frame's verdict: the object's (x, y) [m] in the fabric frame, or why there is none."""
+    capture_time_s: float                   # [s] when the frame was captured (monotonic clock or video time)
+    status: str                             # OK, NO_FRAME or NO_OBJECT
+    xy_m: tuple[float, float] | None = None
+    corners_seen: tuple[int, ...] = ()      # which corner markers (0..3) this frame showed
+    reused_frame_fit: bool = False          # the fabric frame came from an earlier image (a corner was hidden)
+
+    @property
+    def visible(self) -> bool:
+        return self.status == OK
+
+
+@dataclass
+class BlobColour:
+    """A marker-less object (the egg): the largest blob within an HSV range (OpenCV's H 0..179, S, V 0..255)."""
+    hsv_low: tuple[int, int, int]
+    hsv_high: tuple[int, int, int]
+    min_area_px: int = 30
+
+
+@dataclass
+class Tracker:
+    """Finds the fabric frame and the object in BGR or grey images. Reuse one per camera: it keeps the last
+    fabric-frame fit so that a frame with a corner marker hidden (a hand, the object) still measures, flagged."""
+    layout: MarkerLayout = field(default_factory=MarkerLayout)
+    marker_height_m: float = 0.0            # [m] object marker (or blob) above the corner markers' plane
+    camera_height_m: float = 1.0            # [m] camera above that plane (homography mode's parallax)
+    camera_xy_m: tuple[float, float] = (0.0, 0.0)   # [m] the point the camera stands above
+    calibration: Calibration | None = None
+    blob: BlobColour | None = None          # track a colour blob instead of the object's marker
+    max_frame_age_s: float = 5.0            # [s] how long a fabric-frame fit may be reused
+
+    def __post_init__(self) -> None:
+        import cv2
+
+        params = cv2.aruco.DetectorParameters()
+        params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
+        self._detector = cv2.aruco.ArucoDetector(dictionary(self.layout), params)
+        self._fit = None                    # (image -> plane homography, or (rvec, tvec)), fit time [s]
+
+    # ------------------------------------------------------------------------------------------- frames
+    def observe(self, image: np.ndarray, capture_time_s: float | None = None) -> Observation:
+        import cv2
+
+        t = time.monotonic() if capture_time_s is None else capture_time_s
+        grey = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+        corners, ids, _ = self._detector.detectMarkers(grey)
+        found = {int(i): c.reshape(4, 2) for i, c in zip(ids.ravel(), corners)} if ids is not None else {}
+        seen = tuple(k for k, marker_id in enumerate(self.layout.corner_ids) if marker_id in found)
+        reused = False
+        if len(seen) == 4:
+            self._fit = (self._fit_frame(np.array([found[i] for i in self.layout.corner_ids])), t)
+        elif self._fit is not None and t - self._fit[1] <= self.max_frame_age_s:
+            reused = True
+        else:
+            return Observation(t, NO_FRAME, corners_seen=seen)
+        if self.blob is not None:
+            point = self._blob_centre(image)
+        else:
+            marker = found.get(self.layout.object_id)
+            point = None if marker is None else marker.mean(axis=0)
+        if point is None:
+            return Observation(t, NO_OBJECT, corners_seen=seen, reused_frame_fit=reused)
+        x, y = self._to_fabric(point)
+        return Observation(t, OK, (float(x), float(y)), seen, reused)
+
+    def _fit_frame(self, image_corners: np.ndarray):
+        import cv2
+
+        plane = self.layout.corner_points_m().reshape(-1, 2)
+        pixels = image_corners.reshape(-1, 2).astype(np.float64)
+        if self.calibration is None:
+            homography, _ = cv2.findHomography(pixels, plane, 0)
+            return homography
+        objects = np.hstack([plane, np.zeros((len(plane), 1))])
+        ok, rvec, tvec = cv2.solvePnP(objects, pixels, self.calibration.camera_matrix, self.calibration.distortion,
+                                      flags=cv2.SOLVEPNP_ITERATIVE)
+        if not ok:
+            raise RuntimeError("solvePnP failed on the four corner markers")
+        return rvec, tvec
+
+    def _to_fabric(self, pixel: np.ndarray) -> tuple[float, float]:
+        import cv2
+
+        fit = self._fit[0]
+        h = self.marker_height_m
+        if self.calibration is None:
+            p = cv2.perspectiveTransform(pixel.reshape(1, 1, 2).astype(np.float64), fit).reshape(2)
+            c = np.asarray(self.camera_xy_m)
+            return tuple(c + (p - c) * (self.camera_height_m - h) / self.camera_height_m)
+        rvec, tvec = fit
+        rotation, _ = cv2.Rodrigues(rvec)
+        ray_cam = cv2.undistortPoints(pixel.reshape(1, 1, 2).astype(np.float64), self.calibration.camera_matrix,
+                                      self.calibration.distortion).reshape(2)
+        direction = rotation.T @ np.array([ray_cam[0], ray_cam[1], 1.0])   # in the fabric frame
+        centre = (-rotation.T @ tvec).ravel()                              # the camera, fabric frame
+        s = (h - centre[2]) / direction[2]
+        point = centre + s * direction
+        return float(point[0]), float(point[1])
+
+    def _blob_centre(self, image: np.ndarray) -> np.ndarray | None:
+        import cv2
+
+        if image.ndim == 2:
+            raise ValueError("colour-blob tracking needs colour (BGR) images")
+        hsv = cv2.cvtColor(image, cv2.COLOR_BGR2HSV)
+        mask = cv2.inRange(hsv, np.array(self.blob.hsv_low), np.array(self.blob.hsv_high))
+        count, _, stats, centroids = cv2.connectedComponentsWithStats(mask)
+        if count <= 1:
+            return None
+        best = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+        if stats[best, cv2.CC_STAT_AREA] < self.blob.min_area_px:
+            return None
+        return centroids[best]
+
+
+class FrameSource:
+    """Frames from a camera index or a video file, each with its capture time [s] (monotonic, or the video's)."""
+
+    def __init__(self, source: str | int, width: int = 1280, height: int = 720) -> None:
+        import cv2
+
+        self.is_file = not (isinstance(source, int) or str(source).isdigit())
+        self._capture = cv2.VideoCapture(str(source) if self.is_file else int(source))
+        if not self._capture.isOpened():
+            kind = "video file" if self.is_file else "camera"
+            raise OSError(f"cannot open {kind} {source!r}")
+        if not self.is_file:
+            self._capture.set(cv2.CAP_PROP_FRAME_WIDTH, width)
+            self._capture.set(cv2.CAP_PROP_FRAME_HEIGHT, height)
+
+    def read(self) -> tuple[np.ndarray, float] | None:
+        """(BGR image, capture time [s]), or None at the end of a file or when the camera stops."""
+        import cv2
+
+        ok, image = self._capture.read()
+        if not ok:
+            return None
+        if self.is_file:
+            return image, self._capture.get(cv2.CAP_PROP_POS_MSEC) / 1000.0
+        return image, time.monotonic()
+
+    def close(self) -> None:
+        self._capture.release()

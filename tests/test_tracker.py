@@ -1,0 +1,133 @@
+"""The ArUco tracker on synthetic perspective images with known ground truth: accuracy, parallax, lost markers."""
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from mantaray.host import tracker as T
+from mantaray.host.markers import MarkerLayout, marker_image, quiet_scale
+
+LAYOUT = MarkerLayout()
+W, H = 1280, 720
+FOVY_DEG = 45.0
+TEXTURE_PX = 256
+
+
+def intrinsics() -> np.ndarray:
+    f = (H / 2) / math.tan(math.radians(FOVY_DEG) / 2)
+    return np.array([[f, 0, W / 2], [0, f, H / 2], [0, 0, 1]])
+
+
+def camera(height_m: float, xy_m=(0.0, 0.0), tilt_deg: float = 0.0):
+    """(rvec, tvec) of a camera looking down at the fabric from height_m above xy_m, tilted about x."""
+    a = math.radians(tilt_deg)
+    down = np.array([[1, 0, 0], [0, -1, 0], [0, 0, -1]], dtype=float)           # image right +x, image down -y
+    tilt = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
+    rotation = tilt @ down                                                         # world -> camera
+    centre = np.array([xy_m[0], xy_m[1], height_m])
+    return cv2.Rodrigues(rotation)[0], -rotation @ centre
+
+
+def render(object_xy=None, marker_height_m=0.0, cam=None, hide_corner=None, noise=2.0, rng=None) -> np.ndarray:
+    """A grey image of the corner markers (plane z = 0) and the object's marker at its height, in perspective."""
+    rvec, tvec = cam if cam is not None else camera(1.0)
+    k = intrinsics()
+    image = np.full((H, W), 140, np.float64)
+    patches = [(LAYOUT.corner_ids[i], c, LAYOUT.corner_size_m, 0.0) for i, c in enumerate(LAYOUT.corner_centres_m())
+               if i != hide_corner]
+    if object_xy is not None:
+        patches.append((LAYOUT.object_id, np.asarray(object_xy), LAYOUT.object_size_m, marker_height_m))
+    for marker_id, centre, size, z in patches:
+        half = size * quiet_scale(LAYOUT) / 2
+        world = np.array([[centre[0] - half, centre[1] + half, z], [centre[0] + half, centre[1] + half, z],
+                          [centre[0] + half, centre[1] - half, z], [centre[0] - half, centre[1] - half, z]])
+        pixels, _ = cv2.projectPoints(world, rvec, tvec, k, None)
+        src = np.array([[0, 0], [TEXTURE_PX, 0], [TEXTURE_PX, TEXTURE_PX], [0, TEXTURE_PX]], np.float32)
+        warp = cv2.getPerspectiveTransform(src, pixels.reshape(4, 2).astype(np.float32))
+        texture = marker_image(LAYOUT, marker_id, TEXTURE_PX).astype(np.float64)
+        ink = cv2.warpPerspective(texture, warp, (W, H), flags=cv2.INTER_AREA)
+        cover = cv2.warpPerspective(np.ones_like(texture), warp, (W, H), flags=cv2.INTER_AREA)
+        image = image * (1 - cover) + ink
+    image = cv2.GaussianBlur(image, (0, 0), 0.6)
+    if noise:
+        image += (rng or np.random.default_rng(0)).normal(0, noise, image.shape)
+    return np.clip(image, 0, 255).astype(np.uint8)
+
+
+def test_homography_mode_is_within_2_mm_rms_at_1280x720():
+    rng = np.random.default_rng(1)
+    tracker = T.Tracker(LAYOUT, marker_height_m=0.0)
+    errors = []
+    for _ in range(40):
+        truth = rng.uniform(-0.25, 0.25, 2)
+        obs = tracker.observe(render(truth, rng=rng), capture_time_s=1.0)
+        assert obs.status == T.OK and obs.corners_seen == (0, 1, 2, 3)
+        errors.append(np.hypot(*(np.asarray(obs.xy_m) - truth)))
+    rms = float(np.sqrt(np.mean(np.square(errors))))
+    assert rms < 0.002, rms
+
+
+def test_the_markers_height_is_corrected_for_parallax():
+    """The object's marker 5 cm above the corner markers' plane, near the fabric's edge."""
+    truth, height = np.array([0.22, -0.18]), 0.05
+    image = render(truth, marker_height_m=height)
+    naive = T.Tracker(LAYOUT, marker_height_m=0.0).observe(image, 0.0)
+    corrected = T.Tracker(LAYOUT, marker_height_m=height, camera_height_m=1.0).observe(image, 0.0)
+    assert np.hypot(*(np.asarray(naive.xy_m) - truth)) > 0.01            # 1.5 cm off without the correction
+    assert np.hypot(*(np.asarray(corrected.xy_m) - truth)) < 0.002
+
+
+def test_with_a_calibration_a_tilted_off_centre_camera_is_handled_exactly():
+    rng = np.random.default_rng(2)
+    cam = camera(1.2, xy_m=(0.04, -0.05), tilt_deg=3.0)
+    calibration = T.Calibration(intrinsics(), np.zeros(5))
+    tracker = T.Tracker(LAYOUT, marker_height_m=0.04, calibration=calibration)
+    errors = []
+    for _ in range(25):
+        truth = rng.uniform(-0.22, 0.22, 2)
+        obs = tracker.observe(render(truth, marker_height_m=0.04, cam=cam, rng=rng), 0.0)
+        assert obs.status == T.OK
+        errors.append(np.hypot(*(np.asarray(obs.xy_m) - truth)))
+    assert float(np.sqrt(np.mean(np.square(errors)))) < 0.002
+
+
+def test_a_missing_object_or_fabric_frame_is_reported_never_guessed():
+    tracker = T.Tracker(LAYOUT)
+    first = tracker.observe(render(None, hide_corner=2), capture_time_s=0.0)
+    assert first.status == T.NO_FRAME and first.xy_m is None and first.corners_seen == (0, 1, 3)
+    assert tracker.observe(render(None), 0.1).status == T.NO_OBJECT
+    hidden = tracker.observe(render((0.1, 0.1), hide_corner=0), 0.2)          # a hand over corner 0
+    assert hidden.status == T.OK and hidden.reused_frame_fit and hidden.corners_seen == (1, 2, 3)
+    stale = tracker.observe(render((0.1, 0.1), hide_corner=0), 0.2 + tracker.max_frame_age_s + 1)
+    assert stale.status == T.NO_FRAME
+
+
+def test_colour_blob_tracking_for_a_marker_less_object():
+    image = cv2.cvtColor(render(None), cv2.COLOR_GRAY2BGR)
+    k, (rvec, tvec) = intrinsics(), camera(1.0)
+    centre, _ = cv2.projectPoints(np.array([[0.12, 0.07, 0.0]]), rvec, tvec, k, None)
+    cv2.circle(image, tuple(int(round(v)) for v in centre.ravel()), 20, (40, 200, 240), -1)   # a yellow egg
+    tracker = T.Tracker(LAYOUT, blob=T.BlobColour((20, 120, 120), (35, 255, 255)))
+    obs = tracker.observe(image, 0.0)
+    assert obs.status == T.OK and np.hypot(obs.xy_m[0] - 0.12, obs.xy_m[1] - 0.07) < 0.002
+    assert tracker.observe(cv2.cvtColor(render(None), cv2.COLOR_GRAY2BGR), 0.1).status == T.NO_OBJECT
+
+
+def test_frames_from_a_video_file_carry_the_videos_time(tmp_path):
+    path = str(tmp_path / "clip.avi")
+    writer = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*"MJPG"), 12.0, (W, H))
+    for x in (-0.1, 0.0, 0.1):
+        writer.write(cv2.cvtColor(render((x, 0.05)), cv2.COLOR_GRAY2BGR))
+    writer.release()
+    source, tracker = T.FrameSource(path), T.Tracker(LAYOUT)
+    seen = []
+    while (frame := source.read()) is not None:
+        seen.append(tracker.observe(*frame))
+    source.close()
+    assert [round(o.capture_time_s * 12) for o in seen] == [0, 1, 2]
+    assert [round(o.xy_m[0], 2) for o in seen] == [-0.1, 0.0, 0.1]
+    with pytest.raises(OSError, match="cannot open"):
+        T.FrameSource(str(tmp_path / "missing.avi"))
