@@ -41,6 +41,7 @@ class Tracking:
     latency_s: float = 0.0         # [s] capture -> delivery to the firmware; below one frame period
     noise_m: float = 0.0           # [m] standard deviation of Gaussian noise on x and on y
     drop_rate: float = 0.0         # [-] probability that a frame never reaches the firmware
+    vision: str | None = None      # None: the true position; "aruco" or "blob": the tracker on rendered frames
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.rate_hz) and 0.5 <= self.rate_hz <= 1000):
@@ -52,6 +53,8 @@ class Tracking:
             raise ValueError(f"camera noise must be 0..0.1 m, got {self.noise_m}")
         if not (0 <= self.drop_rate < 1):
             raise ValueError(f"drop rate must be in [0, 1), got {self.drop_rate}")
+        if self.vision not in (None, "aruco", "blob"):
+            raise ValueError(f"vision must be aruco or blob, got {self.vision!r}")
 
 
 @dataclass(frozen=True)
@@ -93,6 +96,7 @@ class LinkWatch:
     duplicate_replies: int = 0      # telemetry for a frame already answered
     lost_firmware_frames: int = 0   # gaps in the firmware's sequence numbers
     dropped_frames: int = 0         # camera frames dropped on purpose (Tracking.drop_rate)
+    unseen_frames: int = 0          # vision in the loop: frames in which the tracker found no object
     messages: list[str] = field(default_factory=list)
 
     def report(self, text: str) -> None:
@@ -159,6 +163,10 @@ class Bridge:
         if not lockstep and simulated:
             raise LinkError("real-time mode needs a wall-clock firmware; this one is on the simulated clock")
         self.model, self.data = M.load(rig)
+        self.vision = None
+        if tracking.vision is not None:
+            from .vision import CameraVision
+            self.vision = CameraVision(self.model, self.data, rig, tracking.vision)
         self.clock_us = 0               # the firmware's sim clock, last value sent
         self.frame = 0                  # camera frame counter, runs on across trials
         if lockstep:
@@ -267,7 +275,12 @@ class Bridge:
             if reach_s is None and distance < spec.tolerance_m:
                 reach_s = capture_s
             dropped = rng.random() < tracking.drop_rate
-            measured = true_xy + (rng.normal(0.0, tracking.noise_m, 2) if tracking.noise_m else 0.0)
+            if self.vision is not None:
+                seen = self.vision.measure(data, capture_s)
+                measured = seen if seen is not None else np.full(2, math.nan)
+                self._watch.unseen_frames += seen is None
+            else:
+                measured = true_xy + (rng.normal(0.0, tracking.noise_m, 2) if tracking.noise_m else 0.0)
             deliver_s = capture_s + tracking.latency_s
             if tracking.latency_s and advance(deliver_s):
                 fell = True
@@ -281,8 +294,11 @@ class Bridge:
                 t = time.perf_counter()
                 if self.lockstep:
                     self._set_clock(base_us + round(deliver_s * US_PER_S))
+                visible = bool(np.all(np.isfinite(measured)))
                 msg = m.ObjectPosition(frame=frame, capture_time=(base_us + round(capture_s * US_PER_S)) & U32,
-                                       x=float(measured[0]), y=float(measured[1]))
+                                       x=float(measured[0]) if visible else 0.0,
+                                       y=float(measured[1]) if visible else 0.0,
+                                       flags=0 if visible else m.PositionFlags.NOT_VISIBLE)
                 try:
                     reply = self.link.position(msg)
                 except LinkError:

@@ -41,11 +41,16 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from .rig import Rig
 
     rig = Rig().with_object(args.object)
+    if args.vision:   # the tracker needs the corner markers in the scene (and the object's, for aruco)
+        import dataclasses
+        rig = dataclasses.replace(rig, camera=dataclasses.replace(rig.camera, corner_markers=True,
+                                                                   object_marker=args.vision == "aruco"))
     half = (rig.frame.size_x_m / 2, rig.frame.size_y_m / 2)
     _inside(parser, "--start", args.start, half)
     _inside(parser, "--target", args.target, half)
     try:
-        tracking = Tracking(rate_hz=args.rate, latency_s=args.latency, noise_m=args.noise, drop_rate=args.drop)
+        tracking = Tracking(rate_hz=args.rate, latency_s=args.latency, noise_m=args.noise, drop_rate=args.drop,
+                            vision=args.vision)
         spec = TrialSpec(args.start, args.target, controller=args.controller, duration_s=args.duration,
                          alpha_m=args.alpha, tolerance_m=args.tolerance, seed=args.seed)
     except ValueError as exc:
@@ -278,6 +283,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--latency", type=float, default=0.0, help="camera latency [s], below one frame period")
     run.add_argument("--noise", type=float, default=0.0, help="camera noise, standard deviation [m] per axis")
     run.add_argument("--drop", type=float, default=0.0, help="share of camera frames lost [0..1)")
+    run.add_argument("--vision", choices=["aruco", "blob"], help="positions from the host's tracker on rendered "
+                     "1280x720 overhead frames (ArUco marker on the object, or colour blob) instead of the truth")
     run.add_argument("--out", default="out/sim", help="directory for the figure, trajectory and video")
     run.add_argument("--json", action="store_true", help="print one JSON object instead of the sentence")
     run.add_argument("--video", action="store_true", help="also render an MP4 from the overhead camera")

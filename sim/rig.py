@@ -95,6 +95,9 @@ class Camera:
     """Overhead camera looking straight down at the fabric; image right = +x, image up = +y."""
     height_above_z0_m: float = 1.0        # [m] GUESS: not given in the paper
     fovy_deg: float = 45.0                # [deg] vertical field of view: 0.83 m of fabric seen at 1 m
+    corner_markers: bool = False          # draw the tracker's four corner markers (host/markers.py) at z0
+    object_marker: bool = False           # and its marker on the object's top (not for a rolling sphere:
+                                          # the marker would roll away; its colour blob is tracked instead)
 
 
 @dataclass(frozen=True)
