@@ -23,9 +23,11 @@ def _die_with_parent() -> None:
 class VirtualMcu:
     """A `mantaray-vmcu --pty LINK` process; use as a context manager. `path` is the serial device path."""
 
-    def __init__(self, clock: str = "sim", start_timeout: float = 5.0) -> None:
+    def __init__(self, clock: str = "sim", start_timeout: float = 5.0, path: str | None = None) -> None:
+        """path: where to put the serial device's symlink (default: a fresh temporary directory); a new
+        virtual MCU on the path of one that exited plays a board that reset or was plugged back in."""
         self._dir = tempfile.TemporaryDirectory(prefix="mantaray-vmcu-")
-        self.path = str(Path(self._dir.name) / "tty")
+        self.path = path or str(Path(self._dir.name) / "tty")
         self.clock = clock
         self.process = subprocess.Popen(
             [str(native_artifact("mantaray-vmcu")), "--pty", self.path, "--clock", clock],

@@ -1,0 +1,170 @@
+"""A firmware session that survives the serial link: waits out the Uno's reset, re-applies its setup after a reset or replug.
+
+The rig command talks through this rather than a bare Link. Opening an Uno's USB port resets the board,
+so the session waits for its boot message before the handshake (a pty has no such reset). When the board
+resets (a boot message mid-session) or the link fails (unplugged, or no answers), the session reopens
+the port as soon as it is back, identifies the firmware again, and re-sends the configuration, the gains
+and the target, and `start` if it was running: the user restarts nothing.
+"""
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+from mantaray.protocol import messages as m
+
+from .link import CommandRefused, IncompatibleFirmware, Link, LinkError
+from .transport import SerialTransport, Transport
+
+UNO_RESET_WAIT_S = 2.5      # [s] the stock bootloader's delay after the DTR reset, with margin
+
+
+def is_pty(port: str) -> bool:
+    """A pseudo-terminal (virtual MCU, simulator) resets nothing when opened."""
+    return os.path.realpath(port).startswith("/dev/pts/")
+
+
+@dataclass
+class Setup:
+    """What the session re-applies after every (re)connection."""
+    configure: m.Configure = field(default_factory=m.Configure)
+    gains: dict[m.Axis, dict] = field(default_factory=dict)      # axis -> configure_pid fields
+    target: tuple[float, float] | None = None                     # [m]
+
+
+class RigSession:
+    """One firmware on one serial path; use as a context manager."""
+
+    def __init__(self, port: str, setup: Setup | None = None, *, reset_wait_s: float | None = None,
+                 reconnect_timeout_s: float = 30.0, ack_timeout_s: float = 0.2,
+                 report: Callable[[str], None] = lambda text: None,
+                 open_transport: Callable[[str], Transport] = SerialTransport) -> None:
+        self.port = port
+        self.setup = setup or Setup()
+        self.reset_wait_s = (0.0 if is_pty(port) else UNO_RESET_WAIT_S) if reset_wait_s is None else reset_wait_s
+        self.reconnect_timeout_s = reconnect_timeout_s
+        self.ack_timeout_s = ack_timeout_s
+        self.report = report
+        self._open_transport = open_transport
+        self.link: Link | None = None
+        self.identity: m.IdentifyReply | None = None
+        self.running = False
+        self.reconnects = 0          # times the link was reopened
+        self.restores = 0            # times the setup was re-applied after a reset or reconnection
+        self._resets_seen = 0
+
+    # ----------------------------------------------------------------------------------- connection
+    def open(self) -> RigSession:
+        self._connect(self.reconnect_timeout_s)
+        self._apply()
+        return self
+
+    def _connect(self, timeout_s: float) -> None:
+        deadline = time.monotonic() + timeout_s
+        while True:
+            try:
+                transport = self._open_transport(self.port)
+                break
+            except OSError as exc:          # serial.SerialException is an OSError: no such port (yet)
+                if time.monotonic() > deadline:
+                    raise LinkError(f"{self.port}: cannot open it ({exc}); is the board plugged in?") from None
+                time.sleep(0.2)
+        link = Link(transport, ack_timeout=self.ack_timeout_s)
+        boot_deadline = time.monotonic() + self.reset_wait_s
+        while (remaining := boot_deadline - time.monotonic()) > 0:   # the Uno's bootloader runs first
+            if isinstance(link.receive(remaining), m.Boot):
+                break
+        while True:
+            try:
+                self.identity = link.identify()
+                break
+            except IncompatibleFirmware:
+                link.close()
+                raise
+            except (LinkError, OSError):
+                if time.monotonic() > deadline:
+                    link.close()
+                    raise LinkError(f"{self.port}: the firmware does not answer identify") from None
+        self.link = link
+        self._resets_seen = link.resets
+
+    def _apply(self) -> None:
+        s = self.setup
+        self.link.command(m.Stop())
+        self.link.command(s.configure)
+        for axis, gains in s.gains.items():
+            self.link.command(m.ConfigurePid(axis=axis, **gains))
+        if s.target is not None:
+            self.link.command(m.SetTarget(x=s.target[0], y=s.target[1]))
+        if self.running:
+            self.link.command(m.Start())
+
+    def _recover(self, why: str) -> None:
+        """Reopen (if the link failed) and re-apply the setup."""
+        self.report(f"{why}: reconnecting to {self.port}")
+        if self.link is not None:
+            try:
+                self.link.close()
+            except OSError:
+                pass
+        self.link = None
+        self._connect(self.reconnect_timeout_s)
+        self.reconnects += 1
+        self._restore("reconnected")
+
+    def _restore(self, why: str) -> None:
+        self._apply()
+        self.restores += 1
+        self._resets_seen = self.link.resets
+        self.report(f"{why}: configuration, gains, target{' and start' if self.running else ''} sent again")
+
+    # ----------------------------------------------------------------------------------- commands
+    def command(self, msg) -> m.Message:
+        """A command through the session: on a failed link it reconnects, restores, and sends it once more."""
+        try:
+            return self.link.command(msg)
+        except CommandRefused:
+            raise
+        except (LinkError, OSError) as exc:
+            self._recover(f"link failed ({exc})")
+            return self.link.command(msg)
+
+    def set_target(self, x_m: float, y_m: float) -> None:
+        self.setup.target = (x_m, y_m)
+        self.command(m.SetTarget(x=x_m, y=y_m))
+
+    def start(self) -> None:
+        self.command(m.Start())
+        self.running = True
+
+    def stop(self) -> None:
+        """Levels the surface and stops the controller."""
+        self.running = False
+        self.command(m.Stop())
+
+    def position(self, msg: m.ObjectPosition) -> m.Telemetry | None:
+        """One camera frame; None when it got no answer (the link is then recovered for the next one)."""
+        try:
+            telemetry = self.link.position(msg)
+        except CommandRefused:
+            raise
+        except (LinkError, OSError) as exc:
+            self._recover(f"no telemetry ({exc})")
+            return None
+        if self.link.resets != self._resets_seen:    # the board restarted (its boot came in): idle, defaults
+            self.report("the firmware reset")
+            self._restore("after the reset")
+        return telemetry
+
+    def close(self) -> None:
+        if self.link is not None:
+            self.link.close()
+            self.link = None
+
+    def __enter__(self) -> RigSession:
+        return self.open()
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,152 @@
+"""The host's link and session against the virtual MCU: faults on the wire, garbage, board resets and unplugging."""
+from __future__ import annotations
+
+import os
+import tempfile
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from mantaray.host.faults import FaultInjector
+from mantaray.host.link import Link, LinkError
+from mantaray.host.session import RigSession, Setup
+from mantaray.host.transport import SerialTransport
+from mantaray.host.vmcu import VirtualMcu
+from mantaray.protocol import messages as m
+
+WIRE_M = 1e-5   # [m] command telemetry resolution
+
+
+def _probe(link: Link, frame: int, tries: int = 20) -> m.Telemetry:
+    """Telemetry through a not-visible position (steps nothing), retried past injected faults."""
+    for k in range(tries):
+        try:
+            return link.position(m.ObjectPosition(frame=(frame * 32 + k) & 0xFFFF, capture_time=frame * 32 + k + 1,
+                                                  flags=m.PositionFlags.NOT_VISIBLE), timeout=0.1)
+        except LinkError:
+            continue
+    raise AssertionError("no telemetry through the faulty link")
+
+
+def test_no_corrupted_command_is_ever_applied_through_drops_flips_and_bursts():
+    rng = np.random.default_rng(7)
+    with VirtualMcu(clock="wall") as vmcu:
+        faulty = FaultInjector(SerialTransport(vmcu.path), p_drop=0.01, p_flip=0.01, p_burst=0.05, seed=3)
+        link = Link(faulty, ack_timeout=0.1, retries=12)
+        link.identify()
+        link.command(m.Configure(telemetry_period=0))
+        sent = {i: {0.0} for i in range(4)}
+        applied = 0
+        for k in range(150):
+            actuator, position = int(rng.integers(4)), round(float(rng.uniform(-0.25, 0.25)), 4)
+            sent[actuator].add(position)
+            link.command(m.Jog(actuator=actuator, position=position))
+            t = _probe(link, k + 1)
+            assert t.command[actuator] == pytest.approx(position, abs=WIRE_M)     # the acked value is in force
+            for i in range(4):                                                   # and nothing else ever was
+                assert min(abs(t.command[i] - v) for v in sent[i]) <= WIRE_M
+            applied += 1
+        counts = faulty.counts
+        link.close()
+    assert applied == 150
+    assert counts.dropped > 20 and counts.flipped > 20 and counts.burst_bytes > 50     # faults really happened
+    assert t.crc_errors + t.frame_errors > 10                                        # and the firmware saw them
+
+
+def test_garbage_between_frames_costs_only_the_frame_it_hits():
+    with VirtualMcu(clock="wall") as vmcu:
+        link = Link(SerialTransport(vmcu.path))
+        link.identify()
+        before = _probe(link, 1)
+        rng = np.random.default_rng(1)
+        for k in range(20):
+            link.send_raw(rng.integers(0, 256, 200, dtype=np.uint8).tobytes() + b"\x00")
+            link.command(m.Jog(actuator=k % 4, position=0.01 * k))
+        after = _probe(link, 2)
+        link.close()
+    assert after.frame_errors + after.crc_errors > before.frame_errors + before.crc_errors
+    assert after.command[19 % 4] == pytest.approx(0.19, abs=WIRE_M)
+
+
+def test_the_deadman_trips_within_its_configured_time_when_the_camera_goes_quiet():
+    deadman_ms = 200
+    with VirtualMcu(clock="wall") as vmcu:
+        link = Link(SerialTransport(vmcu.path))
+        link.identify()
+        link.command(m.Configure(telemetry_period=0, deadman=deadman_ms))
+        link.command(m.SetTarget(x=0.1, y=0.0))
+        link.command(m.Start())
+        last = None
+        for k in range(1, 6):
+            last = link.position(m.ObjectPosition(frame=k, capture_time=k * 83333, x=0.0, y=0.0))
+            time.sleep(0.05)
+        frame, t = 100, last
+        while m.State(t.state) != m.State.FAULT:          # the camera went quiet: only not-visible probes now
+            frame += 1
+            t = link.position(m.ObjectPosition(frame=frame, capture_time=frame * 83333,
+                                               flags=m.PositionFlags.NOT_VISIBLE))
+            time.sleep(0.005)
+        link.close()
+    assert t.faults == m.Faults.POSITION_TIMEOUT and t.command == (0.0, 0.0, 0.0, 0.0)   # levelled
+    assert deadman_ms <= t.time - last.time <= deadman_ms + 30
+
+
+def test_the_session_rides_out_a_board_reset_and_an_unplug_without_the_user():
+    events = []
+    with tempfile.TemporaryDirectory() as tmp:
+        port = os.path.join(tmp, "ttyUNO")
+        setup = Setup(m.Configure(telemetry_period=0), {m.Axis.X: {**m.PID_DEFAULTS[m.Axis.X], "kp": 50.0}},
+                      target=(0.1, -0.05))
+        vmcu = VirtualMcu(clock="wall", path=port)
+        session = RigSession(port, setup, reconnect_timeout_s=10, report=events.append).open()
+        session.start()
+        frame = 0
+
+        def step() -> m.Telemetry | None:
+            nonlocal frame
+            frame += 1
+            return session.position(m.ObjectPosition(frame=frame, capture_time=frame * 83333, x=0.0, y=0.0))
+
+        assert m.State(step().state) == m.State.RUNNING
+        vmcu.close()                                       # unplugged; plugged back in 0.5 s later, meanwhile
+        done = threading.Event()                           # the session keeps trying: a fresh, idle firmware
+
+        def replug() -> None:                              # a thread that lives as long as its virtual MCU
+            time.sleep(0.5)                                # (which dies with the thread that started it)
+            with VirtualMcu(clock="wall", path=port):
+                done.wait(30)
+
+        board = threading.Thread(target=replug)
+        board.start()
+        t = None
+        for _ in range(50):
+            t = step()
+            if t is not None and m.State(t.state) == m.State.RUNNING:
+                break
+        assert t is not None and m.State(t.state) == m.State.RUNNING
+        assert t.tilt_zx > 0 and t.tilt_zy < 0             # steering to the restored target (0.1, -0.05)
+        assert session.reconnects >= 1 and any("reconnecting" in e for e in events)
+        session.close()
+        done.set()
+        board.join()
+
+
+def test_a_board_that_resets_on_its_own_gets_its_setup_back():
+    """A reset without unplugging (watchdog, brown-out): the boot message mid-session triggers the restore."""
+    from mantaray.host.transport import InProcessTransport
+
+    transport = InProcessTransport(simulated_clock=False)
+    events = []
+    session = RigSession("in-process", Setup(m.Configure(telemetry_period=0), target=(-0.1, 0.1)),
+                         reset_wait_s=0.0, report=events.append, open_transport=lambda port: transport).open()
+    session.start()
+    t = session.position(m.ObjectPosition(frame=1, capture_time=1000, x=0.0, y=0.0))
+    assert m.State(t.state) == m.State.RUNNING
+    transport._lib.mr_vmcu_boot(0)                          # the board restarts: idle, no target, boot message
+    t = session.position(m.ObjectPosition(frame=2, capture_time=84000, x=0.0, y=0.0))
+    assert t is not None and m.State(t.state) == m.State.IDLE  # what the reset left; the session notices ...
+    t = session.position(m.ObjectPosition(frame=3, capture_time=168000, x=0.0, y=0.0))
+    assert m.State(t.state) == m.State.RUNNING and t.tilt_zx < 0 and t.tilt_zy > 0   # ... and restored it
+    assert session.restores == 1 and any("reset" in e for e in events)
