@@ -26,6 +26,41 @@ def is_pty(port: str) -> bool:
     return os.path.realpath(port).startswith("/dev/pts/")
 
 
+def connect(port: str, *, reset_wait_s: float | None = None, timeout_s: float = 30.0, ack_timeout_s: float = 0.2,
+            open_transport: Callable[[str], Transport] = SerialTransport) -> tuple[Link, m.IdentifyReply]:
+    """Opens the port (waiting up to timeout_s for it to appear), waits out the Uno's reset, identifies.
+
+    Changes nothing on the firmware: a monitor can attach to a running rig. IncompatibleFirmware is raised
+    at once; a port that does not open or a firmware that does not answer raise LinkError at the timeout.
+    """
+    if reset_wait_s is None:
+        reset_wait_s = 0.0 if is_pty(port) else UNO_RESET_WAIT_S
+    deadline = time.monotonic() + timeout_s
+    while True:
+        try:
+            transport = open_transport(port)
+            break
+        except OSError as exc:          # serial.SerialException is an OSError: no such port (yet)
+            if time.monotonic() > deadline:
+                raise LinkError(f"{port}: cannot open it ({exc}); is the board plugged in?") from None
+            time.sleep(0.2)
+    link = Link(transport, ack_timeout=ack_timeout_s)
+    boot_deadline = time.monotonic() + reset_wait_s
+    while (remaining := boot_deadline - time.monotonic()) > 0:   # the Uno's bootloader runs first
+        if isinstance(link.receive(remaining), m.Boot):
+            break
+    while True:
+        try:
+            return link, link.identify()
+        except IncompatibleFirmware:
+            link.close()
+            raise
+        except (LinkError, OSError):
+            if time.monotonic() > deadline:
+                link.close()
+                raise LinkError(f"{port}: the firmware does not answer identify") from None
+
+
 @dataclass
 class Setup:
     """What the session re-applies after every (re)connection."""
@@ -62,33 +97,9 @@ class RigSession:
         return self
 
     def _connect(self, timeout_s: float) -> None:
-        deadline = time.monotonic() + timeout_s
-        while True:
-            try:
-                transport = self._open_transport(self.port)
-                break
-            except OSError as exc:          # serial.SerialException is an OSError: no such port (yet)
-                if time.monotonic() > deadline:
-                    raise LinkError(f"{self.port}: cannot open it ({exc}); is the board plugged in?") from None
-                time.sleep(0.2)
-        link = Link(transport, ack_timeout=self.ack_timeout_s)
-        boot_deadline = time.monotonic() + self.reset_wait_s
-        while (remaining := boot_deadline - time.monotonic()) > 0:   # the Uno's bootloader runs first
-            if isinstance(link.receive(remaining), m.Boot):
-                break
-        while True:
-            try:
-                self.identity = link.identify()
-                break
-            except IncompatibleFirmware:
-                link.close()
-                raise
-            except (LinkError, OSError):
-                if time.monotonic() > deadline:
-                    link.close()
-                    raise LinkError(f"{self.port}: the firmware does not answer identify") from None
-        self.link = link
-        self._resets_seen = link.resets
+        self.link, self.identity = connect(self.port, reset_wait_s=self.reset_wait_s, timeout_s=timeout_s,
+                                           ack_timeout_s=self.ack_timeout_s, open_transport=self._open_transport)
+        self._resets_seen = self.link.resets
 
     def _apply(self) -> None:
         s = self.setup

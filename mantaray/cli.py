@@ -63,7 +63,9 @@ def build_parser() -> argparse.ArgumentParser:
                       help="after --, options for pytest (e.g. -- -m 'not wall_timing' -k deadman)")
     conf.set_defaults(func=cmd_conformance)
 
+    from mantaray.host.cli import add_parsers as add_rig
     from mantaray.sim.cli import add_parser as add_sim
+    add_rig(sub)
     add_sim(sub)
     return parser
 

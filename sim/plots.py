@@ -15,23 +15,37 @@ from .bridge import TrialResult  # noqa: E402
 
 def trajectory_figure(result: TrialResult, module_m: tuple[float, float], tilt_limit_deg: float,
                       path: str | Path) -> Path:
-    """Save the path (start, target with its tolerance circle, the module's outline) above the phase plot
-    theta_zx vs theta_zy with the tilt-limit square, as the paper draws them; returns the file written."""
+    """Save the Fig. 3-style figure of a simulated trial (path_phase_figure); returns the file written."""
     spec = result.spec
+    outcome = "fell off" if result.fell_off else ("reached" if result.success else "not reached")
+    title = (f"{result.object_name}, {spec.controller}, α = {spec.alpha_m:g} m: {outcome}\n"
+             f"final error {result.final_error_m * 100:.1f} cm (ε = {spec.tolerance_m * 100:g} cm)")
+    return path_phase_figure(result.true_xy_m, result.tilt_deg, spec.start_m, [spec.target_m], spec.tolerance_m,
+                             title, module_m, tilt_limit_deg, path)
+
+
+def path_phase_figure(xy_m: np.ndarray, tilt_deg: np.ndarray, start_m, targets_m, tolerance_m: float, title: str,
+                      module_m: tuple[float, float], tilt_limit_deg: float, path: str | Path) -> Path:
+    """Save the object's path (start, targets with their tolerance circles, the module's outline) above the
+    phase plot theta_zx vs theta_zy with the tilt-limit square, as the paper's Fig. 3 draws them. targets_m
+    is one target, or the successive targets of a path; returns the file written."""
     hx, hy = module_m[0] / 2, module_m[1] / 2
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(4.2, 8.0))
 
     top.add_patch(Rectangle((-hx, -hy), 2 * hx, 2 * hy, fill=False, lw=1.2, color="0.3"))
-    top.add_patch(Circle(spec.target_m, spec.tolerance_m, fill=False, ls="--", lw=1.2, color="tab:blue"))
-    xy = result.true_xy_m
+    targets = np.asarray(targets_m, dtype=float).reshape(-1, 2)
+    if len(targets) > 1:
+        top.plot(targets[:, 0], targets[:, 1], ls="--", lw=1.0, color="tab:blue", label="path")
+    top.add_patch(Circle(targets[-1], tolerance_m, fill=False, ls="--", lw=1.2, color="tab:blue"))
+    xy = np.asarray(xy_m, dtype=float).reshape(-1, 2)
+    xy = xy[np.all(np.isfinite(xy), axis=1)]
     if len(xy):
         top.plot(xy[:, 0], xy[:, 1], color="tab:cyan", lw=1.5, label="object")
         top.plot(*xy[-1], "o", color="tab:red", ms=6, label="end")
-    top.plot(*spec.start_m, "s", color="0.2", ms=6, label="start")
-    top.plot(*spec.target_m, "x", color="tab:blue", ms=8, label="target")
-    outcome = "fell off" if result.fell_off else ("reached" if result.success else "not reached")
-    top.set_title(f"{result.object_name}, {spec.controller}, α = {spec.alpha_m:g} m: {outcome}\n"
-                  f"final error {result.final_error_m * 100:.1f} cm (ε = {spec.tolerance_m * 100:g} cm)", fontsize=9)
+    if start_m is not None:
+        top.plot(*start_m, "s", color="0.2", ms=6, label="start")
+    top.plot(*targets[-1], "x", color="tab:blue", ms=8, label="target")
+    top.set_title(title, fontsize=9)
     top.set_xlim(-hx - 0.05, hx + 0.05)
     top.set_ylim(-hy - 0.05, hy + 0.05)
     top.set_aspect("equal")
@@ -41,7 +55,8 @@ def trajectory_figure(result: TrialResult, module_m: tuple[float, float], tilt_l
 
     lim = tilt_limit_deg
     bottom.add_patch(Rectangle((-lim, -lim), 2 * lim, 2 * lim, fill=False, ls=":", lw=1.5, color="tab:red"))
-    tilt = result.tilt_deg[np.all(np.isfinite(result.tilt_deg), axis=1)]
+    tilt = np.asarray(tilt_deg, dtype=float).reshape(-1, 2)
+    tilt = tilt[np.all(np.isfinite(tilt), axis=1)]
     if len(tilt):
         bottom.plot(tilt[:, 0], tilt[:, 1], color="tab:purple", lw=1.0)
         bottom.plot(*tilt[0], "s", color="0.2", ms=5)

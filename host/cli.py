@@ -1,0 +1,375 @@
+"""The rig's commands: `mantaray rig` (the closed loop on the bench), `monitor`, `markers` and `calibrate`."""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import signal
+import sys
+import time
+from pathlib import Path
+
+TILT_LIMIT_DEG = 26.565051   # [deg] the firmware's default tilt limit (PROTOCOL.md §5)
+MODULE_M = (0.5, 0.5)        # [m] the paper's module
+
+
+def _xy(text: str) -> tuple[float, float]:
+    try:
+        x, y = (float(v) for v in text.replace(",", " ").split())
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected two numbers X,Y in metres, got {text!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y)) or abs(x) > MODULE_M[0] / 2 or abs(y) > MODULE_M[1] / 2:
+        raise argparse.ArgumentTypeError(f"{text!r} is not on the fabric (|x|, |y| <= 0.25 m)")
+    return x, y
+
+
+def _hsv_range(text: str):
+    from .tracker import BlobColour
+
+    try:
+        low, high = (tuple(int(v) for v in part.split(",")) for part in text.split(":"))
+        assert len(low) == len(high) == 3
+    except (ValueError, AssertionError):
+        raise argparse.ArgumentTypeError(f"expected H,S,V:H,S,V (OpenCV's H 0..179, S and V 0..255), got {text!r}") \
+            from None
+    return BlobColour(low, high)
+
+
+# ------------------------------------------------------------------------------------------- rig
+class RunLog:
+    """One JSON-lines file per run: the configuration first, then every position frame and telemetry frame."""
+
+    def __init__(self, path: Path, header: dict) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.path = path
+        self._file = open(path, "w")
+        self.write("config", header)
+
+    def write(self, kind: str, record: dict) -> None:
+        self._file.write(json.dumps({"kind": kind, "t": round(time.monotonic(), 6), **record}) + "\n")
+        self._file.flush()
+
+    def close(self) -> None:
+        self._file.close()
+
+
+def targets_along(args, t_s: float) -> tuple[float, float]:
+    """The target at run time t_s [s]: fixed, or moving round the circle of --path circle."""
+    if args.path is None:
+        return args.target
+    cx, cy = args.target
+    a = 2 * math.pi * t_s / args.period
+    return cx + args.radius * math.cos(a), cy + args.radius * math.sin(a)
+
+
+def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """Run the closed loop on the rig: camera -> tracker -> firmware, until success, timeout or Ctrl-C.
+
+    The Uno runs the controller; this host tracks the object (ArUco marker, or a colour blob with --blob)
+    and sends its position at the camera's rate. It stops when the object has stayed within the tolerance
+    for --hold seconds (a fixed target), at --timeout, or on Ctrl-C, which levels the surface and stops the
+    motors. Every run writes one log (configuration, every position and telemetry frame) and the paper's
+    Fig. 3-style plot."""
+    from mantaray.protocol import messages as m
+    from mantaray.sim.plots import path_phase_figure
+
+    from .session import RigSession, Setup
+    from .tracker import Calibration, FrameSource, Tracker
+
+    if args.path is not None:
+        if not (args.radius > 0 and args.period > 0):
+            parser.error("--path circle needs --radius > 0 and --period > 0")
+        cx, cy = args.target
+        if abs(cx) + args.radius > MODULE_M[0] / 2 or abs(cy) + args.radius > MODULE_M[1] / 2:
+            parser.error(f"the circle of radius {args.radius:g} m about {cx:g},{cy:g} is not on the fabric "
+                         f"(|x|, |y| <= 0.25 m)")
+    try:
+        configure = m.Configure(controller=m.Controller[args.controller.upper()], tolerance=args.tolerance,
+                                noise_amplitude=args.alpha, telemetry_period=0)
+        calibration = Calibration.load(args.calibration) if args.calibration else None
+    except (ValueError, OSError, KeyError) as exc:
+        parser.error(str(exc))
+    tracker = Tracker(marker_height_m=args.marker_height, camera_height_m=args.camera_height,
+                      calibration=calibration, blob=args.blob)
+    source = FrameSource(args.camera)
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    out = Path(args.out)
+    log = RunLog(out / f"rig-{stamp}.jsonl", {"args": {k: v for k, v in vars(args).items() if k != "func"}})
+    events = []
+
+    def report(text: str) -> None:
+        events.append(text)
+        log.write("event", {"text": text})
+        print(f"mantaray rig: {text}", file=sys.stderr)
+
+    interrupted = False
+
+    def on_sigint(signum, frame):
+        nonlocal interrupted
+        interrupted = True
+
+    previous = signal.signal(signal.SIGINT, on_sigint)
+    xy_rows, tilt_rows, target_rows, outcome = [], [], [], "timeout"
+    session = RigSession(args.port, Setup(configure, target=targets_along(args, 0.0)), report=report)
+    try:
+        session.open()
+        log.write("identify", {k: int(v) for k, v in vars(session.identity).items()})
+        session.start()
+        t0 = wall0 = None
+        frame, within_since = 0, None
+        while not interrupted:
+            grabbed = source.read()
+            if grabbed is None:
+                outcome = "camera stopped"
+                break
+            image, capture_s = grabbed
+            if t0 is None:
+                t0, wall0 = capture_s, time.monotonic()
+            run_s = capture_s - t0
+            if source.is_file:                       # a recording plays at its own pace, as a camera would
+                time.sleep(max(0.0, run_s - (time.monotonic() - wall0)))
+            if run_s > args.timeout:
+                break
+            target = targets_along(args, run_s)
+            if args.path is not None:
+                session.set_target(*target)
+            obs = tracker.observe(image, capture_s)
+            frame = (frame + 1) & 0xFFFF
+            x, y = obs.xy_m if obs.visible else (0.0, 0.0)
+            msg = m.ObjectPosition(frame=frame, capture_time=int(run_s * 1e6) & 0xFFFFFFFF, x=x, y=y,
+                                   flags=0 if obs.visible else m.PositionFlags.NOT_VISIBLE)
+            log.write("position", {"frame": frame, "capture_s": round(run_s, 6), "status": obs.status,
+                                   "xy_m": obs.xy_m, "corners_seen": list(obs.corners_seen)})
+            telemetry = session.position(msg)
+            if telemetry is not None:
+                log.write("telemetry", {k: (list(v) if isinstance(v, tuple) else int(v) if isinstance(v, int)
+                                            else v) for k, v in vars(telemetry).items()})
+                tilt_rows.append((telemetry.tilt_zx, telemetry.tilt_zy))
+            xy_rows.append(obs.xy_m if obs.visible else (math.nan, math.nan))
+            target_rows.append(target)
+            if args.path is None and obs.visible:
+                near = math.hypot(x - target[0], y - target[1]) < args.tolerance
+                within_since = (within_since if within_since is not None else run_s) if near else None
+                if within_since is not None and run_s - within_since >= args.hold:
+                    outcome = "reached"
+                    break
+        if interrupted:
+            outcome = "interrupted"
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        try:
+            if session.link is not None:
+                session.stop()                       # level the surface, controller off
+        finally:
+            session.close()
+            source.close()
+            log.write("end", {"outcome": outcome})
+            log.close()
+    figure = path_phase_figure(xy_rows, tilt_rows, xy_rows[0] if xy_rows and math.isfinite(xy_rows[0][0]) else None,
+                               target_rows or [args.target], args.tolerance, f"rig: {outcome}", MODULE_M,
+                               TILT_LIMIT_DEG, out / f"rig-{stamp}.png")
+    print(f"{outcome}: {len(xy_rows)} frames; log {log.path}; figure {figure}")
+    return {"reached": 0, "interrupted": 130}.get(outcome, 1)
+
+
+# ------------------------------------------------------------------------------------------- monitor
+def cmd_monitor(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """Show the firmware's telemetry live, decoded, without changing anything on it (Ctrl-C ends)."""
+    from mantaray.protocol import messages as m
+
+    from .session import connect
+
+    link, identity = connect(args.port)
+    print(f"{args.port}: protocol {identity.protocol_version}, firmware {identity.firmware_major}."
+          f"{identity.firmware_minor}.{identity.firmware_patch}, clock {m.Clock(identity.clock).name.lower()}")
+    shown = 0
+    try:
+        deadline = time.monotonic() + args.seconds if args.seconds else math.inf
+        while time.monotonic() < deadline and (not args.count or shown < args.count):
+            msg = link.receive(0.2)
+            if isinstance(msg, m.Telemetry):
+                faults = ",".join(f.name.lower() for f in m.Faults if msg.faults & f) or "-"
+                print(f"{msg.time / 1000:9.3f} s  {m.State(msg.state).name.lower():8s} faults {faults:16s} "
+                      f"tilt {msg.tilt_zx:+6.2f} {msg.tilt_zy:+6.2f} deg  cmd "
+                      + " ".join(f"{a:+.4f}" for a in msg.command) + "  meas "
+                      + " ".join(f"{a:+.4f}" for a in msg.measured)
+                      + f"  frame {msg.position_frame} age {msg.position_age} ms  errors {msg.crc_errors}/"
+                        f"{msg.frame_errors}", flush=True)
+                shown += 1
+            elif isinstance(msg, m.Boot):
+                print(f"firmware reset ({m.ResetCause(msg.reset_cause).name.lower()})", flush=True)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        link.close()
+    if shown == 0:
+        print("no telemetry arrived: the firmware's telemetry_period is 0 (set by a host), or nothing is running",
+              file=sys.stderr)
+    return 0
+
+
+# ------------------------------------------------------------------------------------------- markers
+A4_MM = (210.0, 297.0)
+
+
+def cmd_markers(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """Write a printable sheet of the rig's ArUco markers at true size (PDF or PNG; print at 100 %)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .markers import MarkerLayout, marker_image, quiet_scale
+
+    out = Path(args.out)
+    if out.suffix.lower() not in (".pdf", ".png"):
+        parser.error(f"--out must end in .pdf or .png, got {out.name!r}")
+    layout = MarkerLayout()
+    items = [(f"corner {k} (id {i})", i, layout.corner_size_m) for k, i in enumerate(layout.corner_ids)]
+    items += [(f"object (id {layout.object_id})", layout.object_id, layout.object_size_m)] * 2
+    fig = plt.figure(figsize=(A4_MM[0] / 25.4, A4_MM[1] / 25.4))
+    ax = fig.add_axes((0, 0, 1, 1))
+    ax.set_xlim(0, A4_MM[0])
+    ax.set_ylim(0, A4_MM[1])
+    ax.set_axis_off()
+    for n, (label, marker_id, size_m) in enumerate(items):
+        side = size_m * 1000 * quiet_scale(layout)           # [mm] with the white quiet zone
+        x = 25 + (n % 2) * 90
+        y = A4_MM[1] - 40 - (n // 2) * 80 - side
+        ax.imshow(marker_image(layout, marker_id, 480), cmap="gray", vmin=0, vmax=255, interpolation="nearest",
+                  extent=(x, x + side, y, y + side))
+        ax.text(x, y - 6, f"{label}: black square {size_m * 1000:.0f} mm", fontsize=8)
+    ax.plot([25, 125], [15, 15], color="black", lw=1)
+    ax.text(25, 18, "100 mm: check this after printing (print at 100 %, no fit-to-page)", fontsize=8)
+    ax.text(25, 8, f"{layout.dictionary}; corner markers at (±{layout.corner_offset_m[0]}, ±{layout.corner_offset_m[1]})"
+                   " m in the fabric frame, their tops toward +y", fontsize=7)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=args.dpi)
+    plt.close(fig)
+    print(f"{out}: {len(items)} markers on A4 at true size" + (f", {args.dpi} dpi" if out.suffix == ".png" else ""))
+    return 0
+
+
+# ------------------------------------------------------------------------------------------- calibrate
+def charuco_board(args):
+    import cv2
+
+    from .markers import MarkerLayout
+
+    squares_x, squares_y = args.squares
+    return cv2.aruco.CharucoBoard((squares_x, squares_y), args.square_mm / 1000, args.marker_mm / 1000,
+                                  cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, MarkerLayout().dictionary)))
+
+
+def calibrate_from_frames(board, frames, min_corners: int = 8):
+    """(Calibration, RMS reprojection error [px], views used) from BGR or grey images of a ChArUco board."""
+    import cv2
+    import numpy as np
+
+    from .tracker import Calibration
+
+    detector = cv2.aruco.CharucoDetector(board)
+    objects, images, size = [], [], None
+    for image in frames:
+        grey = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+        size = grey.shape[::-1]
+        corners, ids, _, _ = detector.detectBoard(grey)
+        if ids is None or len(ids) < min_corners:
+            continue
+        obj, img = board.matchImagePoints(corners, ids)
+        objects.append(obj)
+        images.append(img)
+    if len(objects) < 5:
+        raise ValueError(f"only {len(objects)} frames showed the board well enough (at least 5 needed)")
+    rms, k, dist, _, _ = cv2.calibrateCamera(objects, images, size, None, None)
+    return Calibration(k, dist.ravel()), float(rms), len(objects)
+
+
+def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """Calibrate the camera with a ChArUco board: --board-out writes the board to print; then show it to the
+    camera from several angles (or give a video of that) and the intrinsics go to --out (.npz)."""
+    import cv2
+
+    board = charuco_board(args)
+    if args.board_out:
+        squares_x, squares_y = args.squares
+        px_per_mm = 300 / 25.4
+        image = board.generateImage((int(squares_x * args.square_mm * px_per_mm),
+                                     int(squares_y * args.square_mm * px_per_mm)))
+        cv2.imwrite(args.board_out, image)
+        print(f"{args.board_out}: {squares_x} x {squares_y} squares of {args.square_mm} mm at 300 dpi")
+        if args.camera is None:
+            return 0
+    if args.camera is None:
+        parser.error("give --camera (index or video file) to calibrate, or --board-out to print the board")
+    from .tracker import FrameSource
+
+    source = FrameSource(args.camera)
+    frames = []
+    while len(frames) < args.frames and (grabbed := source.read()) is not None:
+        frames.append(grabbed[0])
+    source.close()
+    try:
+        calibration, rms, used = calibrate_from_frames(board, frames)
+    except ValueError as exc:
+        print(f"mantaray calibrate: {exc}", file=sys.stderr)
+        return 1
+    calibration.save(args.out)
+    k = calibration.camera_matrix
+    print(f"{args.out}: fx {k[0, 0]:.1f} fy {k[1, 1]:.1f} cx {k[0, 2]:.1f} cy {k[1, 2]:.1f} px, "
+          f"reprojection RMS {rms:.3f} px from {used} of {len(frames)} frames")
+    return 0
+
+
+# ------------------------------------------------------------------------------------------- parsers
+def add_parsers(sub: argparse._SubParsersAction) -> None:
+    fmt = argparse.ArgumentDefaultsHelpFormatter
+    rig = sub.add_parser("rig", help="the closed loop on the real rig: camera, tracker, Uno",
+                         description=cmd_rig.__doc__, formatter_class=fmt)
+    rig.add_argument("--port", required=True, help="serial device of the Uno (e.g. /dev/ttyACM0)")
+    rig.add_argument("--camera", required=True, help="camera index (0, 1, ...) or a video file")
+    rig.add_argument("--target", type=_xy, required=True, metavar="X,Y",
+                     help="target [m] in the fabric frame (with --path: the circle's centre); write "
+                          "--target=-0.1,0.1 when X is negative")
+    rig.add_argument("--path", choices=["circle"], help="follow a path instead of a fixed target (paper Fig. 1A)")
+    rig.add_argument("--radius", type=float, default=0.1, help="circle radius [m]")
+    rig.add_argument("--period", type=float, default=30.0, help="time for one lap of the circle [s]")
+    rig.add_argument("--controller", choices=["manhattan", "euclidean"], default="manhattan")
+    rig.add_argument("--alpha", type=float, default=0.05, help="noise amplitude α [m] (paper's hardware: 0.05)")
+    rig.add_argument("--tolerance", type=float, default=0.02, help="ε [m]")
+    rig.add_argument("--hold", type=float, default=1.0, help="seconds within ε that count as reached")
+    rig.add_argument("--timeout", type=float, default=60.0, help="give up after this many seconds (paper: 60)")
+    rig.add_argument("--marker-height", type=float, default=0.0,
+                     help="height [m] of the object's marker (or blob) above the corner markers' plane")
+    rig.add_argument("--camera-height", type=float, default=1.0, help="camera above that plane [m], without "
+                     "--calibration")
+    rig.add_argument("--calibration", help="camera calibration (.npz from mantaray calibrate): full pose")
+    rig.add_argument("--blob", type=_hsv_range, metavar="H,S,V:H,S,V",
+                     help="track a colour blob in this HSV range instead of the object's marker (the egg)")
+    rig.add_argument("--out", default="out/rig", help="directory for the run log and the figure")
+    rig.set_defaults(func=lambda args: cmd_rig(args, rig))
+
+    monitor = sub.add_parser("monitor", help="live decoded telemetry from a firmware", description=cmd_monitor.__doc__,
+                             formatter_class=fmt)
+    monitor.add_argument("--port", required=True, help="serial device path of the firmware")
+    monitor.add_argument("--count", type=int, default=0, help="stop after this many telemetry frames (0: never)")
+    monitor.add_argument("--seconds", type=float, default=0.0, help="stop after this long (0: never)")
+    monitor.set_defaults(func=lambda args: cmd_monitor(args, monitor))
+
+    markers = sub.add_parser("markers", help="a printable marker sheet at true size", description=cmd_markers.__doc__,
+                             formatter_class=fmt)
+    markers.add_argument("--out", default="out/markers.pdf", help="the sheet: .pdf or .png")
+    markers.add_argument("--dpi", type=int, default=300, help="resolution of a PNG sheet")
+    markers.set_defaults(func=lambda args: cmd_markers(args, markers))
+
+    calibrate = sub.add_parser("calibrate", help="camera calibration with a ChArUco board",
+                               description=cmd_calibrate.__doc__, formatter_class=fmt)
+    calibrate.add_argument("--camera", help="camera index or video file showing the board")
+    calibrate.add_argument("--out", default="out/camera.npz", help="the calibration (for mantaray rig --calibration)")
+    calibrate.add_argument("--board-out", help="write the board to print (PNG at 300 dpi)")
+    calibrate.add_argument("--squares", type=lambda t: tuple(int(v) for v in t.split("x")), default=(7, 5),
+                           metavar="NXxNY", help="board squares")
+    calibrate.add_argument("--square-mm", type=float, default=30.0, help="square side [mm]")
+    calibrate.add_argument("--marker-mm", type=float, default=22.0, help="marker side [mm]")
+    calibrate.add_argument("--frames", type=int, default=200, help="read at most this many frames")
+    calibrate.set_defaults(func=lambda args: cmd_calibrate(args, calibrate))

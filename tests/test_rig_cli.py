@@ -1,0 +1,172 @@
+"""The rig's commands without a rig: the closed loop on a recorded video against the virtual MCU, monitor, markers, calibrate."""
+from __future__ import annotations
+
+import json
+import re
+import signal
+import subprocess
+import sys
+import time
+
+import cv2
+import numpy as np
+import pytest
+
+from mantaray.host.link import Link
+from mantaray.host.markers import MarkerLayout
+from mantaray.host.transport import SerialTransport
+from mantaray.host.vmcu import VirtualMcu
+from mantaray.paths import REPO
+from mantaray.protocol import messages as m
+from synthetic_camera import H, W, camera, intrinsics, render
+
+FPS = 12.0
+
+
+def _video(path, xy_of_frame, frames: int) -> str:
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), FPS, (W, H))
+    for k in range(frames):
+        writer.write(cv2.cvtColor(render(xy_of_frame(k)), cv2.COLOR_GRAY2BGR))
+    writer.release()
+    return str(path)
+
+
+def _mantaray(*args: str, **kwargs) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "mantaray.cli", *args], cwd=REPO, capture_output=True, text=True,
+                          timeout=300, **kwargs)
+
+
+def _log(out) -> list[dict]:
+    (path,) = out.glob("rig-*.jsonl")
+    return [json.loads(line) for line in path.read_text().splitlines()]
+
+
+@pytest.fixture(scope="module")
+def still_video(tmp_path_factory):
+    """24 s of the object standing at (0.1, -0.05)."""
+    return _video(tmp_path_factory.mktemp("video") / "still.avi", lambda k: (0.1, -0.05), int(24 * FPS))
+
+
+def test_rig_runs_the_loop_on_a_video_logs_every_frame_and_plots(still_video, tmp_path):
+    with VirtualMcu(clock="wall") as vmcu:
+        proc = _mantaray("rig", "--port", vmcu.path, "--camera", still_video, "--target=-0.1,0.1",
+                         "--timeout", "2", "--out", str(tmp_path))
+    assert proc.returncode == 1, proc.stderr                                   # not reached: a timeout
+    assert proc.stdout.startswith("timeout")
+    log = _log(tmp_path)
+    kinds = [r["kind"] for r in log]
+    assert kinds[0] == "config" and kinds[1] == "identify" and kinds[-1] == "end"
+    positions = [r for r in log if r["kind"] == "position"]
+    telemetry = [r for r in log if r["kind"] == "telemetry"]
+    assert 20 <= len(positions) <= 26 and len(telemetry) == len(positions)
+    assert all(r["status"] == "ok" and abs(r["xy_m"][0] - 0.1) < 0.002 for r in positions)
+    assert telemetry[-1]["tilt_zx"] < 0 and telemetry[-1]["tilt_zy"] > 0     # steering toward (-0.1, 0.1)
+    assert len(list(tmp_path.glob("rig-*.png"))) == 1
+
+
+def test_rig_stops_when_the_object_holds_the_target(still_video, tmp_path):
+    with VirtualMcu(clock="wall") as vmcu:
+        proc = _mantaray("rig", "--port", vmcu.path, "--camera", still_video, "--target", "0.105,-0.05",
+                         "--hold", "0.5", "--out", str(tmp_path))
+    assert proc.returncode == 0 and proc.stdout.startswith("reached"), proc.stderr
+    assert _log(tmp_path)[-1]["outcome"] == "reached"
+
+
+def test_ctrl_c_levels_the_surface_and_stops(still_video, tmp_path):
+    with VirtualMcu(clock="wall") as vmcu:
+        rig = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "rig", "--port", vmcu.path, "--camera",
+                                still_video, "--target=-0.2,0.2", "--out", str(tmp_path)], cwd=REPO,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(4)
+        rig.send_signal(signal.SIGINT)
+        out, err = rig.communicate(timeout=60)
+        assert rig.returncode == 130, err
+        link = Link(SerialTransport(vmcu.path))
+        link.identify()
+        t = link.position(m.ObjectPosition(frame=1, capture_time=1, flags=m.PositionFlags.NOT_VISIBLE))
+        link.close()
+    assert m.State(t.state) == m.State.IDLE and t.command == (0.0, 0.0, 0.0, 0.0)   # level, motors stopped
+    assert _log(tmp_path)[-1]["outcome"] == "interrupted" and out.startswith("interrupted")
+
+
+def test_rig_follows_a_circle(tmp_path):
+    video = _video(tmp_path / "c.avi", lambda k: (0.0, 0.0), int(3 * FPS))
+    with VirtualMcu(clock="wall") as vmcu:
+        proc = _mantaray("rig", "--port", vmcu.path, "--camera", video, "--target", "0,0", "--path", "circle",
+                         "--radius", "0.1", "--period", "4", "--out", str(tmp_path))
+    assert proc.returncode == 1 and proc.stdout.startswith("camera stopped"), proc.stderr
+    tilts = [(r["tilt_zx"], r["tilt_zy"]) for r in _log(tmp_path) if r["kind"] == "telemetry"]
+    angles = np.unwrap([np.arctan2(ty, tx) for tx, ty in tilts[2:]])
+    assert angles[-1] - angles[0] > 1.5                                          # the tilt turns with the target
+
+
+@pytest.mark.parametrize("args, needle", [
+    (("--target", "0.4,0"), "not on the fabric"),
+    (("--target", "0,0", "--blob", "1,2:3"), "expected H,S,V:H,S,V"),
+    (("--target", "0,0", "--path", "circle", "--radius", "0.3"), "not on the fabric"),
+])
+def test_rig_refuses_bad_input_in_one_line(args, needle):
+    proc = _mantaray("rig", "--port", "/nonexistent", "--camera", "0", *args)
+    assert proc.returncode == 2 and needle in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_rig_explains_a_missing_port_in_one_line(still_video):
+    proc = _mantaray("rig", "--port", "/dev/nonexistent-uno", "--camera", still_video, "--target", "0,0",
+                     "--timeout", "1")
+    assert proc.returncode == 1 and "cannot open" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_monitor_shows_decoded_telemetry_without_changing_anything():
+    with VirtualMcu(clock="wall") as vmcu:
+        proc = _mantaray("monitor", "--port", vmcu.path, "--count", "3")
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert "clock wall" in lines[0] and len(lines) == 4
+    assert all(re.search(r"\d+\.\d{3} s  idle", line) for line in lines[1:])
+
+
+def test_markers_sheet_is_at_true_size(tmp_path):
+    png, pdf = tmp_path / "sheet.png", tmp_path / "sheet.pdf"
+    assert _mantaray("markers", "--out", str(png)).returncode == 0
+    assert _mantaray("markers", "--out", str(pdf)).returncode == 0
+    assert re.search(rb"/MediaBox \[ *0 0 595\.?\d* 841\.?\d* *\]", pdf.read_bytes())   # A4 in points
+    image = cv2.imread(str(png), cv2.IMREAD_GRAYSCALE)
+    assert np.allclose(image.shape, (297 / 25.4 * 300, 210 / 25.4 * 300), atol=1)   # A4 at 300 dpi
+    layout = MarkerLayout()
+    detector = cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, layout.dictionary)))
+    corners, ids, _ = detector.detectMarkers(image)
+    sizes = {}
+    for c, i in zip(corners, ids.ravel()):
+        side_px = np.mean(np.linalg.norm(np.diff(np.vstack([c[0], c[0][:1]]), axis=0), axis=1))
+        sizes.setdefault(int(i), []).append(side_px / 300 * 25.4)
+    for i in layout.corner_ids:
+        assert sizes[i] == [pytest.approx(40.0, abs=0.3)]
+    assert sizes[layout.object_id] == [pytest.approx(30.0, abs=0.3)] * 2
+
+
+def test_calibrate_recovers_a_cameras_intrinsics_from_charuco_views(tmp_path):
+    from mantaray.host.cli import charuco_board
+
+    class Args:
+        squares, square_mm, marker_mm = (7, 5), 30.0, 22.0
+    board = charuco_board(Args)
+    board_px = board.generateImage((1400, 1000))                    # 0.21 x 0.15 m at 6667 px/m
+    k = intrinsics()
+    rng = np.random.default_rng(5)
+    writer = cv2.VideoWriter(str(tmp_path / "board.avi"), cv2.VideoWriter_fourcc(*"MJPG"), FPS, (W, H))
+    for _ in range(30):
+        rvec, tvec = camera(0.5 + rng.uniform(0, 0.2), xy_m=rng.uniform(-0.05, 0.05, 2), tilt_deg=rng.uniform(-25, 25))
+        rvec = cv2.Rodrigues(cv2.Rodrigues(rvec)[0] @ cv2.Rodrigues(np.array([0, rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5)]))[0])[0]
+        world = np.array([[-0.105, 0.075, 0], [0.105, 0.075, 0], [0.105, -0.075, 0], [-0.105, -0.075, 0]])
+        pixels, _ = cv2.projectPoints(world, rvec, tvec, k, None)
+        src = np.float32([[0, 0], [1400, 0], [1400, 1000], [0, 1000]])
+        warp = cv2.getPerspectiveTransform(src, pixels.reshape(4, 2).astype(np.float32))
+        frame = cv2.warpPerspective(board_px, warp, (W, H), borderValue=128)
+        writer.write(cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR))
+    writer.release()
+    out = tmp_path / "camera.npz"
+    proc = _mantaray("calibrate", "--camera", str(tmp_path / "board.avi"), "--out", str(out))
+    assert proc.returncode == 0, proc.stderr + proc.stdout
+    found = np.load(out)["camera_matrix"]
+    assert found[0, 0] == pytest.approx(k[0, 0], rel=0.03) and found[1, 1] == pytest.approx(k[1, 1], rel=0.03)
+    assert found[0, 2] == pytest.approx(k[0, 2], abs=15) and found[1, 2] == pytest.approx(k[1, 2], abs=15)
