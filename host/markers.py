@@ -5,8 +5,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-# Corner markers sit outside the 0.5 m frame, clear of the carriages and posts, in the plane of the carriages
-# at the reference height z0 (PROTOCOL.md §5 numbering: 0 (-x,-y), 1 (+x,-y), 2 (-x,+y), 3 (+x,+y)).
+# Corner markers sit outside the 0.5 m frame beside its corners (PROTOCOL.md §5 numbering: 0 (-x,-y), 1 (+x,-y),
+# 2 (-x,+y), 3 (+x,+y)), in the plane of the carriages at the reference height z0: off the diagonals, where
+# the corner posts would hide them from an overhead camera, and clear of the carriages.
 CORNER_SIGNS = ((-1, -1), (1, -1), (-1, 1), (1, 1))
 
 
@@ -15,7 +16,7 @@ class MarkerLayout:
     """What the tracker looks for and where: every length in metres, in the fabric frame."""
     dictionary: str = "DICT_4X4_50"          # cv2.aruco predefined dictionary
     corner_ids: tuple[int, int, int, int] = (0, 1, 2, 3)   # marker id at corner 0..3
-    corner_offset_m: float = 0.32            # [m] corner marker centres at (+-offset, +-offset)
+    corner_offset_m: tuple[float, float] = (0.33, 0.20)   # [m] corner marker centres at (+-x, +-y)
     corner_size_m: float = 0.04              # [m] black square's side
     object_id: int = 10
     object_size_m: float = 0.03              # [m] black square's side, on the object's top
@@ -23,7 +24,8 @@ class MarkerLayout:
 
     def corner_centres_m(self) -> np.ndarray:
         """(4, 2) centres of the corner markers in the fabric frame, corner 0..3."""
-        return np.array([(sx * self.corner_offset_m, sy * self.corner_offset_m) for sx, sy in CORNER_SIGNS])
+        ox, oy = self.corner_offset_m
+        return np.array([(sx * ox, sy * oy) for sx, sy in CORNER_SIGNS])
 
     def corner_points_m(self) -> np.ndarray:
         """(4, 4, 2) the four corners of each corner marker, in ArUco's order (top-left, top-right,
