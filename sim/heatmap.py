@@ -9,13 +9,16 @@ epsilon at any frame before T (where the paper's algorithms stop) is recorded to
 
 Every finished trial is one line of the results file (JSON lines, after a header line holding the
 protocol). Running the same protocol on the same file skips the trials already there, so an
-interrupted run continues where it stopped and loses nothing.
+interrupted run continues where it stopped and loses nothing. A run with more trials per cell, or more
+cells, on the same file keeps the trials already there and adds the rest (a quick N = 3 map first,
+topped up to the paper's N = 10 later).
 """
 from __future__ import annotations
 
 import dataclasses
 import json
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
@@ -160,13 +163,20 @@ class ResultsFile:
             path.write_text(json.dumps({"format": RESULTS_FORMAT, "protocol": protocol.to_json()}) + "\n")
             return results
         stored, records, good_bytes = _read(path)
-        if stored != protocol:
+        if stored != protocol and not _extends(stored, protocol):
             changed = sorted(k for k, v in protocol.to_json().items() if stored.to_json().get(k) != v)
             raise ProtocolMismatch(f"{path} holds a run with other options ({', '.join(changed)} differ); "
-                                   f"use another --out, or the same options to continue it")
+                                   f"use another --out, the same options to continue it, or more trials or "
+                                   f"cells to add to it")
         if good_bytes != path.stat().st_size:   # a line cut off by an interruption: drop it, its trial reruns
             with open(path, "r+b") as f:
                 f.truncate(good_bytes)
+        if stored != protocol:                  # grown: the header names the larger run, the trials stay
+            body = path.read_bytes().split(b"\n", 1)[1]
+            grown = path.with_name(path.name + ".grown")
+            grown.write_bytes(json.dumps({"format": RESULTS_FORMAT, "protocol": protocol.to_json()}).encode()
+                              + b"\n" + body)
+            os.replace(grown, path)
         results.records = records
         return results
 
@@ -183,6 +193,17 @@ class ResultsFile:
 
     def missing(self) -> list[Trial]:
         return [t for t in trials(self.protocol) if t.key not in self.records]
+
+
+def _extends(stored: Protocol, wanted: Protocol) -> bool:
+    """Whether wanted only adds trials to stored (more per cell, or more cells), so every stored trial is one of
+    wanted's: trials are drawn from (seed, cell, k) alone."""
+    same_otherwise = dataclasses.replace(stored, trials_per_cell=wanted.trials_per_cell,
+                                         only_cells=wanted.only_cells) == wanted
+    more_per_cell = wanted.trials_per_cell >= stored.trials_per_cell
+    more_cells = wanted.only_cells is None or (stored.only_cells is not None
+                                               and set(stored.only_cells) <= set(wanted.only_cells))
+    return same_otherwise and more_per_cell and more_cells
 
 
 def _read(path: Path) -> tuple[Protocol, dict[str, dict], int]:

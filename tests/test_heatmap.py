@@ -1,6 +1,7 @@
 """The heatmap evaluation: sampling of starts and targets, the success rule, resumption, executors, CLI end to end."""
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -125,6 +126,22 @@ def test_an_interrupted_run_continues_where_it_stopped_and_loses_nothing(tmp_pat
         assert {k: v for k, v in final.records[key].items() if k != "wall_time_s"} == \
                {k: v for k, v in record.items() if k != "wall_time_s"}
     assert len(path.read_text().splitlines()) == 9      # header + 8 trials: nothing twice, the cut line gone
+
+
+def test_more_trials_or_cells_on_the_same_file_keep_the_trials_there_and_add_the_rest(tmp_path):
+    path = tmp_path / "grown.jsonl"
+    one_cell = dataclasses.replace(SMALL, trials_per_cell=1, only_cells=(2,))
+    first = H.ResultsFile.open(path, one_cell)
+    H.run(first, H.run_local(one_cell, first.missing(), jobs=1))
+    (kept,) = first.records.values()
+    grown = H.ResultsFile.open(path, SMALL)
+    assert grown.records == first.records and len(grown.missing()) == 7
+    assert H.ResultsFile.load(path).protocol == SMALL              # the header names the larger run now
+    H.run(grown, H.run_local(SMALL, grown.missing(), jobs=1))
+    final = H.ResultsFile.load(path)
+    assert len(final.records) == 8 and final.records[kept["key"]] == kept
+    with pytest.raises(H.ProtocolMismatch, match="trials_per_cell"):   # fewer trials would drop some: refused
+        H.ResultsFile.open(path, one_cell)
 
 
 def test_a_results_file_of_other_options_is_not_continued(tmp_path):
