@@ -64,6 +64,7 @@ def main() -> int:
         times_path.write_text(json.dumps(times) + "\n")
         summary = json.loads(proc.stdout)
         shutil.copyfile(out / "heatmap.png", figures / f"heatmap_{name}.png")
+        shutil.copyfile(out / "heatmap_reach.png", figures / f"heatmap_{name}_reach.png")
         table[name] = {"object": obj, "controller": controller, "alpha_m": alpha, "score": summary["score"],
                        "reach_score": summary["reach_score"], "regions": summary["regions"],
                        "trials": summary["trials"], "trials_per_cell": args.trials, "wall_s_sessions": times, "jobs": args.jobs}

@@ -158,9 +158,12 @@ def _heatmap_outputs(results, out: Path, title: str) -> dict:
                     f"{s.reach_rates[iy, ix]:.3f},{s.fell_rates[iy, ix]:.3f}")
     (out / "cells.csv").write_text("\n".join(rows) + "\n")
     summary = {"protocol": p.to_json(), **s.to_json()}
-    summary["figure"] = str(heatmap_figure(s.rates, (f.size_x_m, f.size_y_m),
-                                           f"{title}\nscore {s.score:.1f} of {len(p.cell_ids())} "
+    size = (f.size_x_m, f.size_y_m)
+    summary["figure"] = str(heatmap_figure(s.rates, size, f"{title}\nscore {s.score:.1f} of {len(p.cell_ids())} "
                                            f"(within ε at any frame: {s.reach_score:.1f})", out / "heatmap.png"))
+    summary["reach_figure"] = str(heatmap_figure(s.reach_rates, size, f"{title}\nwithin ε at any frame (where the "
+                                                 f"paper's loop stops): score {s.reach_score:.1f}",
+                                                 out / "heatmap_reach.png"))
     (out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
     return summary
 
@@ -318,7 +321,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     heat.add_argument("--executor", choices=["local", "ray"], default="local",
                       help="local processes, or Ray actors (a local Ray instance, or --ray-address)")
     heat.add_argument("--ray-address", help="address of a running Ray cluster (e.g. ray://head:10001)")
-    heat.add_argument("--out", help="directory for results.jsonl, cells.csv, summary.json and heatmap.png "
+    heat.add_argument("--out", help="directory for results.jsonl, cells.csv, summary.json, heatmap.png and heatmap_reach.png (the paper's stopping rule) "
                       "(default out/heatmap/OBJECT_CONTROLLER_alphaA)")
     heat.add_argument("--json", action="store_true", help="print the summary as JSON (and no progress bar)")
     heat.set_defaults(func=lambda args: cmd_heatmap(args, heat))

@@ -196,7 +196,7 @@ def test_reduced_heatmap_end_to_end_with_figures_and_difference_map(tmp_path):
             assert set(record) >= {"start_m", "target_m", "final_m", "success", "fell_off", "reached"}
         cells = (out / "cells.csv").read_text().splitlines()
         assert cells[0].startswith("cell,ix,iy") and len(cells) == 4
-        assert (out / "heatmap.png").stat().st_size > 10_000
+        assert (out / "heatmap.png").stat().st_size > 10_000 and (out / "heatmap_reach.png").stat().st_size > 10_000
         runs[controller] = summary
     again = _cli("heatmap", "--cells", "3", "--trials", "1", "--duration", "2", "--only-cells", "3,4,5",
                  "--json", "--out", str(tmp_path / "manhattan"))
