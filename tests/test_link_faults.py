@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from mantaray.host.faults import FaultInjector
-from mantaray.host.link import Link, LinkError
-from mantaray.host.session import RigSession, Setup
+from mantaray.host.link import IncompatibleFirmware, Link, LinkError
+from mantaray.host.session import RigSession, Setup, connect
 from mantaray.host.transport import SerialTransport
 from mantaray.host.vmcu import VirtualMcu
 from mantaray.protocol import messages as m
@@ -150,3 +150,13 @@ def test_a_board_that_resets_on_its_own_gets_its_setup_back():
     t = session.position(m.ObjectPosition(frame=3, capture_time=168000, x=0.0, y=0.0))
     assert m.State(t.state) == m.State.RUNNING and t.tilt_zx < 0 and t.tilt_zy > 0   # ... and restored it
     assert session.restores == 1 and any("reset" in e for e in events)
+
+
+@pytest.mark.parametrize("constant", ["SCHEMA_HASH", "PROTOCOL_VERSION"])
+def test_a_firmware_of_another_protocol_is_refused_at_once_saying_what_to_do(monkeypatch, constant):
+    with VirtualMcu() as vmcu:
+        monkeypatch.setattr(m, constant, getattr(m, constant) ^ 1)     # this host now speaks another protocol
+        started = time.monotonic()
+        with pytest.raises(IncompatibleFirmware, match="flash the firmware built from this checkout"):
+            connect(vmcu.path, timeout_s=10.0)
+        assert time.monotonic() - started < 2.0                      # no waiting out the timeout
