@@ -67,7 +67,11 @@ def path_phase_figure(xy_m: np.ndarray, tilt_deg: np.ndarray, start_m, targets_m
     bottom.set_xlabel("θ_zx [deg]")
     bottom.set_ylabel("θ_zy [deg]")
     bottom.set_title(f"controller output; red: ±{lim:.1f}° tilt limit", fontsize=9)
+    return _save(fig, path)
 
+
+def _save(fig, path: str | Path) -> Path:
+    """Lay out, write (creating the folder) and close a figure; returns the file written."""
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -91,9 +95,4 @@ def heatmap_figure(rates: np.ndarray, module_m: tuple[float, float], title: str,
     ax.set_xlabel("target x [m]")
     ax.set_ylabel("target y [m]")
     ax.set_title(title, fontsize=9)
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
