@@ -9,8 +9,11 @@ import sys
 import time
 from pathlib import Path
 
-TILT_LIMIT_DEG = 26.565051   # [deg] the firmware's default tilt limit (PROTOCOL.md §5)
-MODULE_M = (0.5, 0.5)        # [m] the paper's module
+def _half_module_m() -> tuple[float, float]:
+    """[m] half the module's sides, as configured on the firmware (protocol defaults)."""
+    from mantaray.protocol import messages as m
+
+    return m.Configure.module_x / 2, m.Configure.module_y / 2
 
 
 def _xy(text: str) -> tuple[float, float]:
@@ -18,8 +21,9 @@ def _xy(text: str) -> tuple[float, float]:
         x, y = (float(v) for v in text.replace(",", " ").split())
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected two numbers X,Y in metres, got {text!r}") from None
-    if not (math.isfinite(x) and math.isfinite(y)) or abs(x) > MODULE_M[0] / 2 or abs(y) > MODULE_M[1] / 2:
-        raise argparse.ArgumentTypeError(f"{text!r} is not on the fabric (|x|, |y| <= 0.25 m)")
+    hx, hy = _half_module_m()
+    if not (math.isfinite(x) and math.isfinite(y)) or abs(x) > hx or abs(y) > hy:
+        raise argparse.ArgumentTypeError(f"{text!r} is not on the fabric (|x| <= {hx:g} m, |y| <= {hy:g} m)")
     return x, y
 
 
@@ -28,8 +32,9 @@ def _hsv_range(text: str):
 
     try:
         low, high = (tuple(int(v) for v in part.split(",")) for part in text.split(":"))
-        assert len(low) == len(high) == 3
-    except (ValueError, AssertionError):
+        if not len(low) == len(high) == 3:
+            raise ValueError
+    except ValueError:
         raise argparse.ArgumentTypeError(f"expected H,S,V:H,S,V (OpenCV's H 0..179, S and V 0..255), got {text!r}") \
             from None
     return BlobColour(low, high)
@@ -73,6 +78,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from mantaray.protocol import messages as m
     from mantaray.sim.plots import path_phase_figure
 
+    from .link import LinkError
     from .session import RigSession, Setup
     from .tracker import Calibration, FrameSource, Tracker
 
@@ -80,9 +86,10 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if not (args.radius > 0 and args.period > 0):
             parser.error("--path circle needs --radius > 0 and --period > 0")
         cx, cy = args.target
-        if abs(cx) + args.radius > MODULE_M[0] / 2 or abs(cy) + args.radius > MODULE_M[1] / 2:
+        hx, hy = _half_module_m()
+        if abs(cx) + args.radius > hx or abs(cy) + args.radius > hy:
             parser.error(f"the circle of radius {args.radius:g} m about {cx:g},{cy:g} is not on the fabric "
-                         f"(|x|, |y| <= 0.25 m)")
+                         f"(|x| <= {hx:g} m, |y| <= {hy:g} m)")
     try:
         configure = m.Configure(controller=m.Controller[args.controller.upper()], tolerance=args.tolerance,
                                 noise_amplitude=args.alpha, telemetry_period=0)
@@ -105,15 +112,18 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     interrupted = False
 
     def on_sigint(signum, frame):
+        """The first Ctrl-C ends the loop after this frame; a second one (say, while reconnecting) at once."""
         nonlocal interrupted
         interrupted = True
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
-    previous = signal.signal(signal.SIGINT, on_sigint)
+    previous = signal.getsignal(signal.SIGINT)
     xy_rows, tilt_rows, target_rows, outcome = [], [], [], "timeout"
     session = RigSession(args.port, Setup(configure, target=targets_along(args, 0.0)), report=report)
     try:
         session.open()
         log.write("identify", {k: int(v) for k, v in vars(session.identity).items()})
+        signal.signal(signal.SIGINT, on_sigint)
         session.start()
         t0 = wall0 = None
         frame, within_since = 0, None
@@ -155,19 +165,24 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
                     break
         if interrupted:
             outcome = "interrupted"
+    except KeyboardInterrupt:                        # while connecting, or a second Ctrl-C
+        outcome = "interrupted"
     finally:
         signal.signal(signal.SIGINT, previous)
         try:
             if session.link is not None:
                 session.stop()                       # level the surface, controller off
+        except LinkError as exc:
+            report(f"could not level the surface and stop ({exc}): the firmware's deadman stops it")
         finally:
             session.close()
             source.close()
             log.write("end", {"outcome": outcome})
             log.close()
+    targets = target_rows if args.path is not None and target_rows else [args.target]   # a path, or one target
     figure = path_phase_figure(xy_rows, tilt_rows, xy_rows[0] if xy_rows and math.isfinite(xy_rows[0][0]) else None,
-                               target_rows or [args.target], args.tolerance, f"rig: {outcome}", MODULE_M,
-                               TILT_LIMIT_DEG, out / f"rig-{stamp}.png")
+                               targets, args.tolerance, f"rig: {outcome}", (configure.module_x, configure.module_y),
+                               configure.tilt_limit, out / f"rig-{stamp}.png")
     print(f"{outcome}: {len(xy_rows)} frames; log {log.path}; figure {figure}")
     return {"reached": 0, "interrupted": 130}.get(outcome, 1)
 
@@ -254,11 +269,11 @@ def cmd_markers(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
 def charuco_board(args):
     import cv2
 
-    from .markers import MarkerLayout
+    from .markers import MarkerLayout, dictionary
 
     squares_x, squares_y = args.squares
     return cv2.aruco.CharucoBoard((squares_x, squares_y), args.square_mm / 1000, args.marker_mm / 1000,
-                                  cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, MarkerLayout().dictionary)))
+                                  dictionary(MarkerLayout()))
 
 
 def calibrate_from_frames(board, frames, min_corners: int = 8):
@@ -296,7 +311,9 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
         px_per_mm = 300 / 25.4
         image = board.generateImage((int(squares_x * args.square_mm * px_per_mm),
                                      int(squares_y * args.square_mm * px_per_mm)))
-        cv2.imwrite(args.board_out, image)
+        Path(args.board_out).parent.mkdir(parents=True, exist_ok=True)
+        if not cv2.imwrite(args.board_out, image):
+            parser.error(f"could not write {args.board_out!r} (an image: .png, .jpg, .tif ...)")
         print(f"{args.board_out}: {squares_x} x {squares_y} squares of {args.square_mm} mm at 300 dpi")
         if args.camera is None:
             return 0

@@ -56,7 +56,5 @@ def marker_image(layout: MarkerLayout, marker_id: int, pixels: int, quiet_cells:
 
 def quiet_scale(layout: MarkerLayout, quiet_cells: int = 1) -> float:
     """Side of marker_image()'s whole image over the black square's side."""
-    import cv2
-
     cells = dictionary(layout).markerSize + 2 * layout.border_bits
     return (cells + 2 * quiet_cells) / cells

@@ -37,28 +37,45 @@ def connect(port: str, *, reset_wait_s: float | None = None, timeout_s: float = 
         reset_wait_s = 0.0 if is_pty(port) else UNO_RESET_WAIT_S
     deadline = time.monotonic() + timeout_s
     while True:
+        link = Link(_open(port, deadline, open_transport), ack_timeout=ack_timeout_s)
         try:
-            transport = open_transport(port)
-            break
+            boot_deadline = time.monotonic() + reset_wait_s
+            while (remaining := boot_deadline - time.monotonic()) > 0:   # the Uno's bootloader runs first
+                if isinstance(link.receive(remaining), m.Boot):
+                    break
+            while True:
+                try:
+                    return link, link.identify()
+                except IncompatibleFirmware:
+                    raise
+                except LinkError:
+                    if time.monotonic() > deadline:
+                        raise LinkError(f"{port}: the firmware does not answer identify") from None
+        except OSError:                 # the port went away (unplugged) after it opened: open it again
+            _close_quietly(link)
+            if time.monotonic() > deadline:
+                raise LinkError(f"{port}: the port went away and did not come back") from None
+        except BaseException:
+            _close_quietly(link)
+            raise
+
+
+def _open(port: str, deadline: float, open_transport: Callable[[str], Transport]) -> Transport:
+    """The port's transport, retried every 0.2 s until the deadline (the port may not exist yet)."""
+    while True:
+        try:
+            return open_transport(port)
         except OSError as exc:          # serial.SerialException is an OSError: no such port (yet)
             if time.monotonic() > deadline:
                 raise LinkError(f"{port}: cannot open it ({exc}); is the board plugged in?") from None
             time.sleep(0.2)
-    link = Link(transport, ack_timeout=ack_timeout_s)
-    boot_deadline = time.monotonic() + reset_wait_s
-    while (remaining := boot_deadline - time.monotonic()) > 0:   # the Uno's bootloader runs first
-        if isinstance(link.receive(remaining), m.Boot):
-            break
-    while True:
-        try:
-            return link, link.identify()
-        except IncompatibleFirmware:
-            link.close()
-            raise
-        except (LinkError, OSError):
-            if time.monotonic() > deadline:
-                link.close()
-                raise LinkError(f"{port}: the firmware does not answer identify") from None
+
+
+def _close_quietly(link: Link) -> None:
+    try:
+        link.close()
+    except OSError:
+        pass
 
 
 @dataclass
@@ -78,7 +95,7 @@ class RigSession:
                  open_transport: Callable[[str], Transport] = SerialTransport) -> None:
         self.port = port
         self.setup = setup or Setup()
-        self.reset_wait_s = (0.0 if is_pty(port) else UNO_RESET_WAIT_S) if reset_wait_s is None else reset_wait_s
+        self.reset_wait_s = reset_wait_s        # [s] None: connect() decides by the kind of port
         self.reconnect_timeout_s = reconnect_timeout_s
         self.ack_timeout_s = ack_timeout_s
         self.report = report
@@ -116,10 +133,7 @@ class RigSession:
         """Reopen (if the link failed) and re-apply the setup."""
         self.report(f"{why}: reconnecting to {self.port}")
         if self.link is not None:
-            try:
-                self.link.close()
-            except OSError:
-                pass
+            _close_quietly(self.link)
         self.link = None
         self._connect(self.reconnect_timeout_s)
         self.reconnects += 1

@@ -31,8 +31,8 @@ class Calibration:
 
     @classmethod
     def load(cls, path: str | Path) -> Calibration:
-        data = np.load(path)
-        return cls(data["camera_matrix"], data["distortion"])
+        with np.load(path) as data:
+            return cls(data["camera_matrix"], data["distortion"])
 
     def save(self, path: str | Path) -> None:
         np.savez(path, camera_matrix=self.camera_matrix, distortion=self.distortion)

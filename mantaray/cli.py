@@ -78,6 +78,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         return args.func(args)
+    except KeyboardInterrupt:
+        print(f"mantaray {args.command}: interrupted", file=sys.stderr)
+        return 130
     except Exception as exc:  # a user-facing tool: one clear line, no traceback
         from mantaray.host.link import LinkError
         from mantaray.paths import NotBuilt

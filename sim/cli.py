@@ -9,6 +9,8 @@ import os
 import sys
 from pathlib import Path
 
+from mantaray.protocol import messages as m
+
 from .objects import OBJECTS
 
 
@@ -89,7 +91,7 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
     summary = result.summary()
     summary["figure"] = str(trajectory_figure(result, (rig.frame.size_x_m, rig.frame.size_y_m),
-                                              26.565051, out / f"{stem}.png"))
+                                              m.Configure.tilt_limit, out / f"{stem}.png"))
     summary["trajectory"] = str(_save_trajectory(result, out / f"{stem}.npz"))
     if args.video:
         summary["video"] = str(bridge.recorder.save(out / f"{stem}.mp4"))
@@ -124,7 +126,7 @@ def _gains(text: str) -> tuple[float, float, float, float]:
     except ValueError:
         values = ()
     if len(values) == 3:
-        values += (26.565051,)
+        values += (m.PID_DEFAULTS[m.Axis.X]["integral_limit"],)   # [deg] the firmware's boot default
     if len(values) != 4 or not all(math.isfinite(v) and v >= 0 for v in values):
         raise argparse.ArgumentTypeError(f"expected KP,KI,KD or KP,KI,KD,ILIMIT (numbers >= 0), got {text!r}")
     return values

@@ -19,6 +19,7 @@ import dataclasses
 import json
 import math
 import os
+import signal
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
@@ -319,6 +320,7 @@ _worker: TrialRunner | None = None
 
 def _init_worker(protocol_json: dict) -> None:
     global _worker
+    signal.signal(signal.SIGINT, signal.SIG_IGN)   # Ctrl-C is the parent's to handle: no traceback per worker
     _worker = TrialRunner(Protocol.from_json(protocol_json))
 
 

@@ -3,8 +3,11 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
+import signal
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -204,6 +207,21 @@ def test_reduced_heatmap_end_to_end_with_figures_and_difference_map(tmp_path):
     proc = _cli("compare", str(tmp_path / "euclidean"), str(tmp_path / "manhattan"), "--out", str(tmp_path / "d.png"))
     assert proc.returncode == 0, proc.stderr
     assert "difference" in proc.stdout and (tmp_path / "d.png").stat().st_size > 10_000
+
+
+def test_ctrl_c_on_a_parallel_run_says_how_to_continue_without_a_traceback(tmp_path):
+    out = tmp_path / "run"
+    proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--cells", "2", "--trials", "4",
+                             "--duration", "3", "--jobs", "2", "--out", str(out)], cwd=REPO, stderr=subprocess.PIPE,
+                            stdout=subprocess.DEVNULL, text=True, start_new_session=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and len((out / "results.jsonl").read_text().splitlines()
+                                              if (out / "results.jsonl").exists() else []) < 2:
+        time.sleep(0.2)
+    os.killpg(proc.pid, signal.SIGINT)          # as a terminal's Ctrl-C: the whole process group
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and "the same command continues the run" in stderr
+    assert "Traceback" not in stderr, stderr
 
 
 @pytest.mark.parametrize("args, needle", [

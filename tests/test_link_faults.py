@@ -160,3 +160,26 @@ def test_a_firmware_of_another_protocol_is_refused_at_once_saying_what_to_do(mon
         with pytest.raises(IncompatibleFirmware, match="flash the firmware built from this checkout"):
             connect(vmcu.path, timeout_s=10.0)
         assert time.monotonic() - started < 2.0                      # no waiting out the timeout
+
+
+def test_a_port_that_goes_away_while_identifying_is_opened_again():
+    class Unplugged:
+        def write(self, data: bytes) -> None:
+            raise OSError("device disconnected")
+
+        def read(self, timeout: float) -> bytes:
+            raise OSError("device disconnected")
+
+        def close(self) -> None:
+            pass
+
+    opened = []
+
+    def open_transport(port: str):
+        opened.append(port)
+        return Unplugged() if len(opened) == 1 else SerialTransport(port)
+
+    with VirtualMcu() as vmcu:
+        link, identity = connect(vmcu.path, timeout_s=5.0, open_transport=open_transport)
+        link.close()
+    assert len(opened) == 2 and identity.protocol_version == m.PROTOCOL_VERSION
