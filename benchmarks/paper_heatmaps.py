@@ -19,6 +19,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 REPO = Path(__file__).resolve().parents[1]
 RUNS = {   # name: (object, controller, alpha [m]) as in the paper's Fig. 2
     "sphere_manhattan": ("sphere", "manhattan", 0.0),
@@ -27,6 +29,31 @@ RUNS = {   # name: (object, controller, alpha [m]) as in the paper's Fig. 2
     "bunny_manhattan_alpha0.1": ("bunny", "manhattan", 0.1),
     "bunny_manhattan_alpha0.05": ("bunny", "manhattan", 0.05),
 }
+
+
+ZONES = {   # name: which cells, from the cell centres' |x|, |y| [m] on the paper's 0.5 m module
+    "centre (|x|, |y| < 0.05 m)": lambda ax, ay: (ax < 0.05) & (ay < 0.05),
+    "central (|x|, |y| < 0.10 m)": lambda ax, ay: (ax < 0.10) & (ay < 0.10),
+    "outer 5 cm band": lambda ax, ay: np.maximum(ax, ay) > 0.20,
+    "corners (7.5 cm squares)": lambda ax, ay: (ax > 0.175) & (ay > 0.175),
+}
+
+
+def zone_rates(results_path: Path) -> dict:
+    """Mean success, reach and fall rates over the zones of the workspace, and the regions under the reach rule."""
+    from mantaray.sim import heatmap as H
+
+    results = H.ResultsFile.load(results_path)
+    s, p = H.summarize(results), results.protocol
+    centres = -0.25 + (np.arange(p.cells) + 0.5) * 0.5 / p.cells
+    ax, ay = np.meshgrid(np.abs(centres), np.abs(centres))
+    zones = {name: {kind: round(float(np.nanmean(rates[pick(ax, ay)])), 3)
+                    for kind, rates in (("success", s.rates), ("reach", s.reach_rates), ("fell", s.fell_rates))}
+             for name, pick in ZONES.items()}
+    reach = s.reach_rates[np.isfinite(s.reach_rates)]
+    regions = {"success": int((reach >= H.SUCCESS_REGION_AT).sum()), "failure": int((reach <= H.FAILURE_REGION_AT).sum())}
+    regions["uncertain"] = len(reach) - regions["success"] - regions["failure"]
+    return {"zones": zones, "reach_regions_cells": regions}
 
 
 def main() -> int:
@@ -67,7 +94,8 @@ def main() -> int:
         shutil.copyfile(out / "heatmap_reach.png", figures / f"heatmap_{name}_reach.png")
         table[name] = {"object": obj, "controller": controller, "alpha_m": alpha, "score": summary["score"],
                        "reach_score": summary["reach_score"], "regions": summary["regions"],
-                       "trials": summary["trials"], "trials_per_cell": args.trials, "wall_s_sessions": times, "jobs": args.jobs}
+                       "trials": summary["trials"], "trials_per_cell": args.trials, "wall_s_sessions": times, "jobs": args.jobs,
+                       **zone_rates(out / "results.jsonl")}
         table_path.write_text(json.dumps(table, indent=1) + "\n")
         print(f"{name}: score {summary['score']:.1f} (reach {summary['reach_score']:.1f}), "
               f"{summary['trials']} trials, this session {wall / 60:.1f} min", flush=True)
