@@ -77,6 +77,8 @@ def main() -> int:
         obj, controller, alpha = RUNS[name]
         out = REPO / args.out / name
         out.mkdir(parents=True, exist_ok=True)
+        results_path = out / "results.jsonl"
+        before = len(results_path.read_bytes().splitlines()) if results_path.exists() else 0
         t0 = time.perf_counter()
         proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--object", obj,
                                "--controller", controller, "--alpha", str(alpha), "--trials", str(args.trials), "--jobs", str(args.jobs),
@@ -87,8 +89,9 @@ def main() -> int:
             return proc.returncode
         times_path = out / "wall_times.json"
         times = json.loads(times_path.read_text()) if times_path.exists() else []
-        times.append(round(wall, 1))
-        times_path.write_text(json.dumps(times) + "\n")
+        if len(results_path.read_bytes().splitlines()) > before:     # a session that ran trials
+            times.append(round(wall, 1))
+            times_path.write_text(json.dumps(times) + "\n")
         summary = json.loads(proc.stdout)
         shutil.copyfile(out / "heatmap.png", figures / f"heatmap_{name}.png")
         shutil.copyfile(out / "heatmap_reach.png", figures / f"heatmap_{name}_reach.png")
@@ -100,11 +103,13 @@ def main() -> int:
         print(f"{name}: score {summary['score']:.1f} (reach {summary['reach_score']:.1f}), "
               f"{summary['trials']} trials, this session {wall / 60:.1f} min", flush=True)
     if {"sphere_manhattan", "sphere_euclidean"} <= table.keys():
-        proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "compare",
-                               str(REPO / args.out / "sphere_euclidean"), str(REPO / args.out / "sphere_manhattan"),
-                               "--out", str(figures / "heatmap_sphere_euclidean_minus_manhattan.png")], cwd=REPO)
-        if proc.returncode != 0:
-            return proc.returncode
+        for rule, suffix in (([], ""), (["--reached"], "_reach")):
+            proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "compare",
+                                   str(REPO / args.out / "sphere_euclidean"), str(REPO / args.out / "sphere_manhattan"),
+                                   *rule, "--out", str(figures / f"heatmap_sphere_euclidean_minus_manhattan{suffix}.png")],
+                                  cwd=REPO)
+            if proc.returncode != 0:
+                return proc.returncode
     return 0
 
 

@@ -207,6 +207,9 @@ def test_reduced_heatmap_end_to_end_with_figures_and_difference_map(tmp_path):
     proc = _cli("compare", str(tmp_path / "euclidean"), str(tmp_path / "manhattan"), "--out", str(tmp_path / "d.png"))
     assert proc.returncode == 0, proc.stderr
     assert "difference" in proc.stdout and (tmp_path / "d.png").stat().st_size > 10_000
+    proc = _cli("compare", str(tmp_path / "euclidean"), str(tmp_path / "manhattan"), "--reached", "--out",
+                str(tmp_path / "r.png"))
+    assert proc.returncode == 0 and "within ε at any frame" in proc.stdout and (tmp_path / "r.png").exists()
 
 
 def test_ctrl_c_on_a_parallel_run_says_how_to_continue_without_a_traceback(tmp_path):
