@@ -86,6 +86,13 @@ struct Stack {
       fake::now_us += 250;
     }
   }
+  // Sends the carriages toward +-0.2 m and runs 0.2 s: the motors are driven.
+  void drive_away() {
+    const float setpoints[4] = {0.2f, -0.2f, 0.2f, -0.2f};
+    bank.set_setpoints(setpoints);
+    run(0.2f);
+    CHECK_FALSE(rig.all_pwm_zero());
+  }
   float measured(int i) const {
     float m[4];
     bank.measured(m);
@@ -183,10 +190,7 @@ TEST_CASE("a silent encoder is an encoder fault after three missed readings, and
 
 TEST_CASE("the emergency-stop path (power off) zeroes every PWM at once and keeps them there") {
   Stack s;
-  const float setpoints[4] = {0.2f, -0.2f, 0.2f, -0.2f};
-  s.bank.set_setpoints(setpoints);
-  s.run(0.2f);
-  CHECK_FALSE(s.rig.all_pwm_zero());
+  s.drive_away();
   s.bank.power(false);
   CHECK(s.rig.all_pwm_zero());  // before any further loop run
   s.run(1.0f);
@@ -198,10 +202,7 @@ TEST_CASE("the emergency-stop path (power off) zeroes every PWM at once and keep
 
 TEST_CASE("the watchdog interrupt's path zeroes every PWM") {
   Stack s;
-  const float setpoints[4] = {0.2f, -0.2f, 0.2f, -0.2f};
-  s.bank.set_setpoints(setpoints);
-  s.run(0.2f);
-  CHECK_FALSE(s.rig.all_pwm_zero());
+  s.drive_away();
   mr::board::on_watchdog_timeout();
   CHECK(s.rig.all_pwm_zero());
 }
