@@ -12,7 +12,6 @@ Run: python3 benchmarks/tracker_speed.py [--frames 100]
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import statistics
 import sys
 import time
@@ -108,11 +107,7 @@ def main() -> int:
     from mantaray.sim.rig import Rig
     from mantaray.sim.vision import CameraVision
 
-    def marked(rig: Rig, on_object: bool) -> Rig:
-        return dataclasses.replace(rig, camera=dataclasses.replace(rig.camera, corner_markers=True,
-                                                                   object_marker=on_object))
-
-    rig = marked(Rig().with_object("cube"), True)
+    rig = Rig().with_object("cube").with_vision("aruco")
     model, data = M.load(rig)
     vision = CameraVision(model, data, rig, "aruco")
     errors = []
@@ -126,7 +121,7 @@ def main() -> int:
         errors.append(np.hypot(*(vision.measure(data, data.time) - top[:2])))
     print(f"  MuJoCo frames, the cube's marker, its true height: {rms_mm(errors):.2f} (20 frames)")
     for name, obj, mode, alpha in (("cube, ArUco", "cube", "aruco", 0.1), ("sphere, colour blob", "sphere", "blob", 0.0)):
-        bridge = Bridge(Link(InProcessTransport(simulated_clock=True)), marked(Rig().with_object(obj), mode == "aruco"),
+        bridge = Bridge(Link(InProcessTransport(simulated_clock=True)), Rig().with_object(obj).with_vision(mode),
                         Tracking(vision=mode))
         r = bridge.run(TrialSpec((0.08, -0.06), (-0.05, 0.05), duration_s=6.0, alpha_m=alpha))
         seen = np.all(np.isfinite(r.measured_xy_m), axis=1)

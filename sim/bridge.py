@@ -23,7 +23,7 @@ from mantaray.protocol import messages as m
 
 from . import model as M
 from .model import SimulationUnstable
-from .rig import Rig
+from .rig import VISION_MODES, Rig
 
 US_PER_S = 1_000_000
 U32 = 0xFFFFFFFF
@@ -53,8 +53,8 @@ class Tracking:
             raise ValueError(f"camera noise must be 0..0.1 m, got {self.noise_m}")
         if not (0 <= self.drop_rate < 1):
             raise ValueError(f"drop rate must be in [0, 1), got {self.drop_rate}")
-        if self.vision not in (None, "aruco", "blob"):
-            raise ValueError(f"vision must be aruco or blob, got {self.vision!r}")
+        if self.vision not in (None, *VISION_MODES):
+            raise ValueError(f"vision must be one of {', '.join(VISION_MODES)}, got {self.vision!r}")
 
 
 @dataclass(frozen=True)

@@ -12,6 +12,7 @@ from pathlib import Path
 from mantaray.protocol import messages as m
 
 from .objects import OBJECTS
+from .rig import VISION_MODES
 
 
 def _point(text: str) -> tuple[float, float]:
@@ -43,10 +44,8 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from .rig import Rig
 
     rig = Rig().with_object(args.object)
-    if args.vision:   # the tracker needs the corner markers in the scene (and the object's, for aruco)
-        import dataclasses
-        rig = dataclasses.replace(rig, camera=dataclasses.replace(rig.camera, corner_markers=True,
-                                                                   object_marker=args.vision == "aruco"))
+    if args.vision:
+        rig = rig.with_vision(args.vision)
     half = (rig.frame.size_x_m / 2, rig.frame.size_y_m / 2)
     _inside(parser, "--start", args.start, half)
     _inside(parser, "--target", args.target, half)
@@ -290,7 +289,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--latency", type=float, default=0.0, help="camera latency [s], below one frame period")
     run.add_argument("--noise", type=float, default=0.0, help="camera noise, standard deviation [m] per axis")
     run.add_argument("--drop", type=float, default=0.0, help="share of camera frames lost [0..1)")
-    run.add_argument("--vision", choices=["aruco", "blob"], help="positions from the host's tracker on rendered "
+    run.add_argument("--vision", choices=VISION_MODES, help="positions from the host's tracker on rendered "
                      "1280x720 overhead frames (ArUco marker on the object, or colour blob) instead of the truth")
     run.add_argument("--out", default="out/sim", help="directory for the figure, trajectory and video")
     run.add_argument("--json", action="store_true", help="print one JSON object instead of the sentence")

@@ -108,6 +108,9 @@ class FallRule:
     floor_z_m: float = 0.1                # [m] object centre below this height above the floor
 
 
+VISION_MODES = ("aruco", "blob")   # the tracker on rendered frames: ArUco marker, or colour blob
+
+
 @dataclass(frozen=True)
 class Rig:
     """Everything the model is generated from. Change a field with dataclasses.replace or with_object."""
@@ -123,3 +126,11 @@ class Rig:
     def with_object(self, name: str) -> Rig:
         """The same rig carrying another of the paper's objects (a key of objects.OBJECTS)."""
         return dataclasses.replace(self, object=OBJECTS[name])
+
+    def with_vision(self, mode: str) -> Rig:
+        """The same rig with the scene markers a tracker mode (VISION_MODES) needs: the corner markers, and for
+        aruco the object's marker too."""
+        if mode not in VISION_MODES:
+            raise ValueError(f"vision mode must be one of {', '.join(VISION_MODES)}, got {mode!r}")
+        return dataclasses.replace(self, camera=dataclasses.replace(self.camera, corner_markers=True,
+                                                                    object_marker=mode == "aruco"))

@@ -9,9 +9,8 @@ import numpy as np
 from mantaray.host.tracker import BlobColour, Tracker
 
 from . import model as M
-from .rig import Rig
+from .rig import VISION_MODES, Rig
 
-MODES = ("aruco", "blob")
 FRAME_PX = (1280, 720)       # [px] width, height: the resolution the tracker's accuracy is specified at
 BLOB_HUE_WIDTH = 10          # [OpenCV hue units, 0..179] either side of the object's hue
 BLOB_MIN_SATURATION = 80     # [0..255]
@@ -34,8 +33,8 @@ class CameraVision:
     """
 
     def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, rig: Rig, mode: str) -> None:
-        if mode not in MODES:
-            raise ValueError(f"vision mode must be one of {', '.join(MODES)}, got {mode!r}")
+        if mode not in VISION_MODES:
+            raise ValueError(f"vision mode must be one of {', '.join(VISION_MODES)}, got {mode!r}")
         if not rig.camera.corner_markers:
             raise ValueError("vision in the loop needs the scene's corner markers (Rig.camera.corner_markers)")
         if mode == "aruco" and not rig.camera.object_marker:

@@ -1,7 +1,6 @@
 """The tracker on frames the MuJoCo scene's overhead camera renders (ArUco textures), and vision in the loop."""
 from __future__ import annotations
 
-import dataclasses
 
 import mujoco
 import numpy as np
@@ -16,14 +15,11 @@ from mantaray.sim.rig import Rig
 from mantaray.sim.vision import FRAME_PX, CameraVision
 
 
-def with_markers(rig: Rig, on_object: bool = True) -> Rig:
-    return dataclasses.replace(rig, camera=dataclasses.replace(rig.camera, corner_markers=True,
-                                                               object_marker=on_object))
 
 
 @pytest.fixture(scope="module")
 def cube_scene():
-    rig = with_markers(Rig().with_object("cube"))
+    rig = Rig().with_object("cube").with_vision("aruco")
     model, data = M.load(rig)
     return rig, model, data
 
@@ -68,7 +64,7 @@ def test_an_object_out_of_sight_is_reported_not_guessed(cube_scene):
 
 def test_vision_in_the_loop_steers_the_sphere_by_its_colour():
     """Positions from the tracker on rendered frames (the sphere rolls: a marker on it would roll away)."""
-    bridge = Bridge(Link(InProcessTransport(simulated_clock=True)), with_markers(Rig(), on_object=False),
+    bridge = Bridge(Link(InProcessTransport(simulated_clock=True)), Rig().with_vision("blob"),
                     Tracking(vision="blob"))
     spec = TrialSpec((0.05, -0.05), (-0.05, 0.05), duration_s=6.0)
     result = bridge.run(spec)
@@ -83,5 +79,5 @@ def test_vision_needs_the_scenes_markers():
     with pytest.raises(ValueError, match="corner_markers"):
         Bridge(Link(InProcessTransport(simulated_clock=True)), Rig(), Tracking(vision="blob"))
     with pytest.raises(ValueError, match="object_marker"):
-        Bridge(Link(InProcessTransport(simulated_clock=True)), with_markers(Rig(), on_object=False),
+        Bridge(Link(InProcessTransport(simulated_clock=True)), Rig().with_vision("blob"),
                Tracking(vision="aruco"))
