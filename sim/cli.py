@@ -140,22 +140,17 @@ def _cells(text: str) -> tuple[int, ...]:
 
 def _heatmap_outputs(results, out: Path, title: str) -> dict:
     """Write per-cell rates (CSV), the summary (JSON) and the figure beside the results file; return the summary."""
-    import numpy as np
-
-    from .heatmap import summarize
+    from .heatmap import cell_bounds, summarize
     from .plots import heatmap_figure
 
     s = summarize(results)
     p = results.protocol
     f = p.rig().frame
     rows = ["cell,ix,iy,x_lo_m,y_lo_m,trials,success_rate,reach_rate,fell_rate"]
-    counts = np.zeros(p.cells ** 2, dtype=int)
-    for r in results.records.values():
-        counts[r["cell"]] += 1
     for cell in p.cell_ids():
         ix, iy = cell % p.cells, cell // p.cells
-        rows.append(f"{cell},{ix},{iy},{-f.size_x_m / 2 + ix * f.size_x_m / p.cells:.4f},"
-                    f"{-f.size_y_m / 2 + iy * f.size_y_m / p.cells:.4f},{counts[cell]},{s.rates[iy, ix]:.3f},"
+        x_lo, _, y_lo, _ = cell_bounds(p, (f.size_x_m, f.size_y_m), cell)
+        rows.append(f"{cell},{ix},{iy},{x_lo:.4f},{y_lo:.4f},{s.trials_per_cell[iy, ix]},{s.rates[iy, ix]:.3f},"
                     f"{s.reach_rates[iy, ix]:.3f},{s.fell_rates[iy, ix]:.3f}")
     (out / "cells.csv").write_text("\n".join(rows) + "\n")
     summary = {"protocol": p.to_json(), **s.to_json()}

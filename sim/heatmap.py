@@ -237,6 +237,7 @@ class Summary:
     rates: np.ndarray            # [cells, cells] success rate per cell, [iy, ix]; NaN where no trial ran
     reach_rates: np.ndarray      # the same under the paper's stopping rule (within epsilon at any frame)
     fell_rates: np.ndarray       # share of trials that fell off
+    trials_per_cell: np.ndarray  # [cells, cells] trials counted in each cell
     trials: int                  # trials counted
     score: float                 # sum of per-cell success rates (the paper: 171.3 Manhattan, 108.2 Euclidean)
     reach_score: float
@@ -269,7 +270,8 @@ def summarize(results: ResultsFile) -> Summary:
                "failure": int((rates[0][done] <= FAILURE_REGION_AT).sum())}
     regions["uncertain"] = int(done.sum()) - regions["success"] - regions["failure"]
     f = p.rig().frame
-    return Summary(rates=rates[0], reach_rates=rates[1], fell_rates=rates[2], trials=int(totals.sum()),
+    return Summary(rates=rates[0], reach_rates=rates[1], fell_rates=rates[2],
+                   trials_per_cell=totals.reshape(n, n).astype(int), trials=int(totals.sum()),
                    score=float(np.nansum(rates[0])), reach_score=float(np.nansum(rates[1])),
                    region_cells=regions, cell_area_m2=f.size_x_m * f.size_y_m / n ** 2)
 

@@ -98,6 +98,7 @@ def test_summary_rates_score_and_regions():
     assert s.rates[0, 0] == 1.0 and s.rates[0, 1] == 0.5 and s.rates[1, 0] == 0.0 and np.isnan(s.rates[1, 1])
     assert s.fell_rates[0, 1] == pytest.approx(0.2) and s.reach_rates[1, 0] == pytest.approx(0.1)
     assert s.score == pytest.approx(1.5) and s.reach_score == pytest.approx(1.6) and s.trials == 30
+    assert s.trials_per_cell.tolist() == [[10, 10], [10, 0]]
     assert s.region_cells == {"success": 1, "uncertain": 1, "failure": 1}
     assert s.region_area_m2("success") == pytest.approx(0.0625)               # a quarter of 0.25 m^2
 
