@@ -13,7 +13,6 @@ from hypothesis import strategies as st
 
 from mantaray.host.link import CommandRefused, Link
 from mantaray.host.transport import InProcessTransport
-from mantaray.paths import native_artifact
 from mantaray.protocol import messages as m
 
 RANGE = 0.25  # [m] actuator travel (rig_config.h kActuatorRange)
@@ -27,19 +26,6 @@ def f32(x: float) -> float:
 
 def finite(x: float) -> bool:
     return math.isfinite(x)
-
-
-@pytest.fixture(scope="module")
-def capi():
-    lib = ctypes.CDLL(str(native_artifact("libmantaray_capi.so")))
-    F, P = ctypes.c_float, ctypes.POINTER(ctypes.c_float)
-    lib.mr_manhattan_commands.argtypes = [F, F, F, F, P]
-    lib.mr_manhattan_commands.restype = None
-    lib.mr_euclidean_commands.argtypes = [F, F, F, F, F, P]
-    lib.mr_euclidean_commands.restype = None
-    lib.mr_max_tilt_deg.argtypes = [F, F, F]
-    lib.mr_max_tilt_deg.restype = F
-    return lib
 
 
 # ------------------------------------------------------------------------------------- strategies

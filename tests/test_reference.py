@@ -16,7 +16,6 @@ import paper_reference as ref  # noqa: E402
 
 from mantaray.host.link import Link  # noqa: E402
 from mantaray.host.transport import InProcessTransport  # noqa: E402
-from mantaray.paths import native_artifact  # noqa: E402
 from mantaray.protocol import messages as m  # noqa: E402
 
 TILT_QUANTUM = 0.01  # [deg] telemetry tilt resolution
@@ -30,19 +29,6 @@ def f32(x: float) -> float:
 
 
 # ------------------------------------------------------------------------ (a) the transform, via ctypes
-@pytest.fixture(scope="module")
-def capi():
-    lib = ctypes.CDLL(str(native_artifact("libmantaray_capi.so")))
-    F, P = ctypes.c_float, ctypes.POINTER(ctypes.c_float)
-    lib.mr_manhattan_commands.argtypes = [F, F, F, F, P]
-    lib.mr_manhattan_commands.restype = None
-    lib.mr_euclidean_commands.argtypes = [F, F, F, F, F, P]
-    lib.mr_euclidean_commands.restype = None
-    lib.mr_max_tilt_deg.argtypes = [F, F, F]
-    lib.mr_max_tilt_deg.restype = F
-    return lib
-
-
 def manhattan_cpp(lib, zx, zy, mx, my) -> np.ndarray:
     out = (ctypes.c_float * 4)()
     lib.mr_manhattan_commands(zx, zy, mx, my, out)
