@@ -3,14 +3,16 @@
 Run: python3 benchmarks/paper_heatmaps.py [--runs sphere_manhattan,sphere_euclidean] [--jobs 2]
 Each run is `mantaray sim heatmap` with the paper's protocol (20 x 20 cells, 10 trials, T = 10 s,
 eps = 0.02 m) into out/heatmap/<run>/; runs are resumable, so an interrupted script continues where it
-stopped, and --trials 3 gives a quick map that a later run with the paper's 10 tops up. The wall time
-of every session of a run is appended to out/heatmap/<run>/wall_times.json, so the total a run took is
-known even when it was split. At the end the figures are copied to
-docs/figures/ and the scores, regions and wall times are written to docs/figures/heatmaps.json.
+stopped, and --trials 3 gives a quick map that a later run with the paper's 10 tops up. A run starts
+from the committed trials (docs/results/<run>.jsonl.gz) when out/ has none, and writes every trial back
+there, so a fresh clone continues the committed runs instead of repeating them. The wall time of every
+session of a run is kept in docs/figures/heatmaps.json, so the total a run took is known even when it
+was split. The figures are copied to docs/figures/ beside the scores, regions and zone rates.
 """
 from __future__ import annotations
 
 import argparse
+import gzip
 import json
 import os
 import shutil
@@ -22,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
+COMMITTED = REPO / "docs" / "results"   # every trial of each run, <run>.jsonl.gz
 RUNS = {   # name: (object, controller, alpha [m]) as in the paper's Fig. 2
     "sphere_manhattan": ("sphere", "manhattan", 0.0),
     "sphere_euclidean": ("sphere", "euclidean", 0.0),
@@ -78,6 +81,10 @@ def main() -> int:
         out = REPO / args.out / name
         out.mkdir(parents=True, exist_ok=True)
         results_path = out / "results.jsonl"
+        committed = COMMITTED / f"{name}.jsonl.gz"
+        if not results_path.exists() and committed.exists():
+            results_path.write_bytes(gzip.decompress(committed.read_bytes()))
+            print(f"{name}: continuing from the committed trials in {committed.relative_to(REPO)}", flush=True)
         before = len(results_path.read_bytes().splitlines()) if results_path.exists() else 0
         t0 = time.perf_counter()
         proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--object", obj,
@@ -87,11 +94,13 @@ def main() -> int:
         if proc.returncode != 0:
             print(f"{name}: heatmap failed (exit {proc.returncode})", file=sys.stderr)
             return proc.returncode
-        times_path = out / "wall_times.json"
-        times = json.loads(times_path.read_text()) if times_path.exists() else []
+        times = table.get(name, {}).get("wall_s_sessions", [])
         if len(results_path.read_bytes().splitlines()) > before:     # a session that ran trials
-            times.append(round(wall, 1))
-            times_path.write_text(json.dumps(times) + "\n")
+            times = [*times, round(wall, 1)]
+        trials = results_path.read_bytes()
+        if not committed.exists() or gzip.decompress(committed.read_bytes()) != trials:
+            COMMITTED.mkdir(parents=True, exist_ok=True)
+            committed.write_bytes(gzip.compress(trials, mtime=0))
         summary = json.loads(proc.stdout)
         shutil.copyfile(out / "heatmap.png", figures / f"heatmap_{name}.png")
         shutil.copyfile(out / "heatmap_reach.png", figures / f"heatmap_{name}_reach.png")
@@ -102,10 +111,11 @@ def main() -> int:
         table_path.write_text(json.dumps(table, indent=1) + "\n")
         print(f"{name}: score {summary['score']:.1f} (reach {summary['reach_score']:.1f}), "
               f"{summary['trials']} trials, this session {wall / 60:.1f} min", flush=True)
-    if {"sphere_manhattan", "sphere_euclidean"} <= table.keys():
+    sphere_runs = [REPO / args.out / run / "results.jsonl" for run in ("sphere_euclidean", "sphere_manhattan")]
+    if all(path.exists() for path in sphere_runs):
         for rule, suffix in (([], ""), (["--reached"], "_reach")):
             proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "compare",
-                                   str(REPO / args.out / "sphere_euclidean"), str(REPO / args.out / "sphere_manhattan"),
+                                   *map(str, sphere_runs),
                                    *rule, "--out", str(figures / f"heatmap_sphere_euclidean_minus_manhattan{suffix}.png")],
                                   cwd=REPO)
             if proc.returncode != 0:
