@@ -94,10 +94,10 @@ def main() -> int:
         if proc.returncode != 0:
             print(f"{name}: heatmap failed (exit {proc.returncode})", file=sys.stderr)
             return proc.returncode
-        times = table.get(name, {}).get("wall_s_sessions", [])
-        if len(results_path.read_bytes().splitlines()) > before:     # a session that ran trials
-            times = [*times, round(wall, 1)]
         trials = results_path.read_bytes()
+        times = table.get(name, {}).get("wall_s_sessions", [])
+        if len(trials.splitlines()) > before:     # a session that ran trials
+            times = [*times, round(wall, 1)]
         if not committed.exists() or gzip.decompress(committed.read_bytes()) != trials:
             COMMITTED.mkdir(parents=True, exist_ok=True)
             committed.write_bytes(gzip.compress(trials, mtime=0))

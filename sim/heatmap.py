@@ -238,11 +238,15 @@ class Summary:
     reach_rates: np.ndarray      # the same under the paper's stopping rule (within epsilon at any frame)
     fell_rates: np.ndarray       # share of trials that fell off
     trials_per_cell: np.ndarray  # [cells, cells] trials counted in each cell
-    trials: int                  # trials counted
     score: float                 # sum of per-cell success rates (the paper: 171.3 Manhattan, 108.2 Euclidean)
     reach_score: float
     region_cells: dict[str, int]  # success / uncertain / failure: cells in each region
     cell_area_m2: float
+
+    @property
+    def trials(self) -> int:
+        """Trials counted, over all cells."""
+        return int(self.trials_per_cell.sum())
 
     def region_area_m2(self, region: str) -> float:
         return self.region_cells[region] * self.cell_area_m2
@@ -271,7 +275,7 @@ def summarize(results: ResultsFile) -> Summary:
     regions["uncertain"] = int(done.sum()) - regions["success"] - regions["failure"]
     f = p.rig().frame
     return Summary(rates=rates[0], reach_rates=rates[1], fell_rates=rates[2],
-                   trials_per_cell=totals.reshape(n, n).astype(int), trials=int(totals.sum()),
+                   trials_per_cell=totals.reshape(n, n).astype(int),
                    score=float(np.nansum(rates[0])), reach_score=float(np.nansum(rates[1])),
                    region_cells=regions, cell_area_m2=f.size_x_m * f.size_y_m / n ** 2)
 
