@@ -1,10 +1,15 @@
-"""The one description of the simulated rig: frame, actuators, fabric, contact, solver, camera, fall rule and object."""
+"""The one description of the simulated rig: frame, actuators, fabric, contact, solver, camera, fall rule and object.
+
+Every value the paper does not give is declared, with its range and source, in sim/plant.toml; the defaults here
+are read from there (the polyester plant).
+"""
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
 
 from .objects import OBJECTS, ObjectSpec
+from .parameters import default as _d
 
 
 @dataclass(frozen=True)
@@ -25,37 +30,35 @@ class Actuators:
     """
     range_m: float = 0.25                 # [m] travel each way from z0 (paper)
     motor_speed_rpm: float = 120.0        # [rev/min] RS Pro 834-7590, 12 V, no-load (paper)
-    pulley_circumference_m: float = 0.10   # [m/rev] CALIBRATED (sim/README.md): e.g. a GT2 50-tooth pulley; not in the paper
-    kp_n_per_m: float = 2000.0            # [N/m] servo stiffness (SIM-NOTES); the real loop is on the Uno
-    damping_ratio: float = 1.0            # [-] servo damping as a fraction of critical (SIM-NOTES)
-    carriage_mass_kg: float = 0.2         # [kg] GUESS: V-slot carriage plate, wheels and clamp; gravity-compensated
+    pulley_circumference_m: float = _d("actuators.pulley_circumference_m")   # [m/rev] belt per motor revolution
+    kp_n_per_m: float = _d("actuators.kp_n_per_m")               # [N/m] servo stiffness; the real loop is on the Uno
+    damping_ratio: float = _d("actuators.damping_ratio")         # [-] servo damping as a fraction of critical
+    carriage_mass_kg: float = _d("actuators.carriage_mass_kg")   # [kg] gravity-compensated
 
     @property
     def speed_m_per_s(self) -> float:
-        """Top carriage speed [m/s]: motor speed x pulley circumference (0.08 m/s by default)."""
+        """Top carriage speed [m/s]: motor speed x pulley circumference."""
         return self.motor_speed_rpm / 60.0 * self.pulley_circumference_m
 
 
 @dataclass(frozen=True)
 class Fabric:
     """The polyester sheet: a MuJoCo flexcomp grid (dim 2, full dofs), welded at its four corners to the carriages."""
-    size_m: float = 0.52                  # [m] side of the square sheet, CALIBRATED slack (sim/README.md): the paper's
-                                          # simulation used 0.5 m, its hardware 0.6 m
-    resolution: int = 15                  # [vertices per side] odd, so the alternating mesh is mirror-symmetric
-    mass_kg: float = 0.05                 # [kg] GUESS (SIM-NOTES value): 0.6 x 0.6 m at ~140 g/m^2 polyester
-    young_pa: float = 5e6                 # [Pa] GUESS (SIM-NOTES): sets bending stiffness with thickness
-    poisson: float = 0.3                  # [-] GUESS (SIM-NOTES)
-    thickness_m: float = 3e-4             # [m] GUESS (SIM-NOTES): typical woven polyester
-    damping_s: float = 0.3                # [s] elastic (Rayleigh, stiffness-proportional) damping, GUESS: SIM-NOTES'
-                                          # 0.01 leaves the hanging edges flapping for > 6 s; 0.3 settles in 1.5 s
-    radius_m: float = 0.002               # [m] collision thickness of the triangles (SIM-NOTES)
-    edge_solref: tuple[float, float] = (0.002, 1.0)  # [s, -] edge-length equality: time constant, damping ratio
-                                                     # (SIM-NOTES: 0.4-1.5 % strain; default solref gave 8-12 %)
-    edge_solimp: tuple[float, float, float] = (0.999, 0.9999, 0.001)  # [-, -, m] edge constraints' impedance d0,
-                                          # dmax, width: polyester barely stretches; MuJoCo's default (0.9, 0.95) lets
-                                          # each edge give ~50x more under load (sim/README.md, Calibration)
-    corner_weld_solref: tuple[float, float] = (0.002, 1.0)  # [s, -] corner-to-carriage welds: MuJoCo's default
-                                                            # (0.02 s) leaves the corners ~18 mm off; this, 0.3 mm
+    size_m: float = _d("fabric.size_m")          # [m] side of the square sheet (the paper: simulation 0.5, rig 0.6)
+    resolution: int = 15                         # [vertices per side] odd, so the alternating mesh is mirror-symmetric
+    mass_kg: float = _d("fabric.mass_kg")        # [kg] the whole sheet
+    young_pa: float = _d("fabric.young_pa")      # [Pa] sets bending stiffness with thickness and Poisson's ratio
+    poisson: float = _d("fabric.poisson")        # [-]
+    thickness_m: float = _d("fabric.thickness_m")   # [m]
+    damping_s: float = _d("fabric.damping_s")    # [s] elastic (Rayleigh, stiffness-proportional) damping
+    radius_m: float = _d("fabric.radius_m")      # [m] collision thickness of the triangles
+    edge_solref: tuple[float, float] = (_d("fabric.edge_solref[0]"), 1.0)   # [s, -] edge-length equality: time
+                                                                              # constant, critical damping
+    edge_solimp: tuple[float, float, float] = (_d("fabric.edge_solimp[0]"), _d("fabric.edge_solimp[1]"),
+                                               _d("fabric.edge_solimp[2]"))   # [-, -, m] edges' impedance d0, dmax, width
+    corner_weld_solref: tuple[float, float] = (_d("fabric.corner_weld_solref[0]"), 1.0)   # [s, -] corner-to-carriage welds
+    corner_clamp_m: float = _d("fabric.corner_clamp_m")   # [m] length of each edge, from its corner, the corner's clamp
+                                                           # holds straight at the carriage (0: a point attachment)
 
     def __post_init__(self) -> None:
         if self.resolution < 3 or self.resolution % 2 == 0:
@@ -70,15 +73,16 @@ class Fabric:
 @dataclass(frozen=True)
 class Contact:
     """Object-fabric contact, written on both the fabric and the object's geom so MuJoCo's mixing changes nothing."""
-    friction: tuple[float, float, float] = (0.5, 0.005, 0.0001)  # sliding [-], torsional [m], rolling [m];
-                                                                  # GUESS 0.5 (SIM-NOTES); others MuJoCo defaults
+    friction: tuple[float, float, float] = (_d("contact.friction[0]"), _d("contact.friction[1]"),
+                                            _d("contact.friction[2]"))   # sliding [-], torsional [m], rolling [m]
     condim: int = 6                                              # 6: sliding, torsional and rolling (3: sliding only)
-    solref: tuple[float, float] = (0.005, 1.0)                   # [s, -] (SIM-NOTES)
-    solimp: tuple[float, float, float] = (0.95, 0.99, 0.0001)    # [-, -, m] (SIM-NOTES)
-    rolling_damping_per_s: float = 4.0    # [1/s] CALIBRATED: viscous rolling resistance of the soft fabric, the
-                                          # rate at which a rolling sphere's speed decays on a level sheet; damping
-                                          # on the object's rotational dofs (MuJoCo's own rolling friction is
-                                          # Coulomb-like, the same at any speed)
+    solref: tuple[float, float] = (_d("contact.solref[0]"), 1.0)   # [s, -] time constant, critical damping
+    solimp: tuple[float, float, float] = (_d("contact.solimp[0]"), _d("contact.solimp[1]"),
+                                          _d("contact.solimp[2]"))   # [-, -, m] d0, dmax, width
+    rolling_damping_per_s: float = _d("contact.rolling_damping_per_s")   # [1/s] viscous rolling resistance of the
+                                          # soft fabric, the rate at which a rolling sphere's speed decays on a level
+                                          # sheet; damping on the object's rotational dofs (MuJoCo's own rolling
+                                          # friction is Coulomb-like, the same at any speed)
 
 
 @dataclass(frozen=True)
@@ -103,10 +107,10 @@ class Camera:
 @dataclass(frozen=True)
 class FallRule:
     """When the object counts as fallen off (any one suffices); see sim/README.md."""
-    outside_margin_m: float = 0.05        # [m] marker beyond the frame's edge (|x| > m/2 + margin or |y| > n/2 + margin)
-    below_fabric_m: float = 0.02          # [m] object centre below the fabric's lowest vertex by more than this
+    outside_margin_m: float = _d("fall.outside_margin_m")   # [m] centre beyond the frame's edge (|x| > m/2 + margin
+                                                            # or |y| > n/2 + margin)
+    below_fabric_m: float = _d("fall.below_fabric_m")       # [m] centre below the fabric's lowest vertex by more
     floor_z_m: float = 0.1                # [m] object centre below this height above the floor
-
 
 VISION_MODES = ("aruco", "blob")   # the tracker on rendered frames: ArUco marker, or colour blob
 

@@ -1,0 +1,85 @@
+"""A plant: one point of the declared parameter space (sim/plant.toml), named or not, as the Rig, camera and readings it gives."""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+from . import parameters as P
+from .rig import Rig
+
+DEFAULT_PLANT = "polyester"     # the physically calibrated rig of sim/README.md
+
+
+@dataclass(frozen=True)
+class Plant:
+    """A named plant with values set over it; every value is checked against its declared range."""
+    name: str = DEFAULT_PLANT
+    overrides: tuple[tuple[str, float | str], ...] = ()     # (key, value) set over the named plant, in order
+    values: dict[str, float | str] = field(init=False, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        values = {key: p.value for key, p in P.parameters().items()}
+        values.update(P.plant_values(self.name))
+        for key, value in self.overrides:
+            values[key] = P.lookup(key).check(value)
+        object.__setattr__(self, "values", values)
+
+    def set(self, mapping: dict[str, float | str]) -> Plant:
+        """This plant with more values set (keys as in sim/plant.toml); refuses an undeclared key or a value out of range."""
+        return Plant(self.name, self.overrides + tuple((k, P.lookup(k).check(v)) for k, v in mapping.items()))
+
+    def rig(self, object_name: str = "sphere", *, resolution: int | None = None, timestep_s: float | None = None) -> Rig:
+        """The Rig of this plant carrying an object; resolution and timestep choose the physics' fidelity (not the plant)."""
+        rig = Rig().with_object(object_name)
+        for key, value in self.values.items():
+            p = P.lookup(key)
+            if p.section in ("tracking", "reading"):
+                continue
+            rig = _set_field(rig, p, value)
+        if resolution is not None:
+            rig = dataclasses.replace(rig, fabric=dataclasses.replace(rig.fabric, resolution=resolution))
+        if timestep_s is not None:
+            rig = dataclasses.replace(rig, solver=dataclasses.replace(rig.solver, timestep_s=timestep_s))
+        return rig
+
+    def tracking(self, **kwargs):
+        """The camera model (sim/bridge.py Tracking) of this plant; kwargs set the rest (noise, drops, vision)."""
+        from .bridge import Tracking
+        return Tracking(rate_hz=self.values["tracking.rate_hz"], latency_s=self.values["tracking.latency_s"], **kwargs)
+
+    @property
+    def gain_scale(self) -> float:
+        """Factor on the paper's kp, ki, kd for the firmware, which takes degrees: 1, or 180/pi if they are per radian."""
+        return 180.0 / math.pi if self.values["reading.pid_unit"] == "rad" else 1.0
+
+    @property
+    def success_rule(self) -> str:
+        """end (within eps at T) or reached (within eps at any frame, where the paper's loop stops)."""
+        return self.values["reading.success_rule"]
+
+    def describe(self) -> dict[str, float | str]:
+        """The values that differ from the polyester defaults (what makes this plant this plant)."""
+        defaults = {key: p.value for key, p in P.parameters().items()}
+        return {k: v for k, v in self.values.items() if v != defaults[k]}
+
+
+def _set_field(rig: Rig, p: P.Parameter, value: float | str) -> Rig:
+    """rig with the field a parameter names set to value (a tuple member through its index)."""
+    part = getattr(rig, p.section)
+    if p.index is None:
+        new = value
+    else:
+        members = list(getattr(part, p.field))
+        members[p.index] = value
+        new = tuple(members)
+    return dataclasses.replace(rig, **{p.section: dataclasses.replace(part, **{p.field: new})})
+
+
+def parse_setting(text: str) -> tuple[str, float | str]:
+    """KEY=VALUE as given on a command line (--set fabric.size_m=0.55), checked against the declared range."""
+    key, sep, value = text.partition("=")
+    if not sep:
+        raise P.ParameterError(f"expected KEY=VALUE (e.g. fabric.size_m=0.55), got {text!r}")
+    p = P.lookup(key.strip())
+    return p.key, p.check(value.strip() if p.choices else value)

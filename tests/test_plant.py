@@ -1,0 +1,115 @@
+"""The declared parameter space (sim/plant.toml) and plants: ranges honoured, defaults in one place, the README in step."""
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mantaray.paths import REPO
+from mantaray.sim import parameters as P
+from mantaray.sim.heatmap import Protocol, controller_gains, trial_spec, trials
+from mantaray.sim.plant import Plant, parse_setting
+from mantaray.sim.rig import Rig
+from mantaray.protocol import messages as m
+
+PHYSICAL = [p for p in P.parameters().values() if p.section not in ("tracking", "reading")]
+
+
+def _rig_value(rig: Rig, p: P.Parameter):
+    value = getattr(getattr(rig, p.section), p.field)
+    return value if p.index is None else value[p.index]
+
+
+def test_every_default_and_mujoco_default_lies_in_its_declared_range():
+    for p in P.parameters().values():
+        assert p.check(p.value) == p.value
+        if p.mujoco is not None:
+            p.check(p.mujoco)
+        assert p.source and p.reason and p.kind in P.KINDS
+
+
+def test_the_rig_takes_its_defaults_from_the_table():
+    rig = Rig()
+    for p in PHYSICAL:
+        assert _rig_value(rig, p) == p.value, p.key
+
+
+@settings(max_examples=60, deadline=None)
+@given(data=st.data())
+def test_a_plant_sets_any_value_within_range_on_the_field_it_names(data):
+    p = data.draw(st.sampled_from(PHYSICAL))
+    value = data.draw(st.floats(p.low, p.high, allow_nan=False))
+    rig = Plant().set({p.key: value}).rig()
+    assert _rig_value(rig, p) == pytest.approx(value)
+
+
+@pytest.mark.parametrize("key, value, needle", [
+    ("fabric.size_m", 0.7, r"outside its declared range \[0.5, 0.6\] m"),
+    ("contact.rolling_damping_per_s", -1, "outside its declared range"),
+    ("fabric.mass_kg", math.nan, "outside its declared range"),
+    ("fabric.mass_kg", "heavy", "must be a number"),
+    ("reading.pid_unit", "grad", "must be one of deg, rad"),
+    ("fabric.size", 0.5, "is not a declared parameter"),
+])
+def test_a_value_outside_its_range_or_an_undeclared_key_is_refused(key, value, needle):
+    with pytest.raises(P.ParameterError, match=needle):
+        Plant().set({key: value})
+
+
+def test_a_command_line_setting_is_parsed_and_checked():
+    assert parse_setting("fabric.size_m=0.55") == ("fabric.size_m", 0.55)
+    assert parse_setting("reading.success_rule=reached") == ("reading.success_rule", "reached")
+    with pytest.raises(P.ParameterError, match="KEY=VALUE"):
+        parse_setting("fabric.size_m")
+    with pytest.raises(P.ParameterError, match="outside"):
+        parse_setting("fabric.size_m=2")
+
+
+def test_an_unknown_plant_is_refused_and_every_named_plant_is_valid():
+    with pytest.raises(P.ParameterError, match="no plant named"):
+        Plant("teflon")
+    for name in P.plant_names():
+        Plant(name).rig()
+
+
+def test_a_protocol_refuses_an_out_of_range_plant_value():
+    with pytest.raises(P.ParameterError, match="outside"):
+        Protocol(plant_set=(("fabric.size_m", 0.3),))
+
+
+def test_the_readme_table_is_generated_from_the_declared_table():
+    readme = (REPO / "sim" / "README.md").read_text()
+    block = re.search(r"<!-- parameters: begin.*?-->\n(.*?)\n<!-- parameters: end -->", readme, re.S)
+    assert block, "sim/README.md has no generated parameter table"
+    assert block.group(1).strip() == P.markdown_table().strip(), \
+        "sim/README.md's parameter table is stale: python3 -m mantaray.sim.parameters --write-readme"
+
+
+def test_the_radian_reading_scales_the_papers_gains_and_nothing_else():
+    gains = controller_gains("manhattan", None, Plant().set({"reading.pid_unit": "rad"}).gain_scale)
+    paper = m.PID_DEFAULTS[m.Axis.X]
+    assert gains["x"].kp == pytest.approx(paper["kp"] * 180 / math.pi)
+    assert gains["y"].kd == pytest.approx(paper["kd"] * 180 / math.pi)
+    assert gains["x"].integral_limit == paper["integral_limit"]
+    assert controller_gains("euclidean", None, 1.0) == {}     # degrees: the firmware's own defaults
+    protocol = Protocol(cells=2, trials_per_cell=1, plant_set=(("reading.pid_unit", "rad"),), controller="euclidean")
+    spec = trial_spec(protocol, trials(protocol)[0])
+    assert spec.gains["radial"].ki == pytest.approx(m.PID_DEFAULTS[m.Axis.RADIAL]["ki"] * 180 / math.pi)
+
+
+def test_the_corner_clamp_holds_its_edge_vertices_at_the_carriage():
+    from mantaray.sim import model as M
+
+    plant = Plant().set({"fabric.corner_clamp_m": 0.08})
+    rig = plant.rig(resolution=11, timestep_s=0.002)
+    model, data = M.load(rig)
+    for i in range(4):
+        held = M.clamped_vertices(11, rig.fabric.spacing_m, 0.08, i)
+        assert len(held) == 2 * int(0.08 // rig.fabric.spacing_m)
+        for vertex, dx, dy in held:
+            offset = data.body(f"{M.FABRIC}_{vertex}").xpos - data.body(f"carriage{i}").xpos
+            assert np.allclose(offset[:2], (dx, dy), atol=2e-3) and abs(offset[2]) < 2e-3
