@@ -23,6 +23,7 @@ from mantaray.protocol import messages as m
 
 from . import model as M
 from .model import SimulationUnstable
+from .parameters import default
 from .rig import VISION_MODES, Rig
 
 US_PER_S = 1_000_000
@@ -37,8 +38,8 @@ LOCKSTEP_ACK_TIMEOUT_S = 1.0
 @dataclass(frozen=True)
 class Tracking:
     """The camera as the controller sees it: rate, latency, noise and lost frames (the paper: 12 Hz)."""
-    rate_hz: float = 12.0          # [Hz] frames per second
-    latency_s: float = 0.0         # [s] capture -> delivery to the firmware; below one frame period
+    rate_hz: float = default("tracking.rate_hz")       # [Hz] frames per second
+    latency_s: float = default("tracking.latency_s")   # [s] capture -> delivery to the firmware; below one frame period
     noise_m: float = 0.0           # [m] standard deviation of Gaussian noise on x and on y
     drop_rate: float = 0.0         # [-] probability that a frame never reaches the firmware
     vision: str | None = None      # None: the true position; "aruco" or "blob": the tracker on rendered frames
@@ -77,6 +78,7 @@ class TrialSpec:
     tolerance_m: float = 0.02              # [m] epsilon
     seed: int = 1                          # camera noise, drops and the firmware's noise PRNG
     gains: dict[str, Gains] = field(default_factory=dict)   # axis name (x, y, radial) -> gains; absent: firmware defaults
+    stop_when_reached: bool = False        # end at the first frame within epsilon, as the paper's loop does
 
     def __post_init__(self) -> None:
         if self.controller not in ("manhattan", "euclidean"):
@@ -274,6 +276,8 @@ class Bridge:
             distance = float(np.hypot(*(true_xy - target)))
             if reach_s is None and distance < spec.tolerance_m:
                 reach_s = capture_s
+                if spec.stop_when_reached:
+                    break
             dropped = rng.random() < tracking.drop_rate
             if self.vision is not None:
                 seen = self.vision.measure(data, capture_s)

@@ -12,6 +12,7 @@ from pathlib import Path
 from mantaray.protocol import messages as m
 
 from .objects import OBJECTS
+from .parameters import plant_names
 from .rig import VISION_MODES
 
 
@@ -40,20 +41,24 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from mantaray.host.vmcu import VirtualMcu
 
     from .bridge import Bridge, Tracking, TrialSpec
+    from .heatmap import controller_gains
+    from .plant import Plant
     from .plots import trajectory_figure
-    from .rig import Rig
 
-    rig = Rig().with_object(args.object)
+    plant = Plant(args.plant)
+    rig = plant.rig(args.object)
     if args.vision:
         rig = rig.with_vision(args.vision)
     half = (rig.frame.size_x_m / 2, rig.frame.size_y_m / 2)
     _inside(parser, "--start", args.start, half)
     _inside(parser, "--target", args.target, half)
     try:
-        tracking = Tracking(rate_hz=args.rate, latency_s=args.latency, noise_m=args.noise, drop_rate=args.drop,
-                            vision=args.vision)
+        tracking = Tracking(rate_hz=args.rate or plant.values["tracking.rate_hz"],
+                            latency_s=plant.values["tracking.latency_s"] if args.latency is None else args.latency,
+                            noise_m=args.noise, drop_rate=args.drop, vision=args.vision)
         spec = TrialSpec(args.start, args.target, controller=args.controller, duration_s=args.duration,
-                         alpha_m=args.alpha, tolerance_m=args.tolerance, seed=args.seed)
+                         alpha_m=args.alpha, tolerance_m=args.tolerance, seed=args.seed,
+                         gains=controller_gains(args.controller, None, plant.gain_scale))
     except ValueError as exc:
         parser.error(str(exc))
 
@@ -177,12 +182,13 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
         protocol = Protocol(object_name=args.object, controller=args.controller, cells=args.cells,
                             trials_per_cell=args.trials, tolerance_m=args.tolerance, duration_s=args.duration,
                             alpha_m=args.alpha, seed=args.seed, gains=args.gains, resolution=args.resolution,
-                            timestep_s=args.timestep, only_cells=args.only_cells)
+                            timestep_s=args.timestep, only_cells=args.only_cells, plant=args.plant)
     except ValueError as exc:
         parser.error(str(exc))
     if args.jobs is not None and args.jobs < 1:
         parser.error(f"--jobs must be at least 1, got {args.jobs}")
-    out = Path(args.out or f"out/heatmap/{args.object}_{args.controller}_alpha{args.alpha:g}")
+    plant = "" if args.plant == "polyester" else f"_{args.plant}"
+    out = Path(args.out or f"out/heatmap/{args.object}_{args.controller}_alpha{args.alpha:g}{plant}")
     out.mkdir(parents=True, exist_ok=True)
     try:
         results = ResultsFile.open(out / "results.jsonl", protocol)
@@ -194,10 +200,9 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     if len(todo) < total:
         print(f"continuing {out / 'results.jsonl'}: {total - len(todo)} of {total} trials already done",
               file=sys.stderr)
-    from tqdm import tqdm
+    from .progress import Progress
 
-    bar = tqdm(total=total, initial=total - len(todo), unit="trial", disable=args.json or None,
-               file=sys.stderr, smoothing=0.05)
+    bar = Progress(total, initial=total - len(todo), unit="trial", label="heatmap", enabled=not args.json)
     try:
         if args.executor == "ray":
             try:
@@ -260,6 +265,112 @@ def cmd_compare(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     return 0
 
 
+def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """Fit the simulated plant to evidence with an Optuna search over the declared parameter space (sim/plant.toml).
+
+    Evidence is the paper's findings F1-F5 (default: a stratified sample of heatmap cells, the sphere, both
+    controllers, the paper's gains, several objectives at once) or, with --log, rig logs: the simulation driven
+    by each log's commands should retrace its trajectory. The study is OUT/study.db (SQLite): interrupt it and the
+    same command continues; --candidates is the total the study should hold. Writes OUT/report.md, report.json
+    (best candidate, its findings, parameter importances) and pareto.png; --fig3 also runs the paper's
+    hardware experiment (F6) on the best candidate."""
+    from mantaray.host.runlog import RunLogError
+
+    from . import calibrate as C
+    from . import parameters as P
+    from .heatmap import LocalPool, RayPool
+    from .logfit import LogEvidence, check_logs
+    from .plant import Plant, parse_setting
+    from .progress import Progress
+
+    try:
+        fixed = dict(parse_setting(text) for text in args.set)
+        keys = C.searched(args.params.split(",") if args.params else None, fixed)
+        Plant(args.plant).set(fixed)
+        if args.log:
+            check_logs(args.log)
+            evidence = LogEvidence(logs=tuple(str(Path(p).resolve()) for p in args.log), object_name=args.object,
+                                   plant=args.plant, horizon_s=args.horizon, resolution=args.resolution,
+                                   timestep_s=args.timestep, seed=args.seed)
+        else:
+            evidence = C.FindingsEvidence(plant=args.plant, cells_per_stratum=args.cells_per_stratum,
+                                          trials_per_cell=args.trials_per_cell, duration_s=args.duration,
+                                          seed=args.seed, resolution=args.resolution, timestep_s=args.timestep)
+            evidence.protocols(fixed)          # refuses bad sizes and durations before anything runs
+    except (P.ParameterError, RunLogError, ValueError) as exc:
+        parser.error(str(exc))
+    if not keys:
+        parser.error("nothing to search: every parameter named is fixed by --set")
+    if args.candidates < 0 or (args.jobs is not None and args.jobs < 1):
+        parser.error("--candidates must be >= 0 and --jobs >= 1")
+    out = Path(args.out or f"out/calibration/{'log' if args.log else 'findings'}")
+    try:
+        study = C.open_study(out / "study.db", evidence, keys, fixed)
+    except C.StudyMismatch as exc:
+        print(f"mantaray sim calibrate: {exc}", file=sys.stderr)
+        return 2
+    done = len(C.completed(study))
+    if 0 < done < args.candidates:
+        print(f"continuing {out / 'study.db'}: {done} of {args.candidates} candidates already evaluated",
+              file=sys.stderr)
+    progress = Progress(max(args.candidates, done), initial=done, unit="candidate", label="calibrate",
+                        line_every_s=0, enabled=not args.json)
+
+    def report_candidate(n: int, total: int, info: dict) -> None:
+        progress.update(1, note="objectives " + " ".join(f"{v:.3f}" for v in info["objectives"])
+                        + (f", {info['passed']} findings hold" if evidence.kind == "findings" else ""))
+
+    if args.executor == "ray":
+        try:
+            import ray  # noqa: F401  (only to say clearly when it is missing)
+        except ImportError:
+            parser.error("--executor ray needs Ray: pip install 'mantaray[ray]'")
+        pool = RayPool(args.jobs, args.ray_address)
+    else:
+        pool = LocalPool(args.jobs or os.cpu_count() or 1)
+    fig3 = None
+    try:
+        with pool:
+            C.run_study(study, evidence, keys, fixed, args.candidates, pool, report_candidate)
+            best = C.best_trial(study)
+            if args.fig3 and best is not None and evidence.kind == "findings":
+                fig3 = _fig3_for(best, args, pool, out)
+    except KeyboardInterrupt:
+        progress.close()
+        C.write_report(study, evidence, out)
+        print(f"\ninterrupted: {len(C.completed(study))} candidates are in {out / 'study.db'}; the same command "
+              f"continues the search (report so far in {out / 'report.md'})", file=sys.stderr)
+        return 130
+    progress.close()
+    report = C.write_report(study, evidence, out, fig3)
+    if args.json:
+        print(json.dumps(report))
+    else:
+        best = report["best"]
+        print(f"{report['candidates']} candidates; best #{best['number']}: objectives {best['objectives']}; "
+              f"report {out / 'report.md'}" if best else f"no candidate evaluated; {out / 'report.md'}")
+    return 0
+
+
+def _fig3_for(best, args: argparse.Namespace, pool, out: Path) -> dict:
+    """F6 for the best candidate: the paper's Fig. 3 experiment on it, with its figure."""
+    from mantaray.protocol import messages as m
+
+    from .fig3 import TOLERANCE_M, run_fig3
+    from .findings import MODULE_M, fig3_finding
+    from .plots import fig3_figure
+
+    records = run_fig3(pool, args.plant, best.user_attrs["values"], resolution=args.resolution,
+                       timestep_s=args.timestep)
+    finding = fig3_finding(records)
+    runs: dict[str, list[dict]] = {}
+    for r in records:
+        runs.setdefault(r["object"], []).append(r)
+    figure = fig3_figure(runs, TOLERANCE_M, MODULE_M, m.Configure.tilt_limit,
+                         f"Fig. 3 on calibration candidate #{best.number}", out / "fig3.png")
+    return {"holds": finding.holds, "measured": finding.measured, "figure": str(figure)}
+
+
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Register `sim` and its subcommands on the top-level parser's subparsers."""
     sim = sub.add_parser("sim", help="the MuJoCo rig with the firmware in the loop",
@@ -280,8 +391,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--seed", type=int, default=1, help="seed of the actuator noise and the camera model")
     run.add_argument("--alpha", type=float, default=0.0, help="noise amplitude α [m] (paper: 0.1 cube, 0.05 bunny)")
     run.add_argument("--tolerance", type=float, default=0.02, help="ε [m]")
-    run.add_argument("--rate", type=float, default=12.0, help="camera rate [Hz] (paper: 12)")
-    run.add_argument("--latency", type=float, default=0.0, help="camera latency [s], below one frame period")
+    run.add_argument("--plant", choices=plant_names(), default="polyester",
+                     help="the simulated plant (sim/plant.toml): its parameters, camera latency and readings")
+    run.add_argument("--rate", type=float, help="camera rate [Hz] (default the plant's: the paper's 12)")
+    run.add_argument("--latency", type=float, help="camera latency [s], below one frame period (default the plant's)")
     run.add_argument("--noise", type=float, default=0.0, help="camera noise, standard deviation [m] per axis")
     run.add_argument("--drop", type=float, default=0.0, help="share of camera frames lost [0..1)")
     run.add_argument("--vision", choices=VISION_MODES, help="positions from the host's tracker on rendered "
@@ -311,6 +424,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     heat.add_argument("--gains", type=_gains, metavar="KP,KI,KD[,ILIM]",
                       help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
     heat.add_argument("--seed", type=int, default=2026, help="seed of the whole run: starts, targets and noise")
+    heat.add_argument("--plant", choices=plant_names(), default="polyester", help="the simulated plant (sim/plant.toml)")
     heat.add_argument("--resolution", type=int, default=11, help="fabric vertices per side (odd); the reference "
                       "model is 15 at 0.001 s, 4x slower: 11 at 0.002 s keeps its per-cell success (docs/results.md)")
     heat.add_argument("--timestep", type=float, default=0.002, help="physics step [s] (paper and reference: 0.001)")
@@ -320,9 +434,39 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                       help="local processes, or Ray actors (a local Ray instance, or --ray-address)")
     heat.add_argument("--ray-address", help="address of a running Ray cluster (e.g. ray://head:10001)")
     heat.add_argument("--out", help="directory for results.jsonl, cells.csv, summary.json, heatmap.png and heatmap_reach.png (the paper's stopping rule) "
-                      "(default out/heatmap/OBJECT_CONTROLLER_alphaA)")
+                      "(default out/heatmap/OBJECT_CONTROLLER_alphaA, with _PLANT for a plant other than polyester)")
     heat.add_argument("--json", action="store_true", help="print the summary as JSON (and no progress bar)")
     heat.set_defaults(func=lambda args: cmd_heatmap(args, heat))
+
+    cal = sim_sub.add_parser("calibrate", help="fit the plant to the paper's findings or to rig logs (Optuna, resumable)",
+                             description=cmd_calibrate.__doc__, formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    cal.add_argument("--out", help="directory for study.db, report.md, report.json, pareto.png "
+                     "(default out/calibration/findings, or out/calibration/log with --log)")
+    cal.add_argument("--candidates", type=int, default=100, help="candidates the study should hold when done "
+                     "(0: only write the report)")
+    cal.add_argument("--params", metavar="KEY,KEY", help="search only these parameters (keys of sim/plant.toml; "
+                     "default every one declared search = true)")
+    cal.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                     help="fix a parameter (checked against its declared range); repeatable")
+    cal.add_argument("--plant", choices=plant_names(), default="polyester", help="the plant the values are set over")
+    cal.add_argument("--log", action="append", metavar="RUN.jsonl", help="fit to this rig log (mantaray rig's "
+                     "output) instead of the findings; repeatable")
+    cal.add_argument("--object", choices=sorted(OBJECTS), default="sphere", help="the object of the rig logs")
+    cal.add_argument("--horizon", type=float, help="with --log: compare only the first HORIZON seconds of each run")
+    cal.add_argument("--cells-per-stratum", type=int, default=4, help="cells drawn from each of centre, axes, "
+                     "diagonals, edges and corners")
+    cal.add_argument("--trials-per-cell", type=int, default=3)
+    cal.add_argument("--duration", type=float, default=10.0, help="runtime T [s] (paper: 10)")
+    cal.add_argument("--seed", type=int, default=12, help="seed of the search and its trials (the heatmaps judged "
+                     "afterwards use another)")
+    cal.add_argument("--resolution", type=int, default=11, help="fabric vertices per side (the fast mode: 11)")
+    cal.add_argument("--timestep", type=float, default=0.002, help="physics step [s] (the fast mode: 0.002)")
+    cal.add_argument("--fig3", action="store_true", help="also run the paper's Fig. 3 experiment (F6) on the best")
+    cal.add_argument("--jobs", type=int, help="parallel workers (default: every core; with ray: every CPU)")
+    cal.add_argument("--executor", choices=["local", "ray"], default="local")
+    cal.add_argument("--ray-address", help="address of a running Ray cluster")
+    cal.add_argument("--json", action="store_true", help="print the report as JSON (and no progress)")
+    cal.set_defaults(func=lambda args: cmd_calibrate(args, cal))
 
     compare = sim_sub.add_parser("compare", help="difference map of two heatmap runs (first minus second)",
                                  description=cmd_compare.__doc__, formatter_class=argparse.ArgumentDefaultsHelpFormatter)

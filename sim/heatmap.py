@@ -26,9 +26,13 @@ from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
+from mantaray.protocol import messages as m
+
 from .bridge import Gains, TrialSpec
 from .objects import OBJECTS
-from .rig import Fabric, Rig
+from .model import SimulationUnstable
+from .plant import DEFAULT_PLANT, Plant
+from .rig import Fabric
 
 RESULTS_FORMAT = "mantaray-heatmap/1"
 SUCCESS_REGION_AT = 0.9    # [-] cells with at least this success rate form the success region ...
@@ -54,6 +58,9 @@ class Protocol:
     resolution: int = 11                    # [vertices per side] of the fabric; 11 at 2 ms is the fast mode that
     timestep_s: float = 0.002               # [s] keeps per-cell success of the 15 x 15, 1 ms reference (docs/results.md)
     only_cells: tuple[int, ...] | None = None   # run just these cell indices (samples, tests); None: all
+    plant: str = DEFAULT_PLANT              # the named plant (sim/plant.toml) ...
+    plant_set: tuple[tuple[str, float | str], ...] = ()   # ... with these values set over it
+    stop_when_reached: bool = False         # end each trial at the first frame within epsilon (the paper's loop)
 
     def __post_init__(self) -> None:
         checks = [
@@ -75,12 +82,14 @@ class Protocol:
             if not ok:
                 raise ValueError(message)
         Fabric(resolution=self.resolution)      # refuses an even or too small resolution
+        self.plant_model()                       # refuses an unknown plant or a value outside its range
+
+    def plant_model(self) -> Plant:
+        return Plant(self.plant, self.plant_set)
 
     def rig(self) -> Rig:
         """The simulated rig this protocol runs on."""
-        rig = Rig().with_object(self.object_name)
-        return dataclasses.replace(rig, fabric=dataclasses.replace(rig.fabric, resolution=self.resolution),
-                                   solver=dataclasses.replace(rig.solver, timestep_s=self.timestep_s))
+        return self.plant_model().rig(self.object_name, resolution=self.resolution, timestep_s=self.timestep_s)
 
     def cell_ids(self) -> list[int]:
         return list(self.only_cells) if self.only_cells is not None else list(range(self.cells ** 2))
@@ -90,7 +99,9 @@ class Protocol:
 
     @classmethod
     def from_json(cls, data: dict) -> Protocol:
-        return cls(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in data.items()})
+        fields = {k: (tuple(v) if isinstance(v, list) else v) for k, v in data.items()}
+        fields["plant_set"] = tuple(tuple(kv) for kv in fields.get("plant_set", ()))
+        return cls(**fields)
 
 
 @dataclass(frozen=True)
@@ -133,12 +144,24 @@ def trials(protocol: Protocol) -> list[Trial]:
 
 
 def trial_spec(protocol: Protocol, trial: Trial) -> TrialSpec:
-    gains = {}
-    if protocol.gains is not None:
-        g = Gains(*protocol.gains)
-        gains = {"x": g, "y": g} if protocol.controller == "manhattan" else {"radial": g}
     return TrialSpec(trial.start_m, trial.target_m, controller=protocol.controller, duration_s=protocol.duration_s,
-                     alpha_m=protocol.alpha_m, tolerance_m=protocol.tolerance_m, seed=trial.seed, gains=gains)
+                     alpha_m=protocol.alpha_m, tolerance_m=protocol.tolerance_m, seed=trial.seed,
+                     gains=controller_gains(protocol.controller, protocol.gains, protocol.plant_model().gain_scale),
+                     stop_when_reached=protocol.stop_when_reached)
+
+
+def controller_gains(controller: str, gains: tuple[float, float, float, float] | None,
+                     scale: float = 1.0) -> dict[str, Gains]:
+    """The gains to configure per axis: the given ones, else the paper's; kp, ki, kd times scale (the plant's reading of
+    the PID's unit: 180/pi when the paper's gains are per radian). Empty: the firmware's own defaults as they are."""
+    if gains is None and scale == 1.0:
+        return {}
+    axes = ("x", "y") if controller == "manhattan" else ("radial",)
+    out = {}
+    for axis in axes:
+        kp, ki, kd, limit = gains if gains is not None else m.PID_DEFAULTS[m.Axis[axis.upper()]].values()
+        out[axis] = Gains(kp * scale, ki * scale, kd * scale, limit)
+    return out
 
 
 def is_success(fell_off: bool, final_error_m: float, tolerance_m: float) -> bool:
@@ -301,19 +324,42 @@ def unplaceable_record(trial: Trial, why: str) -> dict:
 
 
 class TrialRunner:
-    """Runs trials of one protocol in this process: the firmware core in-process (no pty), one MuJoCo model."""
+    """Runs trials in this process: the firmware core in-process (no pty) and the MuJoCo model of the trial's rig.
 
-    def __init__(self, protocol: Protocol) -> None:
+    The core is one per process, so the runner keeps one link; it loads a model when a trial's rig differs from
+    the last one's (the two controllers of one plant share it).
+    """
+
+    def __init__(self, protocol: Protocol | None = None) -> None:
         from mantaray.host.link import Link
         from mantaray.host.transport import InProcessTransport
 
-        from .bridge import Bridge
         self.protocol = protocol
-        self.bridge = Bridge(Link(InProcessTransport(simulated_clock=True)), protocol.rig())
+        self._link = Link(InProcessTransport(simulated_clock=True))
+        self._rig_key: str | None = None
+        self._bridge_now = None
+        self._unstable: tuple[str, SimulationUnstable] | None = None   # the last rig that would not load
 
-    def run(self, trial: Trial) -> dict:
+    def _bridge(self, protocol: Protocol):
+        from .bridge import Bridge
+        key = json.dumps([protocol.object_name, protocol.plant, protocol.plant_set, protocol.resolution,
+                          protocol.timestep_s])
+        if self._unstable is not None and self._unstable[0] == key:
+            raise self._unstable[1]        # the same rig diverges the same way: do not load it again
+        if key != self._rig_key:
+            try:
+                self._bridge_now = Bridge(self._link, protocol.rig(), protocol.plant_model().tracking())
+            except SimulationUnstable as exc:
+                self._unstable = (key, exc)
+                raise
+            self._rig_key = key
+        return self._bridge_now
+
+    def run(self, trial: Trial, protocol: Protocol | None = None) -> dict:
+        """The record of one trial of protocol (default: the runner's own)."""
+        protocol = protocol or self.protocol
         try:
-            result = self.bridge.run(trial_spec(self.protocol, trial))
+            result = self._bridge(protocol).run(trial_spec(protocol, trial))
         except ValueError as exc:        # model.fabric_height: the start is not over the fabric
             if "not over the fabric" not in str(exc):
                 raise
@@ -324,41 +370,99 @@ class TrialRunner:
 _worker: TrialRunner | None = None
 
 
-def _init_worker(protocol_json: dict) -> None:
+def _init_worker() -> None:
     global _worker
     signal.signal(signal.SIGINT, signal.SIG_IGN)   # Ctrl-C is the parent's to handle: no traceback per worker
-    _worker = TrialRunner(Protocol.from_json(protocol_json))
+    _worker = TrialRunner()
 
 
-def _run_in_worker(trial: Trial) -> dict:
-    return _worker.run(trial)
+def _run_in_worker(job: tuple[dict, Trial]) -> dict:
+    protocol_json, trial = job
+    return _worker.run(trial, Protocol.from_json(protocol_json))
+
+
+class LocalPool:
+    """Worker processes of this machine that run (protocol, trial) jobs; `jobs` = 1 runs them in this process."""
+
+    def __init__(self, jobs: int) -> None:
+        self.jobs = jobs
+        self._pool = None
+        self._runner = TrialRunner() if jobs == 1 else None
+
+    def __enter__(self) -> LocalPool:
+        if self.jobs > 1:
+            import multiprocessing
+            self._pool = multiprocessing.get_context("forkserver").Pool(self.jobs, initializer=_init_worker)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._pool is not None:
+            self._pool.terminate() if exc[0] is not None else self._pool.close()
+            self._pool.join()
+
+    def imap(self, jobs: list[tuple[Protocol, Trial]], ordered: bool = False) -> Iterator[dict]:
+        """Records as the jobs finish (in any order), or in the jobs' order."""
+        if self._pool is None:
+            for protocol, trial in jobs:
+                yield self._runner.run(trial, protocol)
+            return
+        mapper = self._pool.imap if ordered else self._pool.imap_unordered
+        yield from mapper(_run_in_worker, [(p.to_json(), t) for p, t in jobs], chunksize=1)
+
+    def map(self, jobs: list[tuple[Protocol, Trial]]) -> list[dict]:
+        """The jobs' records, in the jobs' order."""
+        return list(self.imap(jobs, ordered=True))
+
+    def map_calls(self, fn: Callable, args: list) -> list:
+        """[fn(a) for a in args] on the workers (fn a module-level function), in order."""
+        return [fn(a) for a in args] if self._pool is None else self._pool.map(fn, args, chunksize=1)
+
+
+class RayPool:
+    """Ray actors (a cluster at address, or a local Ray instance) that run (protocol, trial) jobs."""
+
+    def __init__(self, jobs: int | None, address: str | None) -> None:
+        import ray
+        from ray.util import ActorPool
+
+        if not ray.is_initialized():
+            ray.init(address=address, include_dashboard=False, logging_level="ERROR", log_to_driver=False)
+        actors_n = jobs or max(1, int(ray.cluster_resources().get("CPU", 1)))
+        actor = ray.remote(num_cpus=1)(TrialRunner)
+        self._pool = ActorPool([actor.remote() for _ in range(actors_n)])
+
+    def __enter__(self) -> RayPool:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
+
+    def imap(self, jobs: list[tuple[Protocol, Trial]], ordered: bool = False) -> Iterator[dict]:
+        """Records as the jobs finish (in any order), or in the jobs' order."""
+        mapper = self._pool.map if ordered else self._pool.map_unordered
+        yield from mapper(lambda actor, job: actor.run.remote(job[1], job[0]), jobs)
+
+    def map(self, jobs: list[tuple[Protocol, Trial]]) -> list[dict]:
+        """The jobs' records, in the jobs' order."""
+        return list(self.imap(jobs, ordered=True))
+
+    def map_calls(self, fn: Callable, args: list) -> list:
+        """[fn(a) for a in args] as Ray tasks, in order."""
+        import ray
+        task = ray.remote(num_cpus=1)(fn)
+        return ray.get([task.remote(a) for a in args])
 
 
 def run_local(protocol: Protocol, todo: list[Trial], jobs: int) -> Iterator[dict]:
     """Records of the trials as they finish, on `jobs` processes of this machine (1: this process)."""
-    if jobs == 1:
-        runner = TrialRunner(protocol)
-        for trial in todo:
-            yield runner.run(trial)
-        return
-    import multiprocessing
-
-    ctx = multiprocessing.get_context("forkserver")
-    with ctx.Pool(jobs, initializer=_init_worker, initargs=(protocol.to_json(),)) as pool:
-        yield from pool.imap_unordered(_run_in_worker, todo, chunksize=1)
+    with LocalPool(jobs) as pool:
+        yield from pool.imap([(protocol, t) for t in todo])
 
 
 def run_ray(protocol: Protocol, todo: list[Trial], jobs: int | None, address: str | None) -> Iterator[dict]:
     """Records of the trials as they finish, on Ray actors (a cluster at address, or a local Ray instance)."""
-    import ray
-    from ray.util import ActorPool
-
-    if not ray.is_initialized():
-        ray.init(address=address, include_dashboard=False, logging_level="ERROR", log_to_driver=False)
-    actors_n = jobs or max(1, int(ray.cluster_resources().get("CPU", 1)))
-    Actor = ray.remote(num_cpus=1)(TrialRunner)
-    pool = ActorPool([Actor.remote(protocol) for _ in range(actors_n)])
-    yield from pool.map_unordered(lambda actor, trial: actor.run.remote(trial), todo)
+    with RayPool(jobs, address) as pool:
+        yield from pool.imap([(protocol, t) for t in todo])
 
 
 def run(results: ResultsFile, records: Iterable[dict], progress: Callable[[dict], None] | None = None) -> None:

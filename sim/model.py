@@ -44,6 +44,24 @@ def corner_vertex(resolution: int, actuator: int) -> int:
     return ix * resolution + iy
 
 
+def clamped_vertices(resolution: int, spacing_m: float, clamp_m: float, actuator: int) -> list[tuple[int, float, float]]:
+    """(vertex id, x, y [m] relative to the carriage) of the edge vertices the corner's clamp holds, corner excluded.
+
+    The clamp holds clamp_m of both edges from the corner straight, at the fabric's own spacing, pointing along
+    the frame's edges toward the neighbouring corners.
+    """
+    sx, sy = CORNERS[actuator]
+    held = []
+    for k in range(1, resolution // 2):
+        if k * spacing_m > clamp_m + 1e-9:
+            break
+        ix0 = 0 if sx < 0 else resolution - 1
+        iy0 = 0 if sy < 0 else resolution - 1
+        held.append(((ix0 - sx * k) * resolution + iy0, -sx * k * spacing_m, 0.0))   # along the x edge
+        held.append((ix0 * resolution + iy0 - sy * k, 0.0, -sy * k * spacing_m))     # along the y edge
+    return held
+
+
 def alternating_elements(resolution: int) -> np.ndarray:
     """Triangles (counter-clockwise seen from +z) of an N x N grid with diagonals alternating cell by cell.
 
@@ -85,6 +103,9 @@ def model_xml(rig: Rig) -> str:
         welds.append(f'    <weld name="corner{i}" body1="carriage{i}" '
                      f'body2="{FABRIC}_{corner_vertex(fab.resolution, i)}" relpose="0 0 0 1 0 0 0" '
                      f'solref="{_v(*fab.corner_weld_solref)}"/>')
+        for k, (vertex, dx, dy) in enumerate(clamped_vertices(fab.resolution, fab.spacing_m, fab.corner_clamp_m, i)):
+            welds.append(f'    <weld name="clamp{i}_{k}" body1="carriage{i}" body2="{FABRIC}_{vertex}" '
+                         f'relpose="{_v(dx, dy, 0)} 1 0 0 0" solref="{_v(*fab.corner_weld_solref)}"/>')
         actuators.append(
             f'    <pid name="actuator{i}" joint="lift{i}" input="pos" kp="{_v(a.kp_n_per_m)}" '
             f'dampratio="{_v(a.damping_ratio)}" slewmax="{_v(a.speed_m_per_s)}" '
@@ -244,7 +265,11 @@ class SimulationUnstable(RuntimeError):
     """MuJoCo reported a diverging step (NaN or huge accelerations) and reset its state: the physics is not valid."""
 
     def __init__(self, when: str) -> None:
+        self.when = when
         super().__init__(f"{when}; the rig's parameters are too stiff for the timestep (see sim/README.md)")
+
+    def __reduce__(self):              # across processes (a worker's trial) with its message once
+        return type(self), (self.when,)
 
 
 def _set_rolling_damping(model: mujoco.MjModel, rig: Rig) -> None:
@@ -277,10 +302,11 @@ def load(rig: Rig, fabric_settle_s: float = 2.0) -> tuple[mujoco.MjModel, mujoco
     qadr = model.jnt_qposadr[model.joint(OBJECT).id]
     park_x_m = rig.frame.size_x_m / 2 + PARK_OFFSET_M
     data.qpos[qadr:qadr + 7] = [park_x_m, 0.0, rig.object.half_height_m + 0.01, 1, 0, 0, 0]  # dropped 1 cm
+    diverged = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]   # a live view of MuJoCo's counter
     for _ in range(round(fabric_settle_s / model.opt.timestep)):
         mujoco.mj_step(model, data)
-    if data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number:
-        raise SimulationUnstable("the physics diverged while the bare fabric settled")
+        if diverged.number:            # MuJoCo restarts a diverged state from zero: nothing after it is valid
+            raise SimulationUnstable("the physics diverged while the bare fabric settled")
     key = model.key(REST_KEY).id
     model.key_time[key] = 0.0
     model.key_qpos[key] = data.qpos

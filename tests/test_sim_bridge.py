@@ -50,6 +50,16 @@ def test_central_trials_reach_the_target(sphere_bridge, controller):
         assert np.all(np.abs(result.command_m) <= 0.25)   # what the firmware sent stays in range
 
 
+def test_stopping_when_reached_ends_at_the_first_frame_within_tolerance_as_the_papers_loop(sphere_bridge):
+    start, target = CENTRAL[0]
+    full = sphere_bridge.run(TrialSpec(start, target, seed=1))
+    stopped = sphere_bridge.run(TrialSpec(start, target, seed=1, stop_when_reached=True))
+    assert full.time_to_reach_s is not None and stopped.time_to_reach_s == full.time_to_reach_s
+    assert stopped.success and stopped.final_error_m < stopped.spec.tolerance_m
+    assert stopped.t_s[-1] < stopped.time_to_reach_s and len(stopped.t_s) < len(full.t_s)
+    assert np.array_equal(stopped.true_xy_m, full.true_xy_m[:len(stopped.t_s)])   # the same trial up to there
+
+
 def test_same_seed_gives_the_same_trajectory(sphere_bridge):
     spec = TrialSpec((0.05, -0.04), (-0.06, 0.03), duration_s=4.0, alpha_m=0.02, seed=5)
     first, second = sphere_bridge.run(spec), sphere_bridge.run(spec)
