@@ -2,12 +2,14 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import signal
 import sys
 import time
 from pathlib import Path
+
+from .runlog import RunLog
+
 
 def _half_module_m() -> tuple[float, float]:
     """[m] half the module's sides, as configured on the firmware (protocol defaults)."""
@@ -41,23 +43,6 @@ def _hsv_range(text: str):
 
 
 # ------------------------------------------------------------------------------------------- rig
-class RunLog:
-    """One JSON-lines file per run: the configuration first, then every position frame and telemetry frame."""
-
-    def __init__(self, path: Path, header: dict) -> None:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        self.path = path
-        self._file = open(path, "w")
-        self.write("config", header)
-
-    def write(self, kind: str, record: dict) -> None:
-        self._file.write(json.dumps({"kind": kind, "t": round(time.monotonic(), 6), **record}) + "\n")
-        self._file.flush()
-
-    def close(self) -> None:
-        self._file.close()
-
-
 def targets_along(args, t_s: float) -> tuple[float, float]:
     """The target at run time t_s [s]: fixed, or moving round the circle of --path circle."""
     if args.path is None:

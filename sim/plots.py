@@ -29,45 +29,72 @@ def path_phase_figure(xy_m: np.ndarray, tilt_deg: np.ndarray, start_m, targets_m
     """Save the object's path (start, targets with their tolerance circles, the module's outline) above the
     phase plot theta_zx vs theta_zy with the tilt-limit square, as the paper's Fig. 3 draws them. targets_m
     is one target, or the successive targets of a path; returns the file written."""
-    hx, hy = module_m[0] / 2, module_m[1] / 2
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(4.2, 8.0))
-
-    top.add_patch(Rectangle((-hx, -hy), 2 * hx, 2 * hy, fill=False, lw=1.2, color="0.3"))
-    targets = np.asarray(targets_m, dtype=float).reshape(-1, 2)
-    if len(targets) > 1:
-        top.plot(targets[:, 0], targets[:, 1], ls="--", lw=1.0, color="tab:blue", label="path")
-    top.add_patch(Circle(targets[-1], tolerance_m, fill=False, ls="--", lw=1.2, color="tab:blue"))
-    xy = np.asarray(xy_m, dtype=float).reshape(-1, 2)
-    xy = xy[np.all(np.isfinite(xy), axis=1)]
-    if len(xy):
-        top.plot(xy[:, 0], xy[:, 1], color="tab:cyan", lw=1.5, label="object")
-        top.plot(*xy[-1], "o", color="tab:red", ms=6, label="end")
-    if start_m is not None:
-        top.plot(*start_m, "s", color="0.2", ms=6, label="start")
-    top.plot(*targets[-1], "x", color="tab:blue", ms=8, label="target")
+    _draw_paths(top, [(xy_m, start_m, targets_m)], tolerance_m, module_m)
     top.set_title(title, fontsize=9)
-    top.set_xlim(-hx - 0.05, hx + 0.05)
-    top.set_ylim(-hy - 0.05, hy + 0.05)
-    top.set_aspect("equal")
-    top.set_xlabel("x [m]")
-    top.set_ylabel("y [m]")
     top.legend(fontsize=7, loc="upper right")
-
-    lim = tilt_limit_deg
-    bottom.add_patch(Rectangle((-lim, -lim), 2 * lim, 2 * lim, fill=False, ls=":", lw=1.5, color="tab:red"))
-    tilt = np.asarray(tilt_deg, dtype=float).reshape(-1, 2)
-    tilt = tilt[np.all(np.isfinite(tilt), axis=1)]
-    if len(tilt):
-        bottom.plot(tilt[:, 0], tilt[:, 1], color="tab:purple", lw=1.0)
-        bottom.plot(*tilt[0], "s", color="0.2", ms=5)
-    span = max(lim * 1.15, float(np.abs(tilt).max()) * 1.1 if len(tilt) else 0.0)
-    bottom.set_xlim(-span, span)
-    bottom.set_ylim(-span, span)
-    bottom.set_aspect("equal")
-    bottom.set_xlabel("θ_zx [deg]")
-    bottom.set_ylabel("θ_zy [deg]")
-    bottom.set_title(f"controller output; red: ±{lim:.1f}° tilt limit", fontsize=9)
+    _draw_phase(bottom, [tilt_deg], tilt_limit_deg)
+    bottom.set_title(f"controller output; red: ±{tilt_limit_deg:.1f}° tilt limit", fontsize=9)
     return _save(fig, path)
+
+
+def fig3_figure(runs: dict[str, list[dict]], tolerance_m: float, module_m: tuple[float, float],
+                tilt_limit_deg: float, title: str, path: str | Path) -> Path:
+    """Save the paper's Fig. 3 for several objects: per object (a column) every run's path to its target's
+    tolerance circle above the phase plot of its tilts. runs: object -> [{path_m, tilt_deg, target_m, reached}]."""
+    fig, axes = plt.subplots(2, len(runs), figsize=(2.6 * len(runs), 5.6), squeeze=False)
+    for col, (name, trials) in enumerate(runs.items()):
+        top, bottom = axes[0][col], axes[1][col]
+        _draw_paths(top, [(t["path_m"], (0.0, 0.0), t["target_m"]) for t in trials], tolerance_m, module_m)
+        reached = sum(bool(t["reached"]) and not t.get("fell_off") for t in trials)
+        top.set_title(f"{name}, α = {trials[0].get('alpha_m', 0):g}: {reached}/{len(trials)}", fontsize=8)
+        _draw_phase(bottom, [t["tilt_deg"] for t in trials], tilt_limit_deg)
+    fig.suptitle(title, fontsize=9)
+    return _save(fig, path)
+
+
+def _draw_paths(ax, runs: list[tuple], tolerance_m: float, module_m: tuple[float, float]) -> None:
+    """The module's outline and, per run (xy_m, start_m or None, one target or a path of targets), its path."""
+    hx, hy = module_m[0] / 2, module_m[1] / 2
+    ax.add_patch(Rectangle((-hx, -hy), 2 * hx, 2 * hy, fill=False, lw=1.2, color="0.3"))
+    for i, (xy_m, start_m, targets_m) in enumerate(runs):
+        first = i == 0
+        targets = np.asarray(targets_m, dtype=float).reshape(-1, 2)
+        if len(targets) > 1:
+            ax.plot(targets[:, 0], targets[:, 1], ls="--", lw=1.0, color="tab:blue", label="path" if first else None)
+        ax.add_patch(Circle(targets[-1], tolerance_m, fill=False, ls="--", lw=1.2, color="tab:blue"))
+        xy = np.asarray(xy_m, dtype=float).reshape(-1, 2)
+        xy = xy[np.all(np.isfinite(xy), axis=1)]
+        if len(xy):
+            ax.plot(xy[:, 0], xy[:, 1], color="tab:cyan", lw=1.5, label="object" if first else None)
+            ax.plot(*xy[-1], "o", color="tab:red", ms=5, label="end" if first else None)
+        if start_m is not None:
+            ax.plot(*start_m, "s", color="0.2", ms=5, label="start" if first else None)
+        ax.plot(*targets[-1], "x", color="tab:blue", ms=7, label="target" if first else None)
+    ax.set_xlim(-hx - 0.05, hx + 0.05)
+    ax.set_ylim(-hy - 0.05, hy + 0.05)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+
+
+def _draw_phase(ax, tilts: list, tilt_limit_deg: float) -> None:
+    """Each run's theta_zx against theta_zy [deg] with the dotted red square of the tilt limit."""
+    lim = tilt_limit_deg
+    ax.add_patch(Rectangle((-lim, -lim), 2 * lim, 2 * lim, fill=False, ls=":", lw=1.5, color="tab:red"))
+    span = lim * 1.15
+    for tilt_deg in tilts:
+        tilt = np.asarray(tilt_deg, dtype=float).reshape(-1, 2)
+        tilt = tilt[np.all(np.isfinite(tilt), axis=1)]
+        if len(tilt):
+            ax.plot(tilt[:, 0], tilt[:, 1], color="tab:purple", lw=1.0)
+            ax.plot(*tilt[0], "s", color="0.2", ms=4)
+            span = max(span, float(np.abs(tilt).max()) * 1.1)
+    ax.set_xlim(-span, span)
+    ax.set_ylim(-span, span)
+    ax.set_aspect("equal")
+    ax.set_xlabel("θ_zx [deg]")
+    ax.set_ylabel("θ_zy [deg]")
 
 
 def _save(fig, path: str | Path) -> Path:
@@ -95,4 +122,21 @@ def heatmap_figure(rates: np.ndarray, module_m: tuple[float, float], title: str,
     ax.set_xlabel("target x [m]")
     ax.set_ylabel("target y [m]")
     ax.set_title(title, fontsize=9)
+    return _save(fig, path)
+
+
+def pareto_figure(values: np.ndarray, on_front: np.ndarray, names: tuple[str, ...], title: str,
+                  path: str | Path) -> Path:
+    """Save one panel per pair of objectives (values: [candidates, objectives], all minimised): every candidate a
+    grey dot, those on the Pareto front (on_front) ringed."""
+    pairs = [(i, j) for i in range(len(names)) for j in range(i + 1, len(names))]
+    fig, axes = plt.subplots(1, len(pairs), figsize=(4.2 * len(pairs), 3.8), squeeze=False)
+    for ax, (i, j) in zip(axes[0], pairs):
+        ax.scatter(values[:, i], values[:, j], s=12, c="0.6", label="candidate")
+        ax.scatter(values[on_front, i], values[on_front, j], s=40, facecolors="none", edgecolors="C3",
+                   label="Pareto front")
+        ax.set_xlabel(names[i], fontsize=8)
+        ax.set_ylabel(names[j], fontsize=8)
+    axes[0][0].legend(fontsize=7)
+    fig.suptitle(title, fontsize=9)
     return _save(fig, path)

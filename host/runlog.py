@@ -1,0 +1,87 @@
+"""The log of a rig run (what `mantaray rig` writes): one JSON-lines file, written as it runs and read back for fitting."""
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+
+class RunLog:
+    """One JSON-lines file per run: the configuration first, then every position frame and telemetry frame."""
+
+    def __init__(self, path: Path, header: dict) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.path = path
+        self._file = open(path, "w")
+        self.write("config", header)
+
+    def write(self, kind: str, record: dict) -> None:
+        self._file.write(json.dumps({"kind": kind, "t": round(time.monotonic(), 6), **record}) + "\n")
+        self._file.flush()
+
+    def close(self) -> None:
+        self._file.close()
+
+
+class RunLogError(ValueError):
+    """A file that is not a usable rig log (not JSON lines, no config, no frames)."""
+
+
+@dataclass(frozen=True)
+class LoggedRun:
+    """A rig log as arrays, one row per position frame (in the order they were sent)."""
+    path: Path
+    args: dict                   # the run's options as logged (controller, target, alpha, ...)
+    t_s: np.ndarray              # [s] capture time of each frame from the run's start
+    xy_m: np.ndarray             # [m] tracked position; NaN where the object was not seen
+    command_m: np.ndarray        # [m] a_0..a_3 of the telemetry that answered the frame; NaN where none came
+    tilt_deg: np.ndarray         # [deg] theta_zx, theta_zy of that telemetry
+
+    @property
+    def start_m(self) -> tuple[float, float]:
+        """The first position seen."""
+        seen = np.flatnonzero(np.isfinite(self.xy_m[:, 0]))
+        return float(self.xy_m[seen[0], 0]), float(self.xy_m[seen[0], 1])
+
+
+def read_run_log(path: str | Path) -> LoggedRun:
+    """Read a rig log; RunLogError says what is wrong with a file that is not one."""
+    path = Path(path)
+    try:
+        lines = path.read_text().splitlines()
+    except OSError as exc:
+        raise RunLogError(f"cannot read the rig log {path}: {exc.strerror}") from None
+    records = []
+    for n, line in enumerate(lines, 1):
+        if not line.strip():
+            continue
+        try:
+            records.append(json.loads(line))
+        except json.JSONDecodeError:
+            if n == len(lines):             # a last line cut off by an interruption
+                break
+            raise RunLogError(f"{path}:{n} is not JSON: not a rig log") from None
+    if not records or records[0].get("kind") != "config":
+        raise RunLogError(f"{path} does not start with a config line: not a rig log (mantaray rig writes them)")
+    rows: dict[int, int] = {}
+    t, xy, cmd, tilt = [], [], [], []
+    for r in records[1:]:
+        if r.get("kind") == "position":
+            rows[r["frame"]] = len(t)
+            t.append(float(r["capture_s"]))
+            xy.append(r["xy_m"] if r.get("xy_m") is not None else (math.nan, math.nan))
+            cmd.append((math.nan,) * 4)
+            tilt.append((math.nan,) * 2)
+        elif r.get("kind") == "telemetry" and r.get("position_frame") in rows:
+            row = rows[r["position_frame"]]
+            cmd[row] = tuple(r["command"])
+            tilt[row] = (r["tilt_zx"], r["tilt_zy"])
+    xy_m = np.asarray(xy, dtype=float).reshape(-1, 2)
+    if not np.isfinite(xy_m[:, 0]).any():
+        raise RunLogError(f"{path} holds no frame in which the object was seen")
+    return LoggedRun(path, records[0].get("args", {}), np.asarray(t, float), xy_m,
+                     np.asarray(cmd, float).reshape(-1, 4), np.asarray(tilt, float).reshape(-1, 2))

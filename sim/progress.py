@@ -1,0 +1,58 @@
+"""Progress of a long run: a bar with ETA on a terminal, plain timestamped lines when the output goes to a log."""
+from __future__ import annotations
+
+import sys
+import time
+from typing import TextIO
+
+
+class Progress:
+    """Counts done of total; on a terminal a tqdm bar, otherwise a line at most every line_every_s seconds."""
+
+    def __init__(self, total: int, initial: int = 0, unit: str = "trial", label: str = "",
+                 stream: TextIO | None = None, line_every_s: float = 30.0, enabled: bool = True) -> None:
+        self.total, self.done, self.unit, self.label = total, initial, unit, label
+        self.stream = stream or sys.stderr
+        self.enabled, self.line_every_s = enabled, line_every_s
+        self._initial, self._t0, self._last_line = initial, time.monotonic(), -float("inf")
+        self._bar = None
+        if enabled and self.stream.isatty():
+            from tqdm import tqdm
+            self._bar = tqdm(total=total, initial=initial, unit=unit, desc=label or None, file=self.stream,
+                             smoothing=0.05)
+
+    def eta_s(self) -> float | None:
+        """[s] seconds left at the rate of this run so far (None before anything finished in it)."""
+        ran = self.done - self._initial
+        if ran <= 0:
+            return None
+        return (time.monotonic() - self._t0) / ran * (self.total - self.done)
+
+    def update(self, n: int = 1, note: str = "") -> None:
+        self.done += n
+        if not self.enabled:
+            return
+        if self._bar is not None:
+            self._bar.update(n)
+            if note:
+                self._bar.set_postfix_str(note, refresh=False)
+            return
+        now = time.monotonic()
+        if now - self._last_line >= self.line_every_s or self.done >= self.total:
+            self._last_line = now
+            eta = self.eta_s()
+            left = "" if eta is None else f", about {_duration(eta)} left"
+            print(f"{time.strftime('%H:%M:%S')} {self.label + ': ' if self.label else ''}{self.done}/{self.total} "
+                  f"{self.unit}s{left}{'; ' + note if note else ''}", file=self.stream, flush=True)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
