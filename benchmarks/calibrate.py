@@ -4,14 +4,14 @@ The acceptance protocol of the model (sim/README.md, Calibration): N trials whos
 are drawn uniformly within RADIUS of the centre; success = within the tolerance at the end of T.
 Each grid point runs those same trials (same seeds) with each controller, over the pty, in lock-step.
 
-Run:  python3 benchmarks/calibrate.py --set fabric.size_m=0.5,0.55,0.6 --set contact.friction=0.5/0.005/0.001
-      (a value with / is a tuple; several --set make the Cartesian product; --jobs splits grid points over cores)
+Run:  python3 benchmarks/calibrate.py --set fabric.size_m=0.5,0.55,0.6 --set 'contact.friction[2]=0.0001,0.001'
+      (keys and ranges of sim/plant.toml; several --set make the Cartesian product; --jobs splits grid points
+      over cores). `mantaray sim calibrate` searches the whole space; this sweeps a grid of a few parameters.
 Prints one line per grid point and controller, and writes them as JSON lines to --out.
 """
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import itertools
 import json
 import multiprocessing
@@ -25,7 +25,7 @@ from mantaray.host.transport import SerialTransport
 from mantaray.host.vmcu import VirtualMcu
 from mantaray.sim.bridge import Bridge, TrialSpec, Tracking
 from mantaray.sim.model import SimulationUnstable
-from mantaray.sim.rig import Rig
+from mantaray.sim.plant import Plant
 
 RADIUS_M = 0.10   # [m] starts and targets within this distance of the centre (the issue's central region)
 
@@ -41,31 +41,16 @@ def central_trials(n: int, seed: int) -> list[tuple[tuple[float, float], tuple[f
     return [(point(), point()) for _ in range(n)]
 
 
-def with_setting(rig: Rig, key: str, value) -> Rig:
-    """rig with rig.<part>.<name> = value (key 'part.name'); a bare 'object' picks the object."""
-    if key == "object":
-        return rig.with_object(value)
-    part, name = key.split(".")
-    return dataclasses.replace(rig, **{part: dataclasses.replace(getattr(rig, part), **{name: value})})
-
-
-def parse_value(text: str):
-    if "/" in text:
-        return tuple(float(v) for v in text.split("/"))
+def parse_value(text: str) -> float | str:
     try:
-        return int(text)
+        return float(text)
     except ValueError:
-        try:
-            return float(text)
-        except ValueError:
-            return text
+        return text
 
 
 def run_point(job: tuple) -> list[dict]:
     settings, controllers, trials, duration_s, rate_hz, latency_s = job
-    rig = Rig()
-    for key, value in settings:
-        rig = with_setting(rig, key, value)
+    rig = Plant().set(dict(settings)).rig()
     rows = []
     with VirtualMcu(clock="sim") as vmcu:
         try:
@@ -94,8 +79,8 @@ def run_point(job: tuple) -> list[dict]:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--set", action="append", default=[], metavar="PART.NAME=V1,V2",
-                        help="a Rig field and the values to try (e.g. fabric.size_m=0.5,0.55)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=V1,V2",
+                        help="a parameter of sim/plant.toml and the values to try (e.g. fabric.size_m=0.5,0.55)")
     parser.add_argument("--controllers", default="manhattan,euclidean")
     parser.add_argument("--trials", type=int, default=10)
     parser.add_argument("--seed", type=int, default=2026, help="seed of the start/target draw")
@@ -110,6 +95,11 @@ def main() -> int:
     for item in args.set:
         key, _, values = item.partition("=")
         axes.append([(key, parse_value(v)) for v in values.split(",")])
+        try:
+            for _, value in axes[-1]:
+                Plant().set({key: value})
+        except ValueError as exc:
+            parser.error(str(exc))
     trials = central_trials(args.trials, args.seed)
     jobs = [(list(combo), args.controllers.split(","), trials, args.duration, args.rate, args.latency)
             for combo in itertools.product(*axes)]

@@ -1,13 +1,15 @@
 """The paper's full simulation protocol (Fig. 2) with our stack: five heatmap runs, their difference map, the figures.
 
-Run: python3 benchmarks/paper_heatmaps.py [--runs sphere_manhattan,sphere_euclidean] [--jobs 2]
+Run: python3 benchmarks/paper_heatmaps.py [--runs sphere_manhattan,sphere_euclidean] [--jobs 2] [--plant paper]
 Each run is `mantaray sim heatmap` with the paper's protocol (20 x 20 cells, 10 trials, T = 10 s,
-eps = 0.02 m) into out/heatmap/<run>/; runs are resumable, so an interrupted script continues where it
+eps = 0.02 m) on the named plant (sim/plant.toml) into out/heatmap/<run>/ (a plant other than polyester
+suffixes the run's name with _<plant>); runs are resumable, so an interrupted script continues where it
 stopped, and --trials 3 gives a quick map that a later run with the paper's 10 tops up. A run starts
 from the committed trials (docs/results/<run>.jsonl.gz) when out/ has none, and writes every trial back
 there, so a fresh clone continues the committed runs instead of repeating them. The wall time of every
 session of a run is kept in docs/figures/heatmaps.json, so the total a run took is known even when it
-was split. The figures are copied to docs/figures/ beside the scores, regions and zone rates.
+was split. The figures are copied to docs/figures/ beside the scores, regions and zone rates, and the
+paper's findings F1-F5 (sim/findings.py) on the two sphere maps, under both success rules.
 """
 from __future__ import annotations
 
@@ -66,7 +68,12 @@ def main() -> int:
     parser.add_argument("--trials", type=int, default=10, help="trials per cell (the paper: 10)")
     parser.add_argument("--out", default="out/heatmap")
     parser.add_argument("--figures", default="docs/figures")
+    parser.add_argument("--plant", default="polyester", help="the simulated plant (a [plant.NAME] of sim/plant.toml)")
     args = parser.parse_args()
+    from mantaray.sim.parameters import plant_names
+    if args.plant not in plant_names():
+        parser.error(f"unknown plant {args.plant!r}; the plants are: {', '.join(plant_names())}")
+    suffix = "" if args.plant == "polyester" else f"_{args.plant}"
     names = args.runs.split(",")
     unknown = [n for n in names if n not in RUNS]
     if unknown:
@@ -76,8 +83,9 @@ def main() -> int:
     figures.mkdir(parents=True, exist_ok=True)
     table_path = figures / "heatmaps.json"
     table = json.loads(table_path.read_text()) if table_path.exists() else {}
-    for name in names:
-        obj, controller, alpha = RUNS[name]
+    for run in names:
+        obj, controller, alpha = RUNS[run]
+        name = run + suffix
         out = REPO / args.out / name
         out.mkdir(parents=True, exist_ok=True)
         results_path = out / "results.jsonl"
@@ -89,7 +97,7 @@ def main() -> int:
         t0 = time.perf_counter()
         proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--object", obj,
                                "--controller", controller, "--alpha", str(alpha), "--trials", str(args.trials), "--jobs", str(args.jobs),
-                               "--out", str(out), "--json"], cwd=REPO, stdout=subprocess.PIPE)
+                               "--plant", args.plant, "--out", str(out), "--json"], cwd=REPO, stdout=subprocess.PIPE)
         wall = time.perf_counter() - t0
         if proc.returncode != 0:
             print(f"{name}: heatmap failed (exit {proc.returncode})", file=sys.stderr)
@@ -104,23 +112,43 @@ def main() -> int:
         summary = json.loads(proc.stdout)
         shutil.copyfile(out / "heatmap.png", figures / f"heatmap_{name}.png")
         shutil.copyfile(out / "heatmap_reach.png", figures / f"heatmap_{name}_reach.png")
-        table[name] = {"object": obj, "controller": controller, "alpha_m": alpha, "score": summary["score"],
+        table[name] = {"object": obj, "controller": controller, "alpha_m": alpha, "plant": args.plant,
+                       "score": summary["score"],
                        "reach_score": summary["reach_score"], "regions": summary["regions"],
                        "trials": summary["trials"], "trials_per_cell": args.trials, "wall_s_sessions": times, "jobs": args.jobs,
                        **zone_rates(out / "results.jsonl")}
         table_path.write_text(json.dumps(table, indent=1) + "\n")
         print(f"{name}: score {summary['score']:.1f} (reach {summary['reach_score']:.1f}), "
               f"{summary['trials']} trials, this session {wall / 60:.1f} min", flush=True)
-    sphere_runs = [REPO / args.out / run / "results.jsonl" for run in ("sphere_euclidean", "sphere_manhattan")]
+    sphere_runs = [REPO / args.out / (run + suffix) / "results.jsonl" for run in ("sphere_euclidean", "sphere_manhattan")]
     if all(path.exists() for path in sphere_runs):
-        for rule, suffix in (([], ""), (["--reached"], "_reach")):
+        for rule, rule_suffix in (([], ""), (["--reached"], "_reach")):
             proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "compare",
-                                   *map(str, sphere_runs),
-                                   *rule, "--out", str(figures / f"heatmap_sphere_euclidean_minus_manhattan{suffix}.png")],
+                                   *map(str, sphere_runs), *rule, "--out",
+                                   str(figures / f"heatmap_sphere_euclidean_minus_manhattan{rule_suffix}{suffix}.png")],
                                   cwd=REPO)
             if proc.returncode != 0:
                 return proc.returncode
+        table[f"findings_{args.plant}"] = findings(*sphere_runs)
+        table_path.write_text(json.dumps(table, indent=1) + "\n")
+        for rule, found in table[f"findings_{args.plant}"].items():
+            print(f"findings on the {args.plant} plant, rule {rule}: "
+                  + "; ".join(f"{f['name']} {'holds' if f['holds'] else 'fails'} ({f['measured']})" for f in found))
     return 0
+
+
+def findings(euclidean_path: Path, manhattan_path: Path) -> dict:
+    """F1-F5 on the full sphere maps, under each success rule."""
+    from mantaray.sim import findings as F
+    from mantaray.sim import heatmap as H
+
+    runs = {c: H.ResultsFile.load(p) for c, p in (("euclidean", euclidean_path), ("manhattan", manhattan_path))}
+    out = {}
+    for rule in F.RULES:
+        stats = {c: F.map_stats(r.records.values(), r.protocol.cells, rule) for c, r in runs.items()}
+        out[rule] = [{"name": f.name, "holds": f.holds, "measured": f.measured}
+                     for f in F.heatmap_findings(stats["manhattan"], stats["euclidean"])]
+    return out
 
 
 if __name__ == "__main__":

@@ -76,6 +76,7 @@ class FindingsEvidence:
     kind: str = "findings"
     objective_names: tuple[str, ...] = ("central shortfall (F1)", "corners and shape shortfall (F2-F4)",
                                         "log distance of the totals (F5)")
+    penalty: tuple[float, ...] = F.WORST_OBJECTIVES   # what a plant that cannot be simulated scores
 
     def protocols(self, values: dict[str, float | str]) -> dict[str, Protocol]:
         from .plant import Plant
@@ -142,7 +143,17 @@ def requeue_abandoned(study) -> None:
 
     for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.RUNNING,)):
         study.tell(t.number, state=optuna.trial.TrialState.FAIL)
-        study.enqueue_trial(t.params, skip_if_exists=True)
+        _queue_again(study, t.params)
+
+
+def _queue_again(study, params: dict) -> None:
+    """Queue a candidate's values for the next ask, unless they are queued already (Optuna's skip_if_exists would
+    also skip them for the failed trial that had them)."""
+    import optuna
+
+    waiting = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.WAITING,))
+    if all(t.params != params for t in waiting):
+        study.enqueue_trial(params)
 
 
 def completed(study) -> list:
@@ -156,6 +167,8 @@ def run_study(study, evidence, keys: list[P.Parameter], fixed: dict, candidates:
     in flight and queues its values again, so the next run evaluates it first."""
     import optuna
 
+    from .model import SimulationUnstable
+
     while len(completed(study)) < candidates:
         trial = study.ask()
         values = dict(fixed)
@@ -166,16 +179,15 @@ def run_study(study, evidence, keys: list[P.Parameter], fixed: dict, candidates:
             objectives, details = evidence.evaluate(values, pool)
         except KeyboardInterrupt:
             study.tell(trial, state=optuna.trial.TrialState.FAIL)
-            study.enqueue_trial(trial.params, skip_if_exists=True)
+            _queue_again(study, trial.params)
             raise
-        except Exception as exc:          # noqa: BLE001  (a plant MuJoCo cannot simulate is a failed candidate)
-            from .model import SimulationUnstable
-            if not isinstance(exc, SimulationUnstable):
-                study.tell(trial, state=optuna.trial.TrialState.FAIL)
-                raise
-            trial.set_user_attr("failure", str(exc))
+        except SimulationUnstable as exc:
+            # A plant MuJoCo cannot integrate at this step scores the worst of every objective, so the sampler
+            # learns to avoid its region (a failed candidate would teach it nothing); it is never the best.
+            objectives, details = evidence.penalty, {"unstable": str(exc), "passed": -1}
+        except BaseException:
             study.tell(trial, state=optuna.trial.TrialState.FAIL)
-            continue
+            raise
         trial.set_user_attr("details", details)
         trial.set_user_attr("values", values)
         trial.set_user_attr("wall_s", round(time.perf_counter() - t0, 1))
@@ -186,10 +198,10 @@ def run_study(study, evidence, keys: list[P.Parameter], fixed: dict, candidates:
 
 def best_trial(study):
     """The candidate that satisfies the most findings, then has the smallest sum of objectives."""
-    done = completed(study)
+    done = [t for t in completed(study) if "unstable" not in t.user_attrs["details"]]
     if not done:
         return None
-    return min(done, key=lambda t: (-t.user_attrs.get("details", {}).get("passed", 0), sum(t.values)))
+    return min(done, key=lambda t: (-t.user_attrs["details"]["passed"], sum(t.values)))
 
 
 def importances(study, evidence) -> dict[str, dict[str, float]]:

@@ -317,8 +317,12 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
                         line_every_s=0, enabled=not args.json)
 
     def report_candidate(n: int, total: int, info: dict) -> None:
-        progress.update(1, note="objectives " + " ".join(f"{v:.3f}" for v in info["objectives"])
-                        + (f", {info['passed']} findings hold" if evidence.kind == "findings" else ""))
+        if "unstable" in info:
+            note = "the physics diverged: scored the worst of every objective"
+        else:
+            note = "objectives " + " ".join(f"{v:.3f}" for v in info["objectives"])
+            note += f", {info['passed']} findings hold" if evidence.kind == "findings" else ""
+        progress.update(1, note=note)
 
     if args.executor == "ray":
         try:

@@ -203,6 +203,12 @@ def fig3_finding(records: Iterable[dict]) -> Finding:
                    holds if records else None, words or "not run")
 
 
+# The largest value each objective can take: both central rates 0; the corner rates and shape indices as wrong as
+# they can be; both totals at the floor of 1.
+WORST_OBJECTIVES = (2 * CENTRAL_AT, FAILURE_REGION_AT + (1 - FAILURE_REGION_AT) + 2 + 2,
+                    math.log(PAPER_TOTALS["manhattan"]) + math.log(PAPER_TOTALS["euclidean"]))
+
+
 def objectives(manhattan: MapStats, euclidean: MapStats) -> tuple[float, float, float]:
     """What the calibration search minimises (each 0 when its findings hold):
     (central shortfall, F1; corners and shape shortfall, F2-F4; log-distance of the totals from the paper's, F5)."""

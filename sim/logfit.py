@@ -89,6 +89,7 @@ class LogEvidence:
     seed: int = 12
     kind: str = "log"
     objective_names: tuple[str, ...] = ("mean trajectory error [m]",)
+    penalty: tuple[float, ...] = (FELL_ERROR_M,)     # a plant that cannot be simulated: as if it fell at once
 
     def evaluate(self, values: dict[str, float | str], pool) -> tuple[tuple[float, ...], dict]:
         jobs = [(log, self.plant, values, self.object_name, self.resolution, self.timestep_s, self.horizon_s)

@@ -166,3 +166,47 @@ def test_a_file_that_is_not_a_rig_log_is_refused_with_a_reason(tmp_path, text, n
     path.write_text(text)
     with pytest.raises(RunLogError, match=needle):
         read_run_log(path)
+
+
+class _Toy:
+    """Evidence without physics: the objective is |size - 0.55|; sizes above 0.58 'diverge'."""
+    kind = "toy"
+    seed = 1
+    objective_names = ("distance",)
+    penalty = (1.0,)
+
+    def evaluate(self, values, pool):
+        from mantaray.sim.model import SimulationUnstable
+        if values["fabric.size_m"] > 0.58:
+            raise SimulationUnstable("toy divergence")
+        return (abs(values["fabric.size_m"] - 0.55),), {"passed": 0}
+
+
+def _toy_study(path):
+    evidence = _Toy()
+    keys = C.searched(["fabric.size_m"], {})
+    study = optuna.create_study(storage=f"sqlite:///{path}", study_name=C.STUDY_NAME, load_if_exists=True,
+                                sampler=optuna.samplers.RandomSampler(seed=2))
+    return study, evidence, keys
+
+
+def test_an_unstable_candidate_scores_the_penalty_and_is_never_the_best(tmp_path):
+    study, evidence, keys = _toy_study(tmp_path / "toy.db")
+    C.run_study(study, evidence, keys, {}, 25, pool=None)
+    done = C.completed(study)
+    unstable = [t for t in done if "unstable" in t.user_attrs["details"]]
+    assert unstable and all(t.values == [1.0] for t in unstable)
+    assert all(t.user_attrs["values"]["fabric.size_m"] > 0.58 for t in unstable)
+    best = C.best_trial(study)
+    assert best.user_attrs["values"]["fabric.size_m"] <= 0.58 and best.values[0] == min(
+        t.values[0] for t in done if t not in unstable)
+
+
+def test_a_candidate_left_running_by_a_killed_search_is_queued_again(tmp_path):
+    study, evidence, keys = _toy_study(tmp_path / "toy.db")
+    orphan = study.ask()
+    size = C.suggest(orphan, keys[0])                 # the search was killed here: the trial stays RUNNING
+    C.requeue_abandoned(study)
+    assert study.trials[orphan.number].state == optuna.trial.TrialState.FAIL
+    C.run_study(study, evidence, keys, {}, 1, pool=None)
+    assert C.completed(study)[0].user_attrs["values"]["fabric.size_m"] == size
