@@ -20,6 +20,7 @@ import numpy as np
 from mantaray.sim import calibrate as C
 from mantaray.sim.heatmap import LocalPool
 from mantaray.sim.logfit import LogEvidence, write_log
+from mantaray.sim.parameters import default
 
 HIDDEN = {"contact.rolling_damping_per_s": 2.0, "actuators.pulley_circumference_m": 0.06}
 RUN_S = 8.0                 # [s] each logged run
@@ -59,7 +60,7 @@ def main() -> int:
     out = Path(args.out)
     logs = make_logs(out / "logs", max(counts), args.seed)
     keys = C.searched(list(HIDDEN), {})
-    print(f"hidden: {HIDDEN}; polyester values: rolling damping 4.0 /s, pulley 0.10 m/rev; "
+    print(f"hidden: {HIDDEN}; the polyester plant's: {({k: default(k) for k in HIDDEN})}; "
           f"{args.candidates} candidates per fit, {RUN_S:g} s runs")
     rows = []
     with LocalPool(args.jobs) as pool:

@@ -25,6 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
+from mantaray.sim.findings import CENTRAL_HALF_M, CORNER_FROM_M
+from mantaray.sim.plant import DEFAULT_PLANT
+
 REPO = Path(__file__).resolve().parents[1]
 COMMITTED = REPO / "docs" / "results"   # every trial of each run, <run>.jsonl.gz
 RUNS = {   # name: (object, controller, alpha [m]) as in the paper's Fig. 2
@@ -38,9 +41,9 @@ RUNS = {   # name: (object, controller, alpha [m]) as in the paper's Fig. 2
 
 ZONES = {   # name: which cells, from the cell centres' |x|, |y| [m] on the paper's 0.5 m module
     "centre (|x|, |y| < 0.05 m)": lambda ax, ay: (ax < 0.05) & (ay < 0.05),
-    "central (|x|, |y| < 0.10 m)": lambda ax, ay: (ax < 0.10) & (ay < 0.10),
+    "central (|x|, |y| < 0.10 m)": lambda ax, ay: (ax < CENTRAL_HALF_M) & (ay < CENTRAL_HALF_M),
     "outer 5 cm band": lambda ax, ay: np.maximum(ax, ay) > 0.20,
-    "corners (7.5 cm squares)": lambda ax, ay: (ax > 0.175) & (ay > 0.175),
+    "corners (7.5 cm squares)": lambda ax, ay: (ax > CORNER_FROM_M) & (ay > CORNER_FROM_M),
 }
 
 
@@ -68,12 +71,13 @@ def main() -> int:
     parser.add_argument("--trials", type=int, default=10, help="trials per cell (the paper: 10)")
     parser.add_argument("--out", default="out/heatmap")
     parser.add_argument("--figures", default="docs/figures")
-    parser.add_argument("--plant", default="polyester", help="the simulated plant (a [plant.NAME] of sim/plant.toml)")
+    parser.add_argument("--plant", default=DEFAULT_PLANT, help="the simulated plant (a [plant.NAME] of sim/plant.toml)")
     args = parser.parse_args()
     from mantaray.sim.parameters import plant_names
+
     if args.plant not in plant_names():
         parser.error(f"unknown plant {args.plant!r}; the plants are: {', '.join(plant_names())}")
-    suffix = "" if args.plant == "polyester" else f"_{args.plant}"
+    suffix = "" if args.plant == DEFAULT_PLANT else f"_{args.plant}"
     names = args.runs.split(",")
     unknown = [n for n in names if n not in RUNS]
     if unknown:

@@ -35,11 +35,10 @@ class RunLogError(ValueError):
 class LoggedRun:
     """A rig log as arrays, one row per position frame (in the order they were sent)."""
     path: Path
-    args: dict                   # the run's options as logged (controller, target, alpha, ...)
+    args: dict                   # the run's options as logged (controller, target, alpha, object, ...)
     t_s: np.ndarray              # [s] capture time of each frame from the run's start
     xy_m: np.ndarray             # [m] tracked position; NaN where the object was not seen
     command_m: np.ndarray        # [m] a_0..a_3 of the telemetry that answered the frame; NaN where none came
-    tilt_deg: np.ndarray         # [deg] theta_zx, theta_zy of that telemetry
 
     @property
     def start_m(self) -> tuple[float, float]:
@@ -52,36 +51,45 @@ def read_run_log(path: str | Path) -> LoggedRun:
     """Read a rig log; RunLogError says what is wrong with a file that is not one."""
     path = Path(path)
     try:
-        lines = path.read_text().splitlines()
+        lines = path.read_text(encoding="utf-8").splitlines()
     except OSError as exc:
         raise RunLogError(f"cannot read the rig log {path}: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise RunLogError(f"{path} is not text: not a rig log") from None
     records = []
     for n, line in enumerate(lines, 1):
         if not line.strip():
             continue
         try:
-            records.append(json.loads(line))
+            record = json.loads(line)
         except json.JSONDecodeError:
             if n == len(lines):             # a last line cut off by an interruption
                 break
             raise RunLogError(f"{path}:{n} is not JSON: not a rig log") from None
-    if not records or records[0].get("kind") != "config":
+        if not isinstance(record, dict):
+            raise RunLogError(f"{path}:{n} is not a JSON object: not a rig log")
+        records.append((n, record))
+    if not records or records[0][1].get("kind") != "config":
         raise RunLogError(f"{path} does not start with a config line: not a rig log (mantaray rig writes them)")
     rows: dict[int, int] = {}
-    t, xy, cmd, tilt = [], [], [], []
-    for r in records[1:]:
-        if r.get("kind") == "position":
-            rows[r["frame"]] = len(t)
-            t.append(float(r["capture_s"]))
-            xy.append(r["xy_m"] if r.get("xy_m") is not None else (math.nan, math.nan))
-            cmd.append((math.nan,) * 4)
-            tilt.append((math.nan,) * 2)
-        elif r.get("kind") == "telemetry" and r.get("position_frame") in rows:
-            row = rows[r["position_frame"]]
-            cmd[row] = tuple(r["command"])
-            tilt[row] = (r["tilt_zx"], r["tilt_zy"])
+    t, xy, cmd = [], [], []
+    for n, r in records[1:]:
+        try:
+            if r.get("kind") == "position":
+                rows[r["frame"]] = len(t)
+                t.append(float(r["capture_s"]))
+                xy.append(tuple(map(float, r["xy_m"])) if r.get("xy_m") is not None else (math.nan, math.nan))
+                cmd.append((math.nan,) * 4)
+            elif r.get("kind") == "telemetry" and r.get("position_frame") in rows:
+                command = tuple(map(float, r["command"]))
+                if len(command) != 4:
+                    raise ValueError
+                cmd[rows[r["position_frame"]]] = command
+        except (KeyError, TypeError, ValueError):
+            raise RunLogError(f"{path}:{n}: a {r.get('kind')} line without the fields mantaray rig writes") from None
     xy_m = np.asarray(xy, dtype=float).reshape(-1, 2)
     if not np.isfinite(xy_m[:, 0]).any():
         raise RunLogError(f"{path} holds no frame in which the object was seen")
-    return LoggedRun(path, records[0].get("args", {}), np.asarray(t, float), xy_m,
-                     np.asarray(cmd, float).reshape(-1, 4), np.asarray(tilt, float).reshape(-1, 2))
+    args = records[0][1].get("args")
+    return LoggedRun(path, args if isinstance(args, dict) else {}, np.asarray(t, float), xy_m,
+                     np.asarray(cmd, float).reshape(-1, 4))

@@ -15,7 +15,6 @@ import math
 import time
 from dataclasses import dataclass, field
 
-import mujoco
 import numpy as np
 
 from mantaray.host.link import Link, LinkError
@@ -229,8 +228,6 @@ class Bridge:
         t = time.perf_counter()
         self._configure(spec)
         M.drop_object(model, data, *spec.start_m)
-        bad_qacc = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]   # a live view of MuJoCo's counter
-        bad_steps0 = bad_qacc.number
         link_s += time.perf_counter() - t
         t0_sim = data.time                                # physics time at trial time 0
         base_us = (self.clock_us + CLOCK_GAP_US) & U32    # firmware time at trial time 0
@@ -254,14 +251,11 @@ class Bridge:
                 if ahead > 0:
                     time.sleep(ahead)
             t = time.perf_counter()
-            end = t0_sim + to_trial_s - 0.5 * model.opt.timestep
-            while data.time < end:
-                mujoco.mj_step(model, data)
-                if self.recorder is not None:
-                    self.recorder.capture(data)
-                # Checked every step: MuJoCo resets a diverged state to time 0, so the loop would start over.
-                if bad_qacc.number != bad_steps0:
-                    raise SimulationUnstable(f"the physics diverged before trial time {to_trial_s:.3f} s")
+            try:
+                M.step_until(model, data, t0_sim + to_trial_s,
+                             None if self.recorder is None else self.recorder.capture)
+            except SimulationUnstable:
+                raise SimulationUnstable(f"the physics diverged before trial time {to_trial_s:.3f} s") from None
             physics_s += time.perf_counter() - t
             if self.viewer is not None:
                 self.viewer.sync()

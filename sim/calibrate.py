@@ -22,6 +22,9 @@ from typing import Callable, Protocol as Typing
 from . import findings as F
 from . import parameters as P
 from .heatmap import Protocol, trials
+from .plant import DEFAULT_PLANT, Plant
+
+CELLS = Protocol.cells            # the paper's 20 x 20 grid, on which the strata and the totals are defined
 
 STUDY_NAME = "calibrate"
 
@@ -56,17 +59,11 @@ def suggest(trial, p: P.Parameter) -> float | str:
     return trial.suggest_float(p.key, low, high, log=p.scale == "log")
 
 
-def candidate_values(trial_params: dict) -> dict[str, float | str]:
-    """The plant values of a finished Optuna trial (undoing the 1 - value of one_minus_log parameters)."""
-    return {(k[4:] if k.startswith("1 - ") else k): (1.0 - v if k.startswith("1 - ") else v)
-            for k, v in trial_params.items()}
-
-
 # ------------------------------------------------------------------------------------------- heatmap findings
 @dataclass(frozen=True)
 class FindingsEvidence:
     """The paper's findings F1-F5 on a stratified sample of cells: the sphere, both controllers, alpha 0."""
-    plant: str = "polyester"
+    plant: str = DEFAULT_PLANT
     cells_per_stratum: int = 4             # cells drawn from each of the five strata (findings.STRATA)
     trials_per_cell: int = 3
     duration_s: float = 10.0               # [s] T
@@ -79,9 +76,8 @@ class FindingsEvidence:
     penalty: tuple[float, ...] = F.WORST_OBJECTIVES   # what a plant that cannot be simulated scores
 
     def protocols(self, values: dict[str, float | str]) -> dict[str, Protocol]:
-        from .plant import Plant
         rule = Plant(self.plant).set(values).success_rule
-        sample = F.stratified_sample(20, self.cells_per_stratum, self.seed)
+        sample = F.stratified_sample(CELLS, self.cells_per_stratum, self.seed)
         return {c: Protocol(controller=c, trials_per_cell=self.trials_per_cell, duration_s=self.duration_s,
                             seed=self.seed, resolution=self.resolution, timestep_s=self.timestep_s,
                             only_cells=sample, plant=self.plant, plant_set=tuple(values.items()),
@@ -89,14 +85,13 @@ class FindingsEvidence:
                 for c in ("manhattan", "euclidean")}
 
     def evaluate(self, values: dict[str, float | str], pool) -> tuple[tuple[float, ...], dict]:
-        from .plant import Plant
         protocols = self.protocols(values)
         jobs = [(p, t) for p in protocols.values() for t in trials(p)]
         records = {c: [] for c in protocols}
         for record, (protocol, _) in zip(pool.map(jobs), jobs):
             records[protocol.controller].append(record)
         rule = Plant(self.plant).set(values).success_rule
-        stats = {c: F.map_stats(records[c], 20, rule) for c in protocols}
+        stats = {c: F.map_stats(records[c], CELLS, rule) for c in protocols}
         found = F.heatmap_findings(stats["manhattan"], stats["euclidean"])
         details = {"rule": rule, "findings": {f.name: {"holds": f.holds, "measured": f.measured} for f in found},
                    "passed": sum(bool(f.holds) for f in found),
@@ -111,7 +106,9 @@ def open_study(path: Path, evidence, keys: list[P.Parameter], fixed: dict):
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     path.parent.mkdir(parents=True, exist_ok=True)
-    config = {"evidence": dataclasses.asdict(evidence), "searched": [p.key for p in keys], "fixed": fixed}
+    config = {"evidence": dataclasses.asdict(evidence), "fixed": fixed,
+              "searched": {p.key: [p.scale, *(p.choices or p.search_bounds())] for p in keys},
+              "plant": Plant(evidence.plant).values}   # the plant as declared now: an edited table is another search
     config = json.loads(json.dumps(config))
     storage = f"sqlite:///{path}"
     n_objectives = len(evidence.objective_names)
@@ -152,7 +149,7 @@ def _queue_again(study, params: dict) -> None:
     import optuna
 
     waiting = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.WAITING,))
-    if all(t.params != params for t in waiting):
+    if all(t.system_attrs.get("fixed_params") != params for t in waiting):
         study.enqueue_trial(params)
 
 
@@ -188,6 +185,8 @@ def run_study(study, evidence, keys: list[P.Parameter], fixed: dict, candidates:
         except BaseException:
             study.tell(trial, state=optuna.trial.TrialState.FAIL)
             raise
+        if not all(math.isfinite(v) for v in objectives):   # a measure no trial gave: as bad as it gets
+            objectives, details = evidence.penalty, {**details, "not_finite": True, "passed": -1}
         trial.set_user_attr("details", details)
         trial.set_user_attr("values", values)
         trial.set_user_attr("wall_s", round(time.perf_counter() - t0, 1))
@@ -198,7 +197,7 @@ def run_study(study, evidence, keys: list[P.Parameter], fixed: dict, candidates:
 
 def best_trial(study):
     """The candidate that satisfies the most findings, then has the smallest sum of objectives."""
-    done = [t for t in completed(study) if "unstable" not in t.user_attrs["details"]]
+    done = [t for t in completed(study) if t.user_attrs["details"]["passed"] >= 0]
     if not done:
         return None
     return min(done, key=lambda t: (-t.user_attrs["details"]["passed"], sum(t.values)))

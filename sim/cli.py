@@ -13,6 +13,7 @@ from mantaray.protocol import messages as m
 
 from .objects import OBJECTS
 from .parameters import plant_names
+from .plant import DEFAULT_PLANT
 from .rig import VISION_MODES
 
 
@@ -53,7 +54,7 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     _inside(parser, "--start", args.start, half)
     _inside(parser, "--target", args.target, half)
     try:
-        tracking = Tracking(rate_hz=args.rate or plant.values["tracking.rate_hz"],
+        tracking = Tracking(rate_hz=plant.values["tracking.rate_hz"] if args.rate is None else args.rate,
                             latency_s=plant.values["tracking.latency_s"] if args.latency is None else args.latency,
                             noise_m=args.noise, drop_rate=args.drop, vision=args.vision)
         spec = TrialSpec(args.start, args.target, controller=args.controller, duration_s=args.duration,
@@ -187,7 +188,7 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
         parser.error(str(exc))
     if args.jobs is not None and args.jobs < 1:
         parser.error(f"--jobs must be at least 1, got {args.jobs}")
-    plant = "" if args.plant == "polyester" else f"_{args.plant}"
+    plant = "" if args.plant == DEFAULT_PLANT else f"_{args.plant}"
     out = Path(args.out or f"out/heatmap/{args.object}_{args.controller}_alpha{args.alpha:g}{plant}")
     out.mkdir(parents=True, exist_ok=True)
     try:
@@ -288,7 +289,7 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
         keys = C.searched(args.params.split(",") if args.params else None, fixed)
         Plant(args.plant).set(fixed)
         if args.log:
-            check_logs(args.log)
+            check_logs(args.log, args.object, args.horizon)
             evidence = LogEvidence(logs=tuple(str(Path(p).resolve()) for p in args.log), object_name=args.object,
                                    plant=args.plant, horizon_s=args.horizon, resolution=args.resolution,
                                    timestep_s=args.timestep, seed=args.seed)
@@ -339,6 +340,10 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
             best = C.best_trial(study)
             if args.fig3 and best is not None and evidence.kind == "findings":
                 fig3 = _fig3_for(best, args, pool, out)
+    except RunLogError as exc:              # a log the simulation cannot start (say, off the fabric's corner)
+        progress.close()
+        print(f"mantaray sim calibrate: {exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         progress.close()
         C.write_report(study, evidence, out)
@@ -360,8 +365,9 @@ def _fig3_for(best, args: argparse.Namespace, pool, out: Path) -> dict:
     """F6 for the best candidate: the paper's Fig. 3 experiment on it, with its figure."""
     from mantaray.protocol import messages as m
 
-    from .fig3 import TOLERANCE_M, run_fig3
+    from .fig3 import run_fig3
     from .findings import MODULE_M, fig3_finding
+    from .heatmap import Protocol
     from .plots import fig3_figure
 
     records = run_fig3(pool, args.plant, best.user_attrs["values"], resolution=args.resolution,
@@ -370,7 +376,7 @@ def _fig3_for(best, args: argparse.Namespace, pool, out: Path) -> dict:
     runs: dict[str, list[dict]] = {}
     for r in records:
         runs.setdefault(r["object"], []).append(r)
-    figure = fig3_figure(runs, TOLERANCE_M, MODULE_M, m.Configure.tilt_limit,
+    figure = fig3_figure(runs, Protocol.tolerance_m, MODULE_M, m.Configure.tilt_limit,
                          f"Fig. 3 on calibration candidate #{best.number}", out / "fig3.png")
     return {"holds": finding.holds, "measured": finding.measured, "figure": str(figure)}
 
@@ -395,7 +401,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--seed", type=int, default=1, help="seed of the actuator noise and the camera model")
     run.add_argument("--alpha", type=float, default=0.0, help="noise amplitude α [m] (paper: 0.1 cube, 0.05 bunny)")
     run.add_argument("--tolerance", type=float, default=0.02, help="ε [m]")
-    run.add_argument("--plant", choices=plant_names(), default="polyester",
+    run.add_argument("--plant", choices=plant_names(), default=DEFAULT_PLANT,
                      help="the simulated plant (sim/plant.toml): its parameters, camera latency and readings")
     run.add_argument("--rate", type=float, help="camera rate [Hz] (default the plant's: the paper's 12)")
     run.add_argument("--latency", type=float, help="camera latency [s], below one frame period (default the plant's)")
@@ -428,7 +434,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     heat.add_argument("--gains", type=_gains, metavar="KP,KI,KD[,ILIM]",
                       help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
     heat.add_argument("--seed", type=int, default=2026, help="seed of the whole run: starts, targets and noise")
-    heat.add_argument("--plant", choices=plant_names(), default="polyester", help="the simulated plant (sim/plant.toml)")
+    heat.add_argument("--plant", choices=plant_names(), default=DEFAULT_PLANT, help="the simulated plant (sim/plant.toml)")
     heat.add_argument("--resolution", type=int, default=11, help="fabric vertices per side (odd); the reference "
                       "model is 15 at 0.001 s, 4x slower: 11 at 0.002 s keeps its per-cell success (docs/results.md)")
     heat.add_argument("--timestep", type=float, default=0.002, help="physics step [s] (paper and reference: 0.001)")
@@ -452,7 +458,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      "default every one declared search = true)")
     cal.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                      help="fix a parameter (checked against its declared range); repeatable")
-    cal.add_argument("--plant", choices=plant_names(), default="polyester", help="the plant the values are set over")
+    cal.add_argument("--plant", choices=plant_names(), default=DEFAULT_PLANT, help="the plant the values are set over")
     cal.add_argument("--log", action="append", metavar="RUN.jsonl", help="fit to this rig log (mantaray rig's "
                      "output) instead of the findings; repeatable")
     cal.add_argument("--object", choices=sorted(OBJECTS), default="sphere", help="the object of the rig logs")

@@ -24,8 +24,10 @@ from typing import Iterable
 import numpy as np
 
 from .heatmap import FAILURE_REGION_AT
+from .rig import Frame
 
-MODULE_M = (0.5, 0.5)            # [m] the paper's module; the findings' zones are drawn on it
+MODULE_M = (Frame().size_x_m, Frame().size_y_m)   # [m] the paper's module; the findings' zones are drawn on it
+PAPER_CELLS = 20                 # per side: the paper's grid, over which its totals are summed
 CENTRAL_HALF_M = 0.10            # [m] F1: central targets have |x|, |y| below this
 CENTRAL_AT = 0.9                 # [-] F1: central success rate at least this
 CORNER_FROM_M = 0.175            # [m] F2, F3: corner targets have |x| and |y| above this (7.5 cm squares)
@@ -92,7 +94,8 @@ class MapStats:
     central_rate: float           # F1: share of successes among trials with a central target (NaN: none)
     corner_rate: float            # F2 / F3: among trials with a corner target
     shape_index: float            # F4: rank correlation with L-inf closeness minus with L1 closeness (NaN: too few)
-    total: float                  # F5: estimated sum of the cell rates over the whole grid
+    total: float                  # F5: estimated sum of the cell rates over the grid, scaled to the paper's 400 cells
+                                  # (NaN if a stratum had no cell run)
     strata_rates: dict[str, float]  # mean cell rate by stratum (NaN where no cell was run)
     fell_rate: float
 
@@ -117,9 +120,12 @@ def rank_correlation(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def shape_index(centres: np.ndarray, rates: np.ndarray) -> float:
-    """F4's index: rho(rate, -L-inf norm of the cell centre) - rho(rate, -L1 norm): > 0 square, < 0 diamond."""
+    """F4's index: rho(rate, -L-inf norm of the cell centre) - rho(rate, -L1 norm): > 0 square, < 0 diamond; 0 for a
+    map whose rates are all the same (it has no shape); NaN for fewer than three cells."""
     if len(rates) < 3:
         return math.nan
+    if np.all(rates == rates[0]):
+        return 0.0
     linf = rank_correlation(rates, -np.abs(centres).max(axis=1))
     l1 = rank_correlation(rates, -np.abs(centres).sum(axis=1))
     return linf - l1
@@ -147,7 +153,8 @@ def map_stats(records: Iterable[dict], cells: int, rule: str) -> MapStats:
         run = [rate for c, rate in zip(cell_ids, rates) if c in set(members[name])]
         strata_rates[name] = float(np.mean(run)) if run else math.nan
         if members[name]:
-            total += len(members[name]) * (strata_rates[name] if run else 0.0)
+            total += len(members[name]) * strata_rates[name]
+    total *= PAPER_CELLS ** 2 / cells ** 2
     return MapStats(trials=len(records), central_rate=float(np.mean(central)) if central else math.nan,
                     corner_rate=float(np.mean(corner)) if corner else math.nan,
                     shape_index=shape_index(centres, rates), total=total, strata_rates=strata_rates,
@@ -184,7 +191,8 @@ def heatmap_findings(manhattan: MapStats, euclidean: MapStats) -> list[Finding]:
         Finding("F4", "Manhattan's uncertain region is square, Euclidean's a diamond",
                 m.shape_index > 0 > e.shape_index,
                 f"shape index Manhattan {_fmt(m.shape_index)} (need > 0), Euclidean {_fmt(e.shape_index)} (need < 0)"),
-        Finding("F5", "totals: Manhattan 171.3, Euclidean 108.2 (ratio 1.58)", totals_ok,
+        Finding("F5", f"totals: Manhattan {PAPER_TOTALS['manhattan']}, Euclidean {PAPER_TOTALS['euclidean']} (ratio "
+                f"{PAPER_TOTALS['manhattan'] / PAPER_TOTALS['euclidean']:.2f})", totals_ok,
                 f"Manhattan {m.total:.1f}, Euclidean {e.total:.1f} (ratio {ratio:.2f}; each within "
                 f"{TOTAL_TOLERANCE:.0%} of the paper's)"),
     ]
@@ -203,6 +211,11 @@ def fig3_finding(records: Iterable[dict]) -> Finding:
                    holds if records else None, words or "not run")
 
 
+def _short(gap: float) -> float:
+    """How far a measure falls short of its finding: the gap if positive, else 0; NaN stays NaN."""
+    return gap if math.isnan(gap) else max(0.0, gap)
+
+
 # The largest value each objective can take: both central rates 0; the corner rates and shape indices as wrong as
 # they can be; both totals at the floor of 1.
 WORST_OBJECTIVES = (2 * CENTRAL_AT, FAILURE_REGION_AT + (1 - FAILURE_REGION_AT) + 2 + 2,
@@ -213,11 +226,12 @@ def objectives(manhattan: MapStats, euclidean: MapStats) -> tuple[float, float, 
     """What the calibration search minimises (each 0 when its findings hold):
     (central shortfall, F1; corners and shape shortfall, F2-F4; log-distance of the totals from the paper's, F5)."""
     m, e = manhattan, euclidean
-    nan0 = lambda x: 0.0 if math.isnan(x) else x   # noqa: E731  (a rate no trial measured counts as 0)
-    central = max(0.0, CENTRAL_AT - nan0(m.central_rate)) + max(0.0, CENTRAL_AT - nan0(e.central_rate))
-    corners = (max(0.0, FAILURE_REGION_AT - nan0(m.corner_rate)) + max(0.0, nan0(e.corner_rate) - FAILURE_REGION_AT)
-               + max(0.0, -nan0(m.shape_index)) + max(0.0, nan0(e.shape_index)))
+    # A measure the trials could not give (no central or corner target, too few cells) is NaN, and so is the
+    # objective it enters: the search scores such a candidate as the worst (calibrate.run_study).
+    central = _short(CENTRAL_AT - m.central_rate) + _short(CENTRAL_AT - e.central_rate)
+    corners = (_short(FAILURE_REGION_AT - m.corner_rate) + _short(e.corner_rate - FAILURE_REGION_AT)
+               + _short(-m.shape_index) + _short(e.shape_index))
     floor = 1.0                     # [-] a total of 0 (nothing succeeds) counts as 1
-    totals = sum(abs(math.log(max(s.total, floor) / PAPER_TOTALS[name]))
+    totals = sum(abs(math.log(max(s.total, floor) / PAPER_TOTALS[name])) if math.isfinite(s.total) else math.nan
                  for name, s in (("manhattan", m), ("euclidean", e)))
     return central, corners, totals

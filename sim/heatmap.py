@@ -355,16 +355,29 @@ class TrialRunner:
             self._rig_key = key
         return self._bridge_now
 
+    def result(self, trial: Trial, protocol: Protocol | None = None):
+        """The bridge.TrialResult of one trial of protocol (default: the runner's own)."""
+        protocol = protocol or self.protocol
+        bridge = self._bridge(protocol)
+        try:
+            return bridge.run(trial_spec(protocol, trial))
+        except SimulationUnstable as exc:   # this rig diverges: its other trials are refused without running
+            self._unstable = (self._rig_key, exc)
+            raise
+
     def run(self, trial: Trial, protocol: Protocol | None = None) -> dict:
         """The record of one trial of protocol (default: the runner's own)."""
-        protocol = protocol or self.protocol
         try:
-            result = self._bridge(protocol).run(trial_spec(protocol, trial))
+            result = self.result(trial, protocol)
         except ValueError as exc:        # model.fabric_height: the start is not over the fabric
             if "not over the fabric" not in str(exc):
                 raise
             return unplaceable_record(trial, str(exc))
         return trial_record(trial, result)
+
+    def call(self, fn: Callable, arg):
+        """fn(self, arg): a job that needs this process's runner (a Ray actor's, or a pool worker's)."""
+        return fn(self, arg)
 
 
 _worker: TrialRunner | None = None
@@ -379,6 +392,11 @@ def _init_worker() -> None:
 def _run_in_worker(job: tuple[dict, Trial]) -> dict:
     protocol_json, trial = job
     return _worker.run(trial, Protocol.from_json(protocol_json))
+
+
+def _call_in_worker(job: tuple[Callable, object]) -> object:
+    fn, arg = job
+    return _worker.call(fn, arg)
 
 
 class LocalPool:
@@ -414,8 +432,11 @@ class LocalPool:
         return list(self.imap(jobs, ordered=True))
 
     def map_calls(self, fn: Callable, args: list) -> list:
-        """[fn(a) for a in args] on the workers (fn a module-level function), in order."""
-        return [fn(a) for a in args] if self._pool is None else self._pool.map(fn, args, chunksize=1)
+        """[fn(runner, a) for a in args] on the workers, each with its process's TrialRunner (fn a module-level
+        function), in order."""
+        if self._pool is None:
+            return [self._runner.call(fn, a) for a in args]
+        return self._pool.map(_call_in_worker, [(fn, a) for a in args], chunksize=1)
 
 
 class RayPool:
@@ -447,10 +468,8 @@ class RayPool:
         return list(self.imap(jobs, ordered=True))
 
     def map_calls(self, fn: Callable, args: list) -> list:
-        """[fn(a) for a in args] as Ray tasks, in order."""
-        import ray
-        task = ray.remote(num_cpus=1)(fn)
-        return ray.get([task.remote(a) for a in args])
+        """[fn(runner, a) for a in args] on the actors (which hold every CPU they asked for), in order."""
+        return list(self._pool.map(lambda actor, a: actor.call.remote(fn, a), args))
 
 
 def run_local(protocol: Protocol, todo: list[Trial], jobs: int) -> Iterator[dict]:

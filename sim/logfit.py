@@ -14,7 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from mantaray.host.runlog import LoggedRun, RunLog, read_run_log
+from mantaray.host.runlog import LoggedRun, RunLog, RunLogError, read_run_log
+
+from .plant import DEFAULT_PLANT
 
 FELL_ERROR_M = 0.25          # [m] the error a frame counts for once the replayed object has fallen off
 
@@ -22,33 +24,32 @@ FELL_ERROR_M = 0.25          # [m] the error a frame counts for once the replaye
 def replay(run: LoggedRun, rig, latency_s: float = 0.0, horizon_s: float | None = None) -> np.ndarray:
     """The simulated object's (x, y) [m] at each logged frame's capture time, driven by the logged commands.
 
-    Each frame's command is applied latency_s after its capture, as the firmware's answer was. Rows after the
-    object fell off are NaN. horizon_s ends the replay early.
+    Each frame's command is applied latency_s after its capture, at the step it falls due, as the bridge applies
+    the firmware's answer. Rows after the object fell off are NaN; horizon_s ends the replay early. Raises
+    SimulationUnstable if the physics diverges, and RunLogError if the log starts where there is no fabric.
     """
-    import mujoco
-
     from . import model as M
 
     model, data = M.load(rig)
-    M.drop_object(model, data, *run.start_m)
+    try:
+        M.drop_object(model, data, *run.start_m)
+    except ValueError as exc:                  # model.fabric_height: not over the fabric
+        raise RunLogError(f"{run.path}: the run starts at {run.start_m}, {exc}") from None
     t0 = data.time
-    out = np.full((len(run.t_s), 2), np.nan)
-    pending: list[tuple[float, np.ndarray]] = []           # (time, command) not yet applied
-
     half_step_s = 0.5 * model.opt.timestep
+    out = np.full((len(run.t_s), 2), np.nan)
+    pending: list[tuple[float, np.ndarray]] = []           # (run time [s], command [m]) not yet applied
 
-    def step_to(t_s: float) -> bool:
-        """Step to t_s as the bridge does (to within half a step), applying each command at the step it is due."""
-        while data.time < t0 + t_s - half_step_s:
-            while pending and pending[0][0] <= data.time - t0 + half_step_s:
-                M.set_commands(model, data, pending.pop(0)[1])
-            mujoco.mj_step(model, data)
-        return M.fell_off(model, data, rig.fall)
+    def apply_due(_=None) -> None:
+        while pending and pending[0][0] <= data.time - t0 + half_step_s:
+            M.set_commands(model, data, pending.pop(0)[1])
 
     for k, t_s in enumerate(run.t_s):
         if horizon_s is not None and t_s > horizon_s:
             break
-        if step_to(t_s):
+        apply_due()
+        M.step_until(model, data, t0 + t_s, apply_due)
+        if M.fell_off(model, data, rig.fall):
             break
         out[k] = M.object_xy(model, data)
         if np.all(np.isfinite(run.command_m[k])):
@@ -66,7 +67,8 @@ def trajectory_error_m(simulated_xy: np.ndarray, logged_xy: np.ndarray) -> float
     return float(distance[seen[:n]].mean())
 
 
-def _replay_error(job: tuple) -> float:
+def _replay_error(_runner, job: tuple) -> float:
+    """The trajectory error of one log on one candidate plant (a pool job; it needs no trial runner)."""
     path, plant_name, values, object_name, resolution, timestep_s, horizon_s = job
     from .plant import Plant
     plant = Plant(plant_name).set(values)
@@ -82,7 +84,7 @@ class LogEvidence:
     """Rig logs: the candidate plant, driven by each log's commands, should retrace each log's trajectory."""
     logs: tuple[str, ...]
     object_name: str = "sphere"
-    plant: str = "polyester"
+    plant: str = DEFAULT_PLANT
     horizon_s: float | None = None       # [s] compare only the first part of each run (None: all of it)
     resolution: int = 11
     timestep_s: float = 0.002
@@ -97,6 +99,24 @@ class LogEvidence:
         errors = pool.map_calls(_replay_error, jobs)
         return (float(np.mean(errors)),), {"errors_m": {Path(p).name: round(e, 5) for p, e in zip(self.logs, errors)},
                                            "passed": 0}
+
+
+def check_logs(paths: list[str], object_name: str, horizon_s: float | None) -> None:
+    """Refuse, before a search starts, a file that is not a usable rig log (RunLogError): unreadable, fewer than two
+    frames, logged with another object than the fit's, or with no frame seen before the horizon."""
+    if horizon_s is not None and not (math.isfinite(horizon_s) and horizon_s > 0):
+        raise RunLogError(f"--horizon must be a positive number of seconds, got {horizon_s}")
+    for path in paths:
+        run = read_run_log(path)
+        if len(run.t_s) < 2:
+            raise RunLogError(f"{run.path} has fewer than two frames: nothing to fit")
+        logged = run.args.get("object")
+        if logged is not None and logged != object_name:
+            raise RunLogError(f"{run.path} was logged with the {logged}, not the {object_name}: pass --object {logged}")
+        seen = np.isfinite(run.xy_m[:, 0]) & (run.t_s <= (horizon_s if horizon_s is not None else math.inf))
+        if seen.sum() < 2:
+            raise RunLogError(f"{run.path} has fewer than two frames with the object seen before the horizon "
+                              f"({horizon_s} s)")
 
 
 def write_log(path: str | Path, result, object_name: str, plant_name: str) -> Path:
@@ -122,13 +142,3 @@ def write_log(path: str | Path, result, object_name: str, plant_name: str) -> Pa
     finally:
         log.close()
     return Path(path)
-
-
-def check_logs(paths: list[str]) -> list[LoggedRun]:
-    """Read every log once up front, so a bad file is refused before the search starts (RunLogError)."""
-    runs = [read_run_log(p) for p in paths]
-    for run in runs:
-        if not math.isfinite(run.t_s[-1]) or len(run.t_s) < 2:
-            from mantaray.host.runlog import RunLogError
-            raise RunLogError(f"{run.path} has fewer than two frames: nothing to fit")
-    return runs

@@ -318,6 +318,21 @@ def load(rig: Rig, fabric_settle_s: float = 2.0) -> tuple[mujoco.MjModel, mujoco
     return model, data
 
 
+def step_until(model: mujoco.MjModel, data: mujoco.MjData, until_s: float, after_step=None) -> None:
+    """Step until data.time is within half a step of until_s [s, physics time], calling after_step(data) after each
+    step; raise SimulationUnstable at the step MuJoCo reports a diverged state (it resets it to time 0, so the loop
+    would otherwise start over)."""
+    diverged = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]   # a live view of MuJoCo's counter
+    before = diverged.number
+    end = until_s - 0.5 * model.opt.timestep
+    while data.time < end:
+        mujoco.mj_step(model, data)
+        if after_step is not None:
+            after_step(data)
+        if diverged.number != before:
+            raise SimulationUnstable(f"the physics diverged before t = {until_s:.3f} s")
+
+
 def set_commands(model: mujoco.MjModel, data: mujoco.MjData, a_m) -> None:
     """Set the four actuator commands a_i [m] (+ = corner lowered, PROTOCOL.md §5), clipped to ±range."""
     a = np.asarray(a_m, dtype=float)

@@ -58,11 +58,6 @@ class Plant:
         """end (within eps at T) or reached (within eps at any frame, where the paper's loop stops)."""
         return self.values["reading.success_rule"]
 
-    def describe(self) -> dict[str, float | str]:
-        """The values that differ from the polyester defaults (what makes this plant this plant)."""
-        defaults = {key: p.value for key, p in P.parameters().items()}
-        return {k: v for k, v in self.values.items() if v != defaults[k]}
-
 
 def _set_field(rig: Rig, p: P.Parameter, value: float | str) -> Rig:
     """rig with the field a parameter names set to value (a tuple member through its index)."""

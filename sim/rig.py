@@ -1,7 +1,8 @@
 """The one description of the simulated rig: frame, actuators, fabric, contact, solver, camera, fall rule and object.
 
-Every value the paper does not give is declared, with its range and source, in sim/plant.toml; the defaults here
-are read from there (the polyester plant).
+Every physical quantity of the plant that the paper does not give is declared, with its range and source, in
+sim/plant.toml, and the defaults here are read from there (the polyester plant). What is left here is the paper's
+(frame, travel, motor), the numerics (mesh resolution, solver) and the renderer's camera.
 """
 from __future__ import annotations
 

@@ -13,7 +13,7 @@ from mantaray.sim import findings as F
 CELLS = 20
 
 
-def _records(rate_of, rule_field="success", seed=0, trials=10, cells=None):
+def _records(rate_of, seed=0, trials=10, cells=None):
     """Synthetic records: for each cell, `trials` trials whose target is the cell's centre and whose outcome is
     drawn with probability rate_of(x, y) (deterministic from the seed)."""
     rng = np.random.default_rng(seed)
@@ -22,8 +22,7 @@ def _records(rate_of, rule_field="success", seed=0, trials=10, cells=None):
         x, y = F.cell_centre(cell, CELLS)
         for k in range(trials):
             ok = bool(rng.random() < rate_of(x, y))
-            out.append({"cell": cell, "k": k, "target_m": [x, y], "success": ok if rule_field == "success" else False,
-                        "reached": ok, "fell_off": not ok})
+            out.append({"cell": cell, "k": k, "target_m": [x, y], "success": ok, "reached": ok, "fell_off": not ok})
     return out
 
 
@@ -121,3 +120,20 @@ def test_f6_needs_every_object_five_times_and_every_trial_reached():
     assert not F.fig3_finding(one_fell).holds
     assert not F.fig3_finding(full[5:]).holds                 # the sphere's five missing
     assert F.fig3_finding([]).holds is None
+
+
+def test_a_measure_the_trials_cannot_give_makes_its_objective_nan_not_zero():
+    only_centre = F.map_stats(_records(lambda x, y: 1.0, cells=F.strata_cells(CELLS)["centre"]), CELLS, "end")
+    assert math.isnan(only_centre.corner_rate) and math.isnan(only_centre.total)
+    central, corners, totals = F.objectives(only_centre, only_centre)
+    assert central == 0.0 and math.isnan(corners) and math.isnan(totals)
+
+
+def test_totals_are_scaled_to_the_papers_400_cells():
+    ten = [{"cell": c, "k": 0, "target_m": list(F.cell_centre(c, 10)), "success": True, "reached": True,
+            "fell_off": False} for c in range(100)]
+    assert F.map_stats(ten, 10, "end").total == pytest.approx(400.0)     # every cell of a 10 x 10 grid succeeds
+
+
+def test_a_map_with_one_rate_everywhere_has_no_shape():
+    assert F.map_stats(_records(lambda x, y: 0.0), CELLS, "end").shape_index == 0.0
