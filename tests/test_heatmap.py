@@ -178,6 +178,16 @@ def test_ray_runs_the_same_trials_as_local_processes():
         assert local[key]["final_m"] == on_ray[key]["final_m"] and local[key]["success"] == on_ray[key]["success"]
 
 
+def _runner_kind_and_double(runner, x):
+    return type(runner).__name__, 2 * x
+
+
+@pytest.mark.parametrize("pool", ["local", "ray"])
+def test_any_job_runs_on_the_pools_own_trial_runners_in_order(pool):
+    with (H.LocalPool(2) if pool == "local" else H.RayPool(2, None)) as workers:
+        assert workers.map_calls(_runner_kind_and_double, [1, 2, 3, 4]) == [("TrialRunner", 2 * x) for x in (1, 2, 3, 4)]
+
+
 # ------------------------------------------------------------------------------------------- CLI end to end
 def _cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", *args], cwd=REPO, capture_output=True,
