@@ -184,6 +184,9 @@ def _runner_kind_and_double(runner, x):
 
 @pytest.mark.parametrize("pool", ["local", "ray"])
 def test_any_job_runs_on_the_pools_own_trial_runners_in_order(pool):
+    if pool == "ray":        # Ray's workers cannot import this test module: send the function by value
+        from ray import cloudpickle
+        cloudpickle.register_pickle_by_value(sys.modules[__name__])
     with (H.LocalPool(2) if pool == "local" else H.RayPool(2, None)) as workers:
         assert workers.map_calls(_runner_kind_and_double, [1, 2, 3, 4]) == [("TrialRunner", 2 * x) for x in (1, 2, 3, 4)]
 
