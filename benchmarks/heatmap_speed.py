@@ -1,6 +1,7 @@
 """Benchmark: heatmap trials per wall second on this machine, and whether faster physics keeps per-cell success.
 
 Run: python3 benchmarks/heatmap_speed.py [--configs 15:0.001,15:0.001:7,11:0.002] [--controller manhattan] [--jobs 2]
+     [--plant NAME]
 Each config (fabric resolution : timestep [s]) runs the same sample of cells (a 4 x 4 spread over the
 20 x 20 grid, the paper's 10 trials each, T = 10 s) on all cores, in-process firmware core. The first
 config is the reference. Prints, per config: trials per wall second, simulated seconds per wall second,
@@ -24,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from mantaray.sim import heatmap as H
+from mantaray.sim.plant import DEFAULT_PLANT
 
 SAMPLE_IX = (2, 7, 12, 17)   # cells ix, iy of the sample: centres at -0.1875, -0.0625, 0.0625, 0.1875 m
 FULL_TRIALS = 4000           # the paper's protocol: 20 x 20 cells x 10 trials
@@ -73,6 +75,7 @@ def main() -> int:
     parser.add_argument("--controller", default="manhattan")
     parser.add_argument("--object", default="sphere")
     parser.add_argument("--alpha", type=float, default=0.0)
+    parser.add_argument("--plant", default=DEFAULT_PLANT, help="a named plant of sim/plant.toml")
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     parser.add_argument("--out", default="out/bench/heatmap_speed")
     parser.add_argument("--batched", action="store_true", help="also measure mujoco.rollout's batched stepping")
@@ -90,10 +93,12 @@ def main() -> int:
           f"(tolerance {MEAN_ABS_TOLERANCE} / - / ±{BIAS_TOLERANCE})")
     for resolution, timestep, seed in configs:
         protocol = H.Protocol(object_name=args.object, controller=args.controller, alpha_m=args.alpha,
-                              resolution=resolution, timestep_s=timestep, seed=seed, only_cells=cells)
+                              resolution=resolution, timestep_s=timestep, seed=seed, only_cells=cells,
+                              plant=args.plant)
         drawn = "" if seed == H.Protocol.seed else f"_seed{seed}"
+        plant = "" if args.plant == DEFAULT_PLANT else f"_{args.plant}"
         results = H.ResultsFile.open(
-            Path(args.out) / f"{args.object}_{args.controller}_{resolution}_{timestep:g}{drawn}.jsonl", protocol)
+            Path(args.out) / f"{args.object}_{args.controller}_{resolution}_{timestep:g}{drawn}{plant}.jsonl", protocol)
         todo = results.missing()
         t0 = time.perf_counter()
         H.run(results, H.run_local(protocol, todo, args.jobs))
