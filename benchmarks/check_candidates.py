@@ -1,12 +1,13 @@
 """Benchmark: the calibration's best candidates on a larger sample drawn from another seed (a hold-out check).
 
 Run: python3 benchmarks/check_candidates.py [--study out/calibration/paper/study.db] [--top 3]
-     [--cells-per-stratum 8] [--trials-per-cell 4] [--seed 77] [--jobs 2]
+     [--plants polyester,paper] [--cells-per-stratum 8] [--trials-per-cell 4] [--seed 77] [--jobs 2]
 A search scores candidates on a small sample (12-15 trials a stratum), so the best of many is partly the luckiest.
 This takes the --top candidates of a findings study (most findings holding, then the smallest sum of objectives)
 and scores each again, with the same code, on --cells-per-stratum cells of each stratum and --trials-per-cell
-trials each, drawn from --seed (not the search's). Prints each candidate's F1-F5 on both samples and writes
-them as JSON to --out.
+trials each, drawn from --seed (not the search's). --plants scores named plants (sim/plant.toml) on the same
+hold-out sample, beside them. Prints each one's F1-F5 (for a candidate, on both samples) and writes them as
+JSON to --out.
 """
 from __future__ import annotations
 
@@ -21,12 +22,14 @@ import optuna
 
 from mantaray.sim import calibrate as C
 from mantaray.sim.heatmap import LocalPool
+from mantaray.sim.parameters import plant_names
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--study", default="out/calibration/paper/study.db")
-    parser.add_argument("--top", type=int, default=3)
+    parser.add_argument("--top", type=int, default=3, help="how many of the study's best candidates (0: none)")
+    parser.add_argument("--plants", default="", help="named plants to score on the same sample, comma-separated")
     parser.add_argument("--cells-per-stratum", type=int, default=8)
     parser.add_argument("--trials-per-cell", type=int, default=4)
     parser.add_argument("--seed", type=int, default=77)
@@ -47,6 +50,16 @@ def main() -> int:
                     key=lambda t: (-t.user_attrs["details"]["passed"], sum(t.values)))[:args.top]
     rows = []
     with LocalPool(args.jobs) as pool:
+        for name in filter(None, args.plants.split(",")):
+            if name not in plant_names():
+                parser.error(f"unknown plant {name!r}; the plants are: {', '.join(plant_names())}")
+            objectives, details = dataclasses.replace(check, plant=name).evaluate({}, pool)
+            rows.append({"plant": name, "check": {"objectives": list(objectives), "findings": details["findings"],
+                                                  "stats": details["stats"]}})
+            print(f"plant {name} ({details['rule']} rule), hold-out sample:")
+            for finding, f in details["findings"].items():
+                print(f"  {finding}: {'holds' if f['holds'] else 'fails'}   {f['measured']}")
+            print(f"  objectives {[round(v, 3) for v in objectives]}", flush=True)
         for t in ranked:
             t0 = time.perf_counter()
             objectives, details = check.evaluate(t.user_attrs["values"], pool)
