@@ -6,6 +6,7 @@ import contextlib
 import json
 import math
 import os
+import signal
 import sys
 from pathlib import Path
 
@@ -335,6 +336,7 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
     else:
         pool = LocalPool(args.jobs or os.cpu_count() or 1)
     fig3 = None
+    signal.signal(signal.SIGTERM, _interrupt)   # a stopped session's kill ends the search as Ctrl-C does
     try:
         with pool:
             C.run_study(study, evidence, keys, fixed, args.candidates, pool, report_candidate)
@@ -360,6 +362,11 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
         print(f"{report['candidates']} candidates; best #{best['number']}: objectives {best['objectives']}; "
               f"report {out / 'report.md'}" if best else f"no candidate evaluated; {out / 'report.md'}")
     return 0
+
+
+def _interrupt(signum, frame) -> None:
+    """SIGTERM as Ctrl-C: the candidate in flight is queued again and the report written."""
+    raise KeyboardInterrupt
 
 
 def _fig3_for(best, args: argparse.Namespace, pool, out: Path) -> dict:

@@ -58,7 +58,8 @@ def _study_rows(db) -> list[tuple[int, str]]:
         return con.execute("select number, state from trials order by number").fetchall()
 
 
-def test_a_tiny_search_is_interrupted_and_the_same_command_continues_it(tmp_path):
+@pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM])
+def test_a_tiny_search_is_interrupted_and_the_same_command_continues_it(tmp_path, stop):
     out = tmp_path / "cal"
     proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "calibrate", *TINY, "--candidates", "3",
                              "--out", str(out)], cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -67,7 +68,7 @@ def test_a_tiny_search_is_interrupted_and_the_same_command_continues_it(tmp_path
         if (out / "study.db").exists() and [s for _, s in _study_rows(out / "study.db")].count("COMPLETE") >= 1:
             break
         time.sleep(0.2)
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(stop)
     _, err = proc.communicate(timeout=120)
     if proc.returncode == 0:
         pytest.skip("the search finished before the interruption reached it")   # a machine too fast for the probe
