@@ -184,9 +184,14 @@ class ResultsFile:
         results = cls(path, protocol)
         if not path.exists() or path.stat().st_size == 0:
             path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(json.dumps({"format": RESULTS_FORMAT, "protocol": protocol.to_json()}) + "\n")
+            path.write_text(json.dumps(_header(protocol)) + "\n")
             return results
-        stored, records, good_bytes = _read(path)
+        stored, records, good_bytes, plant_values = _read(path)
+        now = protocol.plant_model().values
+        if plant_values is not None and plant_values != now:
+            changed = sorted(k for k in now if plant_values.get(k) != now[k])
+            raise ProtocolMismatch(f"{path} was run on the plant {protocol.plant!r} when its values were others "
+                                   f"({', '.join(changed)} differ in sim/plant.toml since); use another --out")
         if stored != protocol and not _extends(stored, protocol):
             changed = sorted(k for k, v in protocol.to_json().items() if stored.to_json().get(k) != v)
             raise ProtocolMismatch(f"{path} holds a run with other options ({', '.join(changed)} differ); "
@@ -198,7 +203,7 @@ class ResultsFile:
         if stored != protocol:                  # grown: the header names the larger run, the trials stay
             body = path.read_bytes().split(b"\n", 1)[1]
             grown = path.with_name(path.name + ".grown")
-            grown.write_bytes(json.dumps({"format": RESULTS_FORMAT, "protocol": protocol.to_json()}).encode()
+            grown.write_bytes(json.dumps(_header(protocol)).encode()
                               + b"\n" + body)
             os.replace(grown, path)
         results.records = records
@@ -207,7 +212,7 @@ class ResultsFile:
     @classmethod
     def load(cls, path: str | Path) -> ResultsFile:
         """Read a results file whatever its protocol (for figures and comparisons)."""
-        protocol, records, _ = _read(Path(path))
+        protocol, records, _, _ = _read(Path(path))
         return cls(Path(path), protocol, records)
 
     def append(self, record: dict) -> None:
@@ -230,8 +235,14 @@ def _extends(stored: Protocol, wanted: Protocol) -> bool:
     return same_otherwise and more_per_cell and more_cells
 
 
-def _read(path: Path) -> tuple[Protocol, dict[str, dict], int]:
-    """(protocol, records by key, bytes of complete lines) of a results file."""
+def _header(protocol: Protocol) -> dict:
+    """A results file's first line: the protocol, and the values its plant had (a named plant may be refitted)."""
+    return {"format": RESULTS_FORMAT, "protocol": protocol.to_json(), "plant_values": protocol.plant_model().values}
+
+
+def _read(path: Path) -> tuple[Protocol, dict[str, dict], int, dict | None]:
+    """(protocol, records by key, bytes of complete lines, the plant's values if the header holds them) of a
+    results file."""
     raw = path.read_bytes()
     lines = raw.split(b"\n")
     try:
@@ -250,7 +261,7 @@ def _read(path: Path) -> tuple[Protocol, dict[str, dict], int]:
             break
         records[record["key"]] = record
         good += len(line) + 1
-    return protocol, records, good
+    return protocol, records, good, header.get("plant_values")
 
 
 # ------------------------------------------------------------------------------------------- aggregation

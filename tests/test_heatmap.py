@@ -259,3 +259,14 @@ def test_heatmap_refuses_to_mix_two_experiments_in_one_results_file(tmp_path):
     assert first.returncode == 0, first.stderr
     proc = _cli("heatmap", "--cells", "1", "--trials", "1", "--duration", "0.3", "--jobs", "1", "--out", str(tmp_path))
     assert proc.returncode == 2 and "duration_s" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_a_results_file_of_a_plant_whose_values_changed_is_not_continued(tmp_path):
+    path = tmp_path / "results.jsonl"
+    H.ResultsFile.open(path, SMALL)
+    header = json.loads(path.read_text().splitlines()[0])
+    assert header["plant_values"]["fabric.size_m"] == SMALL.plant_model().values["fabric.size_m"]
+    header["plant_values"]["fabric.size_m"] = 0.51           # as if sim/plant.toml had been refitted since
+    path.write_text(json.dumps(header) + "\n")
+    with pytest.raises(H.ProtocolMismatch, match="fabric.size_m differ"):
+        H.ResultsFile.open(path, SMALL)
