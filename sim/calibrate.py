@@ -15,6 +15,7 @@ import dataclasses
 import json
 import math
 import time
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Protocol as Typing
@@ -209,7 +210,9 @@ def importances(study, evidence) -> dict[str, dict[str, float]]:
 
     if len(completed(study)) < 4:
         return {}
-    evaluator = optuna.importance.PedAnovaImportanceEvaluator()
+    with warnings.catch_warnings():              # PED-ANOVA is marked experimental in Optuna
+        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+        evaluator = optuna.importance.PedAnovaImportanceEvaluator()
     out = {}
     for i, name in enumerate(evidence.objective_names):
         try:

@@ -134,9 +134,10 @@ def markdown_table() -> str:
     rows = ["| parameter | value | range | MuJoCo's default | searched | kind | source; why this range |",
             "|---|---|---|---|---|---|---|"]
     for p in parameters().values():
-        span = " / ".join(p.choices) if p.choices else f"{p.low:g} – {p.high:g} {p.unit}"
+        unit = "" if p.unit in ("", "-") else f" {p.unit}"
+        span = " / ".join(p.choices) if p.choices else f"{p.low:g} – {p.high:g}{unit}"
         mujoco = "" if p.mujoco is None else f"{p.mujoco:g}"
-        value = p.value if p.choices else f"{p.value:g} {p.unit}"
+        value = p.value if p.choices else f"{p.value:g}{unit}"
         rows.append(f"| `{p.key}` | {value} | {span} | {mujoco} | {'yes' if p.search else 'no'} | {p.kind} | "
                     f"{p.source}; {p.reason} |")
     return "\n".join(rows)
