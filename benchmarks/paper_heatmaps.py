@@ -118,7 +118,8 @@ def main() -> int:
             COMMITTED.mkdir(parents=True, exist_ok=True)
             committed.write_bytes(gzip.compress(trials, mtime=0))
         summary = json.loads(proc.stdout)
-        shutil.copyfile(out / "heatmap.png", figures / f"heatmap_{name}.png")
+        if not stop:                  # a run that stops at eps has no map of "ends within eps at T"
+            shutil.copyfile(out / "heatmap.png", figures / f"heatmap_{name}.png")
         shutil.copyfile(out / "heatmap_reach.png", figures / f"heatmap_{name}_reach.png")
         table[name] = {"object": obj, "controller": controller, "alpha_m": alpha, "plant": args.plant,
                        "score": summary["score"],
@@ -130,7 +131,7 @@ def main() -> int:
               f"{summary['trials']} trials, this session {wall / 60:.1f} min", flush=True)
     sphere_runs = [REPO / args.out / (run + suffix) / "results.jsonl" for run in ("sphere_euclidean", "sphere_manhattan")]
     if all(path.exists() for path in sphere_runs):
-        for rule, rule_suffix in (([], ""), (["--reached"], "_reach")):
+        for rule, rule_suffix in ((["--reached"], "_reach"),) if stop else (([], ""), (["--reached"], "_reach")):
             proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "compare",
                                    *map(str, sphere_runs), *rule, "--out",
                                    str(figures / f"heatmap_sphere_euclidean_minus_manhattan{rule_suffix}{suffix}.png")],
