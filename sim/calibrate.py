@@ -18,7 +18,8 @@ import time
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Protocol as Typing
+from typing import Callable
+from typing import Protocol as Interface
 
 from . import findings as F
 from . import parameters as P
@@ -34,10 +35,12 @@ class StudyMismatch(ValueError):
     """The study file holds a search with another configuration: continuing it would mix two searches."""
 
 
-class Evidence(Typing):
-    """What a candidate plant is scored against."""
+class Evidence(Interface):
+    """What a candidate plant is scored against (FindingsEvidence, logfit.LogEvidence)."""
     kind: str
+    seed: int                               # seeds the sampler (with how far the study got)
     objective_names: tuple[str, ...]        # all minimised
+    penalty: tuple[float, ...]              # what a plant that cannot be simulated scores
 
     def evaluate(self, values: dict[str, float | str], pool) -> tuple[tuple[float, ...], dict]:
         """(objectives, details for the report) of the plant with these values set over the base plant."""
@@ -210,16 +213,17 @@ def importances(study, evidence) -> dict[str, dict[str, float]]:
 
     if len(completed(study)) < 4:
         return {}
-    with warnings.catch_warnings():              # PED-ANOVA is marked experimental in Optuna
-        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-        evaluator = optuna.importance.PedAnovaImportanceEvaluator()
     out = {}
-    for i, name in enumerate(evidence.objective_names):
-        try:
-            out[name] = {k: round(float(v), 4) for k, v in optuna.importance.get_param_importances(
-                study, evaluator=evaluator, target=lambda t, i=i: t.values[i]).items()}
-        except (RuntimeError, ValueError) as exc:      # e.g. every candidate gave the same value
-            out[name] = {"(not computable)": str(exc)}
+    with warnings.catch_warnings():   # PED-ANOVA is marked experimental, and reminds that low values are the good ones
+        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+        warnings.filterwarnings("ignore", message="PedAnovaImportanceEvaluator computes", category=UserWarning)
+        evaluator = optuna.importance.PedAnovaImportanceEvaluator()
+        for i, name in enumerate(evidence.objective_names):
+            try:
+                out[name] = {k: round(float(v), 4) for k, v in optuna.importance.get_param_importances(
+                    study, evaluator=evaluator, target=lambda t, i=i: t.values[i]).items()}
+            except (RuntimeError, ValueError) as exc:      # e.g. every candidate gave the same value
+                out[name] = {"(not computable)": str(exc)}
     return out
 
 
