@@ -15,6 +15,20 @@ class CodecError(ValueError):
     """A payload or value that cannot be encoded or decoded."""
 
 
+def choices(kind: type[enum.Enum]) -> list[str]:
+    """An enum's member names as the command lines, the JSON and the error messages spell them: lower case."""
+    return [member.name.lower() for member in kind]
+
+
+class FieldRefused(ValueError):
+    """A field the firmware would refuse by the schema's field-local rules; code and field as its nack would say."""
+
+    def __init__(self, message: "Message", field: str, code: str, text: str) -> None:
+        self.message_name, self.field, self.code = message.NAME, field, code   # code: not_finite | out_of_range
+        self.reason = text
+        super().__init__(f"{message.NAME}.{field}: {text}")
+
+
 @dataclass(frozen=True)
 class FieldSpec:
     """One field of a message as the schema defines it."""
@@ -48,6 +62,33 @@ def _to_wire(spec: FieldSpec, value: Any) -> int | float:
     if not lo <= value <= hi:
         raise CodecError(f"{spec.name}: {value} does not fit the wire type (range {lo}..{hi})")
     return value
+
+
+def _as_f32(value: float) -> float:
+    return struct.unpack("<f", struct.pack("<f", value))[0] if math.isfinite(value) and abs(value) <= F32_MAX else value
+
+
+def _field_refusal(spec: FieldSpec, value: Any) -> tuple[str, str] | None:
+    """(code, why) when the firmware's generated validate() refuses this element, else None.
+
+    The same rules, in the same order, as protocol/generate.py writes into protocol_gen.h: an f32 must be finite,
+    an enum value must be one of the enum's, and the value must lie within min..max (compared as float32)."""
+    unit = f" {spec.unit}" if spec.unit else ""
+    if spec.fmt == "f":
+        value = float(value)
+        if not math.isfinite(value):
+            return "not_finite", f"must be a finite number, got {value}"
+        value = _as_f32(value)
+    if isinstance(spec.kind, type) and issubclass(spec.kind, enum.IntEnum) and not issubclass(spec.kind, enum.IntFlag):
+        if int(value) not in spec.kind._value2member_map_:
+            return "out_of_range", f"must be one of {', '.join(k.name.lower() for k in spec.kind)}, got {value!r}"
+    lo = None if spec.min is None else (_as_f32(spec.min) if spec.fmt == "f" else spec.min)
+    hi = None if spec.max is None else (_as_f32(spec.max) if spec.fmt == "f" else spec.max)
+    if (lo is not None and value < lo) or (hi is not None and value > hi):
+        bounds = f"{spec.min:g}..{spec.max:g}" if lo is not None and hi is not None else (
+            f">= {spec.min:g}" if lo is not None else f"<= {spec.max:g}")
+        return "out_of_range", f"{value:g}{unit} is outside {bounds}{unit}"
+    return None
 
 
 def _from_wire(spec: FieldSpec, raw: int | float) -> Any:
@@ -84,6 +125,17 @@ class Message:
                 raise CodecError(f"{spec.name}: expected {spec.count} values, got {len(elements)}")
             values += [_to_wire(spec, v) for v in elements]
         return struct.pack(self.struct_format(), *values)
+
+    def check(self) -> "Message":
+        """Raise FieldRefused for the first field the firmware would refuse by the schema alone (bounds, finiteness,
+        enum values); returns the message. Rules across fields (PROTOCOL.md) stay the firmware's to judge."""
+        for spec in self.FIELDS:
+            value = getattr(self, spec.name)
+            for element in (list(value) if spec.count > 1 else [value]):
+                refusal = _field_refusal(spec, element)
+                if refusal is not None:
+                    raise FieldRefused(self, spec.name, *refusal)
+        return self
 
     @classmethod
     def decode_payload(cls, payload: bytes) -> "Message":

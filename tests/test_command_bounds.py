@@ -2,18 +2,19 @@
 from __future__ import annotations
 
 import ctypes
-import enum
+import dataclasses
 import math
 import struct
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from mantaray.host.link import CommandRefused, Link
 from mantaray.host.transport import InProcessTransport
 from mantaray.protocol import messages as m
+from mantaray.protocol.codec import FieldRefused
 
 RANGE = 0.25  # [m] actuator travel (rig_config.h kActuatorRange)
 SLACK = 1e-9  # [m] decoding raw * 1e-5 in float64
@@ -132,20 +133,12 @@ class Model:
             -0.5 * f32(c.module_y) <= y <= 0.5 * f32(c.module_y)
 
     def bounds(self, cls, msg) -> tuple[E, int] | None:
-        """The schema's field-local checks, in field order (what the generated validate() does)."""
-        for index, spec in enumerate(cls.FIELDS):
-            value = getattr(msg, spec.name)
-            if spec.fmt == "f":
-                value = f32(value)
-                if not finite(value):
-                    return E.NOT_FINITE, index
-            if spec.kind is not None and not issubclass(spec.kind, enum.IntFlag) and \
-                    int(value) not in {int(v) for v in spec.kind}:
-                return E.OUT_OF_RANGE, index
-            lo = None if spec.min is None else (f32(spec.min) if spec.fmt == "f" else spec.min)
-            hi = None if spec.max is None else (f32(spec.max) if spec.fmt == "f" else spec.max)
-            if (lo is not None and value < lo) or (hi is not None and value > hi):
-                return E.OUT_OF_RANGE, index
+        """The schema's field-local checks as the host runs them before sending (Message.check): the firmware's
+        generated validate() must refuse exactly these, with the same code and field."""
+        try:
+            msg.check()
+        except FieldRefused as refused:
+            return E[refused.code.upper()], [s.name for s in cls.FIELDS].index(refused.field)
         return None
 
     def configure(self, c: m.Configure) -> tuple[E, int] | None:
@@ -400,3 +393,52 @@ def test_non_finite_positions_are_refused_and_change_nothing(capi, seed):
         return seen
 
     assert run(with_bad=True) == run(with_bad=False)
+
+
+
+def _unchecked_spec(**fields):
+    """A TrialSpec built without its own checks, to see what its commands would do to a firmware."""
+    from dataclasses import fields as dc_fields
+
+    from mantaray.sim.bridge import TrialSpec
+
+    spec = object.__new__(TrialSpec)
+    for f in dc_fields(TrialSpec):
+        object.__setattr__(spec, f.name, fields.get(f.name, f.default if f.default_factory is dataclasses.MISSING
+                                                    else f.default_factory()))
+    return spec
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(tolerance=st.one_of(f32s(0.001, 0.5), f32s(0.001, 0.5), f32s(0.0, 0.6), wild_floats()),
+       alpha=st.one_of(f32s(0.0, 0.25), f32s(0.0, 0.25), f32s(-0.05, 0.3), wild_floats()),
+       gains=st.one_of(st.none(), st.tuples(st.one_of(f32s(0.0, 10000.0), f32s(0.0, 12000.0), wild_floats()),
+                                            f32s(0.0, 100.0), f32s(0.0, 100.0),
+                                            st.one_of(f32s(0.0, 90.0), f32s(0.0, 95.0), wild_floats()))),
+       controller=st.sampled_from(list(m.Controller)))
+def test_a_trial_spec_is_refused_exactly_when_the_firmware_would_refuse_its_commands(tolerance, alpha, gains,
+                                                                                      controller):
+    """The host checks a trial's settings against the schema before any firmware sees them (TrialSpec), and
+    that check agrees with the firmware: what it lets through is accepted, what it refuses the firmware refuses."""
+    from mantaray.sim.bridge import TrialSpec
+    from mantaray.sim.heatmap import controller_gains
+
+    name = controller.name.lower()
+    fields = dict(start_m=(0.0, 0.0), target_m=(0.1, -0.1), controller=name, tolerance_m=tolerance, alpha_m=alpha,
+                  gains=controller_gains(name, gains))
+    try:
+        TrialSpec(**fields)
+        refused_by_host = None
+    except ValueError as exc:
+        refused_by_host = exc
+    link = Link(InProcessTransport(simulated_clock=True))
+    link.identify()
+    refused_by_firmware = []
+    for command in _unchecked_spec(**fields).commands():
+        try:
+            link.command(command)
+        except CommandRefused as refused:
+            refused_by_firmware.append(refused)
+    link.close()
+    event("refused" if refused_by_host else "accepted")
+    assert (refused_by_host is None) == (not refused_by_firmware), (refused_by_host, refused_by_firmware)
