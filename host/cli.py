@@ -8,12 +8,14 @@ import sys
 import time
 from pathlib import Path
 
+from mantaray.protocol import messages as m
+from mantaray.protocol.codec import choices
+
 from .runlog import RunLog
 
 
 def _half_module_m() -> tuple[float, float]:
     """[m] half the module's sides, as configured on the firmware (protocol defaults)."""
-    from mantaray.protocol import messages as m
 
     return m.Configure.module_x / 2, m.Configure.module_y / 2
 
@@ -60,7 +62,6 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     for --hold seconds (a fixed target), at --timeout, or on Ctrl-C, which levels the surface and stops the
     motors. Every run writes one log (configuration, every position and telemetry frame) and the paper's
     Fig. 3-style plot."""
-    from mantaray.protocol import messages as m
     from mantaray.sim.plots import path_phase_figure
 
     from .link import LinkError
@@ -175,7 +176,6 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 # ------------------------------------------------------------------------------------------- monitor
 def cmd_monitor(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """Show the firmware's telemetry live, decoded, without changing anything on it (Ctrl-C ends)."""
-    from mantaray.protocol import messages as m
 
     from .session import connect
 
@@ -264,7 +264,6 @@ def charuco_board(args):
 def calibrate_from_frames(board, frames, min_corners: int = 8):
     """(Calibration, RMS reprojection error [px], views used) from BGR or grey images of a ChArUco board."""
     import cv2
-    import numpy as np
 
     from .tracker import Calibration
 
@@ -336,7 +335,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     rig.add_argument("--path", choices=["circle"], help="follow a path instead of a fixed target (paper Fig. 1A)")
     rig.add_argument("--radius", type=float, default=0.1, help="circle radius [m]")
     rig.add_argument("--period", type=float, default=30.0, help="time for one lap of the circle [s]")
-    rig.add_argument("--controller", choices=["manhattan", "euclidean"], default="manhattan")
+    rig.add_argument("--controller", choices=choices(m.Controller), default="manhattan")
     rig.add_argument("--alpha", type=float, default=0.05, help="noise amplitude α [m] (paper's hardware: 0.05)")
     rig.add_argument("--tolerance", type=float, default=0.02, help="ε [m]")
     rig.add_argument("--hold", type=float, default=1.0, help="seconds within ε that count as reached")

@@ -19,6 +19,7 @@ import numpy as np
 
 from mantaray.host.link import Link, LinkError
 from mantaray.protocol import messages as m
+from mantaray.protocol.codec import FieldRefused, Message, choices
 
 from . import model as M
 from .model import SimulationUnstable
@@ -27,6 +28,8 @@ from .rig import VISION_MODES, Rig
 
 US_PER_S = 1_000_000
 U32 = 0xFFFFFFFF
+SPEC_NAMES = {"noise_amplitude": "noise amplitude alpha", "tolerance": "tolerance epsilon", "x": "target x",
+              "y": "target y"}   # a refused command field -> what a trial spec calls it
 U16 = 0xFFFF
 CLOCK_GAP_US = 1_000_000   # [us] the firmware clock moves on this much between trials, so it never goes back
 # [s] In lock-step nothing is real-time (the firmware's clock waits for the bridge), so the link may wait this
@@ -80,13 +83,34 @@ class TrialSpec:
     stop_when_reached: bool = False        # end at the first frame within epsilon, as the paper's loop does
 
     def __post_init__(self) -> None:
-        if self.controller not in ("manhattan", "euclidean"):
-            raise ValueError(f"controller must be manhattan or euclidean, got {self.controller!r}")
+        if self.controller.upper() not in m.Controller.__members__:
+            raise ValueError(f"controller must be one of {', '.join(choices(m.Controller))}, got {self.controller!r}")
         if not (0 < self.duration_s <= 3600):
             raise ValueError(f"duration must be in (0, 3600] s, got {self.duration_s}")
+        if not 0 <= self.seed <= U32:
+            raise ValueError(f"seed must be 0..{U32}, got {self.seed}")
         for axis in self.gains:
-            if axis not in ("x", "y", "radial"):
-                raise ValueError(f"gains are for axes x, y and radial, got {axis!r}")
+            if axis.upper() not in m.Axis.__members__:
+                raise ValueError(f"gains are for axes {', '.join(choices(m.Axis))}, got {axis!r}")
+        for command in self.commands():   # the schema's bounds, before any firmware sees them
+            try:
+                command.check()
+            except FieldRefused as refused:
+                axis = f" of the {command.axis.name.lower()} PID" if isinstance(command, m.ConfigurePid) else ""
+                raise ValueError(f"{SPEC_NAMES.get(refused.field, refused.field)}{axis}: {refused.reason} "
+                                 f"({refused.message_name}.{refused.field}, protocol/schema.toml)") from None
+
+    def commands(self, module_m: tuple[float, float] = (0.5, 0.5), telemetry_period_ms: int = 0) -> list[Message]:
+        """The firmware's set-up for this trial, in order: configure, every PID's gains, the target."""
+        out: list[Message] = [m.Configure(
+            controller=m.Controller[self.controller.upper()], module_x=module_m[0], module_y=module_m[1],
+            tolerance=self.tolerance_m, noise_amplitude=self.alpha_m, noise_seed=self.seed or 1,
+            telemetry_period=telemetry_period_ms)]
+        for axis in m.Axis:
+            g = self.gains.get(axis.name.lower())
+            out.append(m.ConfigurePid(axis=axis, **(vars(g) if g else m.PID_DEFAULTS[axis])))
+        out.append(m.SetTarget(x=self.target_m[0], y=self.target_m[1]))
+        return out
 
 
 @dataclass
@@ -199,16 +223,9 @@ class Bridge:
 
     def _configure(self, spec: TrialSpec) -> None:
         self.link.command(m.Stop())
-        self.link.command(m.Configure(
-            controller=m.Controller[spec.controller.upper()],
-            module_x=self.rig.frame.size_x_m, module_y=self.rig.frame.size_y_m,
-            tolerance=spec.tolerance_m, noise_amplitude=spec.alpha_m, noise_seed=spec.seed & U32 or 1,
-            telemetry_period=0 if self.lockstep else 100))
-        for axis in m.Axis:
-            g = spec.gains.get(axis.name.lower())
-            defaults = m.PID_DEFAULTS[axis]
-            self.link.command(m.ConfigurePid(axis=axis, **(vars(g) if g else defaults)))
-        self.link.command(m.SetTarget(x=spec.target_m[0], y=spec.target_m[1]))
+        for command in spec.commands((self.rig.frame.size_x_m, self.rig.frame.size_y_m),
+                                     telemetry_period_ms=0 if self.lockstep else 100):
+            self.link.command(command)
 
     # ----------------------------------------------------------------------------------------- trial
     def run(self, spec: TrialSpec, progress=None) -> TrialResult:

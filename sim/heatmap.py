@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 import os
 import signal
 from dataclasses import dataclass, field
@@ -32,7 +31,7 @@ from .bridge import Gains, TrialSpec
 from .objects import OBJECTS
 from .model import SimulationUnstable
 from .plant import DEFAULT_PLANT, Plant
-from .rig import Fabric
+from .rig import Fabric, Rig
 
 RESULTS_FORMAT = "mantaray-heatmap/1"
 SUCCESS_REGION_AT = 0.9    # [-] cells with at least this success rate form the success region ...
@@ -65,24 +64,24 @@ class Protocol:
     def __post_init__(self) -> None:
         checks = [
             (self.object_name in OBJECTS, f"object must be one of {', '.join(OBJECTS)}, got {self.object_name!r}"),
-            (self.controller in ("manhattan", "euclidean"), f"controller must be manhattan or euclidean, "
-                                                            f"got {self.controller!r}"),
             (1 <= self.cells <= 200, f"cells per side must be 1..200, got {self.cells}"),
             (1 <= self.trials_per_cell <= 1000, f"trials per cell must be 1..1000, got {self.trials_per_cell}"),
-            (0 < self.tolerance_m <= 0.5, f"tolerance must be in (0, 0.5] m, got {self.tolerance_m}"),
             (0 < self.duration_s <= 600, f"runtime T must be in (0, 600] s, got {self.duration_s}"),
-            (0 <= self.alpha_m <= 0.25, f"alpha must be 0..0.25 m, got {self.alpha_m}"),
+            (self.seed >= 0, f"seed must be >= 0, got {self.seed}"),
             (0 < self.timestep_s <= 0.01, f"timestep must be in (0, 0.01] s, got {self.timestep_s}"),
-            (self.gains is None or (len(self.gains) == 4 and all(math.isfinite(g) and g >= 0 for g in self.gains)),
-             f"gains must be four finite numbers >= 0 (kp, ki, kd, integral limit), got {self.gains}"),
+            (self.gains is None or len(self.gains) == 4,
+             f"gains must be four numbers (kp, ki, kd, integral limit), got {self.gains}"),
             (self.only_cells is None or all(0 <= c < self.cells ** 2 for c in self.only_cells),
              f"cell indices must be 0..{self.cells ** 2 - 1}"),
+            (self.only_cells is None or len(set(self.only_cells)) == len(self.only_cells),
+             f"cell indices must not repeat, got {self.only_cells}"),
         ]
         for ok, message in checks:
             if not ok:
                 raise ValueError(message)
         Fabric(resolution=self.resolution)      # refuses an even or too small resolution
         self.plant_model()                       # refuses an unknown plant or a value outside its range
+        trial_spec(self, Trial(0, 0, (0.0, 0.0), (0.0, 0.0), 1))   # the controller, tolerance, alpha, gains: schema's
 
     def plant_model(self) -> Plant:
         return Plant(self.plant, self.plant_set)
@@ -172,48 +171,51 @@ def is_success(fell_off: bool, final_error_m: float, tolerance_m: float) -> bool
 # ------------------------------------------------------------------------------------------- results file
 @dataclass
 class ResultsFile:
-    """The JSON-lines results of one protocol: a header line, then one line per finished trial."""
+    """The JSON-lines results of one protocol: a header line, then one line per finished trial.
+
+    A line that is not a valid trial record (a disk error, a hand edit) is kept out of the counts and named in
+    `rejected`; continuing the run moves it to <file>.rejected, so nothing is lost, and its trial runs again. A last
+    line cut off by an interruption is dropped quietly: its trial runs again too."""
     path: Path
     protocol: Protocol
     records: dict[str, dict] = field(default_factory=dict)   # trial key -> record
+    rejected: list[tuple[int, str]] = field(default_factory=list)   # (line number from 1, why) of refused lines
 
     @classmethod
     def open(cls, path: str | Path, protocol: Protocol) -> ResultsFile:
         """Open for this protocol: create the file, or read what an earlier run of the same protocol left."""
         path = Path(path)
         results = cls(path, protocol)
-        if not path.exists() or path.stat().st_size == 0:
+        if not path.exists() or _cut_header(path.read_bytes()):   # new, or its header was cut off as it was written
             path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(json.dumps(_header(protocol)) + "\n")
+            _replace(path, json.dumps(_header(protocol)).encode() + b"\n")
             return results
-        stored, records, good_bytes, plant_values = _read(path)
+        stored = _read(path)
         now = protocol.plant_model().values
-        if plant_values is not None and plant_values != now:
-            changed = sorted(k for k in now if plant_values.get(k) != now[k])
+        if stored.plant_values is not None and stored.plant_values != now:
+            changed = sorted(k for k in now if stored.plant_values.get(k) != now[k])
             raise ProtocolMismatch(f"{path} was run on the plant {protocol.plant!r} when its values were others "
                                    f"({', '.join(changed)} differ in sim/plant.toml since); use another --out")
-        if stored != protocol and not _extends(stored, protocol):
-            changed = sorted(k for k, v in protocol.to_json().items() if stored.to_json().get(k) != v)
+        if stored.protocol != protocol and not _extends(stored.protocol, protocol):
+            changed = sorted(k for k, v in protocol.to_json().items() if stored.protocol.to_json().get(k) != v)
             raise ProtocolMismatch(f"{path} holds a run with other options ({', '.join(changed)} differ); "
                                    f"use another --out, the same options to continue it, or more trials or "
                                    f"cells to add to it")
-        if good_bytes != path.stat().st_size:   # a line cut off by an interruption: drop it, its trial reruns
-            with open(path, "r+b") as f:
-                f.truncate(good_bytes)
-        if stored != protocol:                  # grown: the header names the larger run, the trials stay
-            body = path.read_bytes().split(b"\n", 1)[1]
-            grown = path.with_name(path.name + ".grown")
-            grown.write_bytes(json.dumps(_header(protocol)).encode()
-                              + b"\n" + body)
-            os.replace(grown, path)
-        results.records = records
+        if stored.bad_lines:                    # kept aside, never lost
+            with open(path.with_name(path.name + ".rejected"), "ab") as f:
+                f.write(b"".join(line + b"\n" for line in stored.bad_lines))
+        if stored.protocol != protocol or stored.bad_lines or stored.cut:
+            # the header names the (possibly grown) run; only the good lines stay
+            _replace(path, json.dumps(_header(protocol)).encode() + b"\n"
+                     + b"".join(line + b"\n" for line in stored.good_lines))
+        results.records, results.rejected = stored.records, stored.rejected
         return results
 
     @classmethod
     def load(cls, path: str | Path) -> ResultsFile:
         """Read a results file whatever its protocol (for figures and comparisons)."""
-        protocol, records, _, _ = _read(Path(path))
-        return cls(Path(path), protocol, records)
+        stored = _read(Path(path))
+        return cls(Path(path), stored.protocol, stored.records, stored.rejected)
 
     def append(self, record: dict) -> None:
         with open(self.path, "a") as f:
@@ -222,6 +224,24 @@ class ResultsFile:
 
     def missing(self) -> list[Trial]:
         return [t for t in trials(self.protocol) if t.key not in self.records]
+
+    def warnings(self) -> list[str]:
+        """One line per refused line of the file, for the user."""
+        return [f"{self.path} line {line}: {why}; not counted (its trial runs again when the run continues, and "
+                f"the line is kept in {self.path.name}.rejected)" for line, why in self.rejected]
+
+
+def _cut_header(raw: bytes) -> bool:
+    """Whether a file is all or the start of a results header and nothing more (a run interrupted as it began)."""
+    prefix = b'{"format": "' + RESULTS_FORMAT.encode()
+    return b"\n" not in raw and (raw.startswith(prefix) or prefix.startswith(raw))
+
+
+def _replace(path: Path, content: bytes) -> None:
+    """Write the whole file at once: an interruption leaves the old file or the new, never half of one."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_bytes(content)
+    os.replace(tmp, path)
 
 
 def _extends(stored: Protocol, wanted: Protocol) -> bool:
@@ -240,10 +260,45 @@ def _header(protocol: Protocol) -> dict:
     return {"format": RESULTS_FORMAT, "protocol": protocol.to_json(), "plant_values": protocol.plant_model().values}
 
 
-def _read(path: Path) -> tuple[Protocol, dict[str, dict], int, dict | None]:
-    """(protocol, records by key, bytes of complete lines, the plant's values if the header holds them) of a
-    results file."""
+RECORD_TYPES = {"key": str, "cell": int, "k": int, "success": bool, "reached": bool, "fell_off": bool,
+                "target_m": list}   # what aggregation reads from a trial record, by type
+TYPE_NAMES = {str: "a string", int: "a whole number", bool: "true or false", list: "a list"}
+
+
+def record_problem(record, protocol: Protocol) -> str | None:
+    """Why a parsed line is not a trial record of this protocol, or None when it is one."""
+    if not isinstance(record, dict):
+        return f"not a trial record (a JSON {type(record).__name__})"
+    for name, kind in RECORD_TYPES.items():
+        if name not in record:
+            return f"no {name!r} field"
+        value = record[name]
+        if type(value) is not kind:   # exact: a bool is not a count, 7 is not a success
+            return f"{name} must be {TYPE_NAMES[kind]}, got {value!r}"
+    if record["cell"] not in set(protocol.cell_ids()) or not 0 <= record["k"] < protocol.trials_per_cell:
+        return f"trial {record['cell']}:{record['k']} is not one of this run's"
+    if record["key"] != f"{record['cell']}:{record['k']}":
+        return f"key {record['key']!r} does not match cell {record['cell']}, trial {record['k']}"
+    return None
+
+
+@dataclass
+class _Contents:
+    """What a results file holds, line by line."""
+    protocol: Protocol
+    plant_values: dict | None
+    records: dict[str, dict] = field(default_factory=dict)
+    good_lines: list[bytes] = field(default_factory=list)
+    bad_lines: list[bytes] = field(default_factory=list)
+    rejected: list[tuple[int, str]] = field(default_factory=list)
+    cut: bool = False            # the last line was cut off (an interruption mid-write)
+
+
+def _read(path: Path) -> _Contents:
     raw = path.read_bytes()
+    if _cut_header(raw):
+        raise ValueError(f"{path} holds no complete header line (a run interrupted as it began); rerun the same "
+                         f"heatmap command to start it afresh")
     lines = raw.split(b"\n")
     try:
         header = json.loads(lines[0])
@@ -251,17 +306,29 @@ def _read(path: Path) -> tuple[Protocol, dict[str, dict], int, dict | None]:
         raise ValueError(f"{path} is not a heatmap results file (its first line is not JSON)") from None
     if not isinstance(header, dict) or header.get("format") != RESULTS_FORMAT:
         raise ValueError(f"{path} is not a heatmap results file ({RESULTS_FORMAT})")
-    protocol = Protocol.from_json(header["protocol"])
-    records: dict[str, dict] = {}
-    good = len(lines[0]) + 1
-    for line in lines[1:-1]:           # the last element follows the final newline: empty, or a cut-off line
+    try:
+        protocol = Protocol.from_json(header["protocol"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"{path}: its header's protocol is not valid ({exc})") from None
+    out = _Contents(protocol, header.get("plant_values"), cut=lines[-1] != b"")
+    for number, line in enumerate(lines[1:-1], start=2):   # the last element follows the final newline
+        if not line.strip():
+            continue
         try:
             record = json.loads(line)
         except json.JSONDecodeError:
-            break
-        records[record["key"]] = record
-        good += len(line) + 1
-    return protocol, records, good, header.get("plant_values")
+            problem = "not JSON"
+        else:
+            problem = record_problem(record, protocol)
+            if problem is None and record["key"] in out.records:
+                problem = f"repeats trial {record['key']}"
+        if problem is None:
+            out.records[record["key"]] = record
+            out.good_lines.append(line)
+        else:
+            out.rejected.append((number, problem))
+            out.bad_lines.append(line)
+    return out
 
 
 # ------------------------------------------------------------------------------------------- aggregation

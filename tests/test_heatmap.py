@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -68,8 +69,12 @@ def test_a_subset_of_cells_draws_the_same_trials_as_the_full_run():
 
 @pytest.mark.parametrize("kwargs, needle", [
     ({"cells": 0}, "cells per side"), ({"controller": "pid"}, "controller"), ({"object_name": "teapot"}, "object"),
-    ({"tolerance_m": 0}, "tolerance"), ({"duration_s": -1}, "runtime"), ({"gains": (1, 2, float("nan"), 3)}, "gains"),
+    ({"tolerance_m": 0}, "tolerance"), ({"duration_s": -1}, "runtime"), ({"gains": (1, 2, float("nan"), 3)}, "kd"),
     ({"resolution": 14}, "odd"), ({"only_cells": (400,)}, "cell indices"), ({"timestep_s": 0.1}, "timestep"),
+    # the schema's bounds (protocol/schema.toml), not retyped here: epsilon from 1 mm, alpha to 0.25 m, gains to 1e4
+    ({"tolerance_m": 0.0005}, r"tolerance epsilon: 0.0005 m is outside 0.001..0.5 m"), ({"alpha_m": 0.3}, "noise_amplitude"),
+    ({"gains": (2e4, 0, 0, 10)}, r"kp of the x PID: 20000 deg/m is outside 0..10000"), ({"gains": (1, 2, 3)}, "four numbers"),
+    ({"only_cells": (1, 1)}, "must not repeat"), ({"seed": -1}, "seed"),
 ])
 def test_a_bad_protocol_is_refused_with_a_reason(kwargs, needle):
     with pytest.raises(ValueError, match=needle):
@@ -155,6 +160,54 @@ def test_a_results_file_of_other_options_is_not_continued(tmp_path):
     (tmp_path / "other.jsonl").write_text("not json\n")
     with pytest.raises(ValueError, match="not a heatmap results file"):
         H.ResultsFile.open(tmp_path / "other.jsonl", SMALL)
+
+
+def _synthetic_file(path: Path, protocol: H.Protocol, lines: list[str]) -> None:
+    """A results file of this protocol with these trial lines (no simulation)."""
+    H.ResultsFile.open(path, protocol)
+    with open(path, "a") as f:
+        f.write("".join(line + "\n" for line in lines))
+
+
+def _line(cell: int, k: int, **fields) -> str:
+    record = {"key": f"{cell}:{k}", "cell": cell, "k": k, "success": True, "reached": True, "fell_off": False,
+              "target_m": [0.0, 0.0], **fields}
+    return json.dumps(record)
+
+
+@pytest.mark.parametrize("bad, why", [
+    ("{}", "no 'key' field"), ('{"key": "1:0", "cell": 1', "not JSON"), ("[1, 2]", "a JSON list"),
+    (_line(1, 0, success=7), "success must be true or false, got 7"), (json.dumps({**json.loads(_line(1, 0)), "cell": "1"}), "cell must be a whole number, got '1'"),
+    (_line(9, 0), "trial 9:0 is not one of this run's"), (_line(1, 0, key="0:0"), "does not match"),
+    (_line(0, 0), "repeats trial 0:0"),
+])
+def test_a_bad_line_in_the_middle_is_named_kept_aside_and_loses_no_later_trial(tmp_path, bad, why):
+    path = tmp_path / "results.jsonl"
+    _synthetic_file(path, SMALL, [_line(0, 0), bad, _line(2, 1), _line(3, 0)])
+    loaded = H.ResultsFile.load(path)
+    assert sorted(loaded.records) == ["0:0", "2:1", "3:0"]          # the trials after the bad line still count
+    assert [line for line, _ in loaded.rejected] == [3]
+    assert why in loaded.rejected[0][1] and "line 3" in loaded.warnings()[0]
+    continued = H.ResultsFile.open(path, SMALL)                    # continuing moves the line aside, never drops it
+    assert sorted(continued.records) == ["0:0", "2:1", "3:0"] and len(continued.missing()) == 5
+    assert (tmp_path / "results.jsonl.rejected").read_text() == bad + "\n"
+    assert len(path.read_text().splitlines()) == 4 and H.ResultsFile.load(path).rejected == []   # header + 3
+
+
+def test_a_header_cut_off_as_the_run_began_starts_the_run_afresh(tmp_path):
+    path = tmp_path / "results.jsonl"
+    H.ResultsFile.open(path, SMALL)
+    header = path.read_bytes()
+    for cut in (0, 5, len(header) // 2, len(header) - 1):           # every way the first write can be cut
+        path.write_bytes(header[:cut])
+        with pytest.raises(ValueError, match="no complete header line"):
+            H.ResultsFile.load(path)
+        again = H.ResultsFile.open(path, SMALL)
+        assert again.records == {} and path.read_bytes() == header
+    path.write_bytes(b"something else entirely")                   # not ours: refused, not overwritten
+    with pytest.raises(ValueError, match="not a heatmap results file"):
+        H.ResultsFile.open(path, SMALL)
+    assert path.read_bytes() == b"something else entirely"
 
 
 # ------------------------------------------------------------------------------------------- the in-process core
