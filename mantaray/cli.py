@@ -2,7 +2,21 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse, but a value such as -0.05,0.05 (a point with a negative first coordinate) is a value, not an option.
+
+    argparse takes only a plain negative number (-0.05) for a value; points X,Y are written with a comma, so
+    `--target -0.05,0.05` would fail with "expected one argument". Subcommands get the same class."""
+
+    NEGATIVE_VALUES = re.compile(r"^-\.?\d[\d.eE+-]*([, ]-?\.?\d[\d.eE+-]*)*$")
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = self.NEGATIVE_VALUES   # argparse's own hook for "looks like a number"
 
 
 def cmd_vmcu(args: argparse.Namespace) -> int:
@@ -44,7 +58,7 @@ def cmd_conformance(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="mantaray", description="MANTA-RAY control stack: firmware link, simulation and tools.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 

@@ -157,7 +157,7 @@ def cpp_message(schema: dict, msg: dict) -> list[str]:
             if conds:
                 cond = " || ".join(f"({c})" for c in conds)
                 checks.append(f"  if ({cond}) {{ field = {index}; return ErrorCode::kOutOfRange; }}")
-        lines.append(f"// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.")
+        lines.append("// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.")
         sig_m = " m" if checks else " /*m*/"
         sig_f = " field" if checks else " /*field*/"
         lines.append(f"inline ErrorCode validate(const {name}&{sig_m}, uint8_t&{sig_f}) {{")
@@ -166,7 +166,7 @@ def cpp_message(schema: dict, msg: dict) -> list[str]:
         lines.append("}")
 
     if any("default" in f for f in msg["fields"]):
-        lines.append(f"// Boot values from the schema.")
+        lines.append("// Boot values from the schema.")
         lines.append(f"inline void set_defaults({name}& m) {{")
         for field in msg["fields"]:
             if "default" not in field:

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import hashlib
 import json
 import math
 import os
@@ -11,6 +12,8 @@ import sys
 from pathlib import Path
 
 from mantaray.protocol import messages as m
+from mantaray.outputs import FIGURE_SUFFIXES, OutputError, writable_dir, writable_file
+from mantaray.protocol.codec import choices
 
 from .objects import OBJECTS
 from .parameters import plant_names
@@ -64,8 +67,12 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     except ValueError as exc:
         parser.error(str(exc))
 
-    out = Path(args.out)
-    stem = f"{args.object}_{args.controller}_seed{args.seed}"
+    from .video import FPS_RANGE
+
+    if args.video and not FPS_RANGE[0] <= args.video_fps <= FPS_RANGE[1]:
+        parser.error(f"--video-fps must be {FPS_RANGE[0]:g}..{FPS_RANGE[1]:g} frames per second, got {args.video_fps:g}")
+    out = _output(parser, writable_dir, args.out)
+    stem = _trial_stem(args)
     progress = None
     if not args.json and sys.stderr.isatty():
         from tqdm import tqdm
@@ -106,14 +113,33 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     if args.json:
         print(json.dumps(summary))
     else:
-        outcome = "FELL OFF" if result.fell_off else ("REACHED" if result.success else "NOT REACHED")
-        reach = "never within tolerance" if result.time_to_reach_s is None else f"first within tolerance at {result.time_to_reach_s:.2f} s"
+        # one word per meaning: SUCCESS is within ε at T (the exit status); "reached" is within ε at some frame
+        outcome = "FELL OFF" if result.fell_off else ("SUCCESS" if result.success else "NOT WITHIN ε AT T")
+        reach = "never reached ε" if result.time_to_reach_s is None else f"reached ε first at {result.time_to_reach_s:.2f} s"
         print(f"{outcome}: {args.object}, {args.controller}, start {args.start[0]:+.3f},{args.start[1]:+.3f} -> "
               f"target {args.target[0]:+.3f},{args.target[1]:+.3f} m; final error {result.final_error_m * 100:.1f} cm "
               f"(ε {args.tolerance * 100:g} cm), {reach}; {result.sim_time_s:.1f} sim s in {result.wall_time_s:.1f} wall s "
               f"({result.sim_time_s / result.wall_time_s:.2f}x, physics {result.physics_share:.0%}); "
               f"figure {summary['figure']}" + (f", video {summary['video']}" if args.video else ""))
     return 0 if result.success else 1
+
+
+def _output(parser: argparse.ArgumentParser, check, *args):
+    """An output path checked before any work (mantaray.outputs); a bad one is a usage error."""
+    try:
+        return check(*args)
+    except OutputError as exc:
+        parser.error(str(exc))
+
+
+def _trial_stem(args: argparse.Namespace) -> str:
+    """The file name of one trial's outputs: what it was, readably, and a digest of every other setting, so two
+    different trials never overwrite each other's files and the same trial run again does."""
+    settings = {k: v for k, v in sorted(vars(args).items())
+                if k not in ("out", "json", "video", "viewer", "func", "command", "sim_command")}
+    digest = hashlib.sha1(repr(settings).encode()).hexdigest()[:6]
+    (sx, sy), (tx, ty) = args.start, args.target
+    return f"{args.object}_{args.controller}_{sx:+.3f},{sy:+.3f}_to_{tx:+.3f},{ty:+.3f}_seed{args.seed}_{digest}"
 
 
 def _save_trajectory(result, path: Path) -> Path:
@@ -191,13 +217,16 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     if args.jobs is not None and args.jobs < 1:
         parser.error(f"--jobs must be at least 1, got {args.jobs}")
     plant = "" if args.plant == DEFAULT_PLANT else f"_{args.plant}"
-    out = Path(args.out or f"out/heatmap/{args.object}_{args.controller}_alpha{args.alpha:g}{plant}")
-    out.mkdir(parents=True, exist_ok=True)
+    if args.ray_address and args.executor != "ray":
+        parser.error("--ray-address needs --executor ray")
+    out = _output(parser, writable_dir, args.out or f"out/heatmap/{args.object}_{args.controller}_alpha{args.alpha:g}{plant}")
     try:
         results = ResultsFile.open(out / "results.jsonl", protocol)
     except (ProtocolMismatch, ValueError) as exc:
         print(f"mantaray sim heatmap: {exc}", file=sys.stderr)
         return 2
+    for warning in results.warnings():
+        print(f"mantaray sim heatmap: warning: {warning}", file=sys.stderr)
     todo = results.missing()
     total = len(protocol.cell_ids()) * protocol.trials_per_cell
     if len(todo) < total:
@@ -205,7 +234,7 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
               file=sys.stderr)
     from .progress import Progress
 
-    bar = Progress(total, initial=total - len(todo), unit="trial", label="heatmap", enabled=not args.json)
+    bar = Progress(total, initial=total - len(todo), unit="trial", label="heatmap")   # on stderr, beside --json
     try:
         if args.executor == "ray":
             try:
@@ -243,6 +272,7 @@ def cmd_compare(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     from .heatmap import ResultsFile, summarize
     from .plots import heatmap_figure
 
+    _output(parser, writable_file, args.out, FIGURE_SUFFIXES)
     runs = []
     for given in (args.first, args.second):
         path = Path(given)
@@ -253,9 +283,27 @@ def cmd_compare(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
             runs.append(ResultsFile.load(path))
         except ValueError as exc:
             parser.error(str(exc))
+        for warning in runs[-1].warnings():
+            print(f"mantaray sim compare: warning: {warning}", file=sys.stderr)
     (a, b), (pa, pb) = [summarize(r) for r in runs], [r.protocol for r in runs]
-    if pa.cells != pb.cells:
-        parser.error(f"the runs have different cell grids ({pa.cells} and {pb.cells} per side)")
+    # what success means, and where it is measured, must be the same in both runs; object, controller, alpha,
+    # gains and plant are what a comparison is for
+    differ = [name for name in ("cells", "tolerance_m", "duration_s") if getattr(pa, name) != getattr(pb, name)]
+    if set(pa.cell_ids()) != set(pb.cell_ids()):
+        differ.append("only_cells")
+    if differ:
+        parser.error("the runs measure success differently (" + "; ".join(
+            f"{name} {getattr(pa, name)} against {getattr(pb, name)}" for name in differ) + "): compare runs that "
+            "differ only in what is being compared")
+    if not args.reached and (pa.stop_when_reached or pb.stop_when_reached):
+        parser.error("a run that stops at its first frame within ε (--stop-when-reached) has no end-of-T success; "
+                     "compare with --reached")
+    for given, results in zip((args.first, args.second), runs):
+        left = len(results.missing())
+        if left:
+            print(f"mantaray sim compare: warning: {given} is incomplete ({left} of "
+                  f"{left + len(results.records)} trials not run); its rates are over the trials that ran",
+                  file=sys.stderr)
     f = pa.rig().frame
     label = [f"{p.object_name} {p.controller} α={p.alpha_m:g}" for p in (pa, pb)]
     rule = "within ε at any frame" if args.reached else "within ε at T"
@@ -263,8 +311,9 @@ def cmd_compare(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
                                               for s in (a, b)]
     figure = heatmap_figure(rates_a - rates_b, (f.size_x_m, f.size_y_m), f"{label[0]} − {label[1]} ({rule})\n"
                             f"scores {score_a:.1f} − {score_b:.1f} = {score_a - score_b:+.1f}", args.out, difference=True)
+    relative = f" ({(score_a - score_b) / score_b:+.0%} of the second)" if score_b > 0 else ""
     print(f"{rule}: {label[0]}: score {score_a:.1f}; {label[1]}: score {score_b:.1f}; difference "
-          f"{score_a - score_b:+.1f} ({(score_a - score_b) / max(score_b, 1e-9):+.0%} of the second); figure {figure}")
+          f"{score_a - score_b:+.1f}{relative}; figure {figure}")
     return 0
 
 
@@ -306,7 +355,9 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
         parser.error("nothing to search: every parameter named is fixed by --set")
     if args.candidates < 0 or (args.jobs is not None and args.jobs < 1):
         parser.error("--candidates must be >= 0 and --jobs >= 1")
-    out = Path(args.out or f"out/calibration/{'log' if args.log else 'findings'}")
+    if args.ray_address and args.executor != "ray":
+        parser.error("--ray-address needs --executor ray")
+    out = _output(parser, writable_dir, args.out or f"out/calibration/{'log' if args.log else 'findings'}")
     try:
         study = C.open_study(out / "study.db", evidence, keys, fixed)
     except C.StudyMismatch as exc:
@@ -317,7 +368,7 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
         print(f"continuing {out / 'study.db'}: {done} of {args.candidates} candidates already evaluated",
               file=sys.stderr)
     progress = Progress(max(args.candidates, done), initial=done, unit="candidate", label="calibrate",
-                        line_every_s=0, enabled=not args.json)
+                        line_every_s=0)
 
     def report_candidate(n: int, total: int, info: dict) -> None:
         if "unstable" in info:
@@ -371,7 +422,6 @@ def _interrupt(signum, frame) -> None:
 
 def _fig3_for(best, args: argparse.Namespace, pool, out: Path) -> dict:
     """F6 for the best candidate: the paper's Fig. 3 experiment on it, with its figure."""
-    from mantaray.protocol import messages as m
 
     from .fig3 import run_fig3
     from .findings import MODULE_M, fig3_finding
@@ -401,7 +451,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
             "Writes the trajectory plot (paper Fig. 3 style), the trajectory (.npz) and, on request, a video."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     run.add_argument("--object", choices=sorted(OBJECTS), default="sphere", help="the paper's object (Table I)")
-    run.add_argument("--controller", choices=["manhattan", "euclidean"], default="manhattan",
+    run.add_argument("--controller", choices=choices(m.Controller), default="manhattan",
                      help="Manhattan: two PIDs (Algorithm 1); Euclidean: one along the error (Algorithm 2)")
     run.add_argument("--start", type=_point, default=(0.05, -0.05), metavar="X,Y", help="object start [m]")
     run.add_argument("--target", type=_point, default=(-0.05, 0.05), metavar="X,Y", help="target p_d [m]")
@@ -433,7 +483,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "heatmap", help="the paper's success heatmap (Fig. 2) over the workspace", description=cmd_heatmap.__doc__,
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     heat.add_argument("--object", choices=sorted(OBJECTS), default="sphere", help="the paper's object (Table I)")
-    heat.add_argument("--controller", choices=["manhattan", "euclidean"], default="manhattan")
+    heat.add_argument("--controller", choices=choices(m.Controller), default="manhattan")
     heat.add_argument("--cells", type=int, default=20, help="cells per side of the workspace (paper: 20)")
     heat.add_argument("--trials", type=int, default=10, help="trials per cell, N (paper: 10)")
     heat.add_argument("--tolerance", type=float, default=0.02, help="ε [m]")
@@ -456,7 +506,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     heat.add_argument("--ray-address", help="address of a running Ray cluster (e.g. ray://head:10001)")
     heat.add_argument("--out", help="directory for results.jsonl, cells.csv, summary.json, heatmap.png and heatmap_reach.png (the paper's stopping rule) "
                       "(default out/heatmap/OBJECT_CONTROLLER_alphaA, with _PLANT for a plant other than polyester)")
-    heat.add_argument("--json", action="store_true", help="print the summary as JSON (and no progress bar)")
+    heat.add_argument("--json", action="store_true", help="print the summary as JSON on stdout (progress stays on stderr)")
     heat.set_defaults(func=lambda args: cmd_heatmap(args, heat))
 
     cal = sim_sub.add_parser("calibrate", help="fit the plant to the paper's findings or to rig logs (Optuna, resumable)",
@@ -486,7 +536,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     cal.add_argument("--jobs", type=int, help="parallel workers (default: every core; with ray: every CPU)")
     cal.add_argument("--executor", choices=["local", "ray"], default="local")
     cal.add_argument("--ray-address", help="address of a running Ray cluster")
-    cal.add_argument("--json", action="store_true", help="print the report as JSON (and no progress)")
+    cal.add_argument("--json", action="store_true", help="print the report as JSON on stdout (progress stays on stderr)")
     cal.set_defaults(func=lambda args: cmd_calibrate(args, cal))
 
     compare = sim_sub.add_parser("compare", help="difference map of two heatmap runs (first minus second)",

@@ -7,13 +7,15 @@ import mujoco
 
 from . import model as M
 
+FPS_RANGE = (1.0, 240.0)   # [1/s] video frame rates a recorder takes
+
 
 class Recorder:
     """Renders the overhead camera every 1/fps simulated seconds; attach to Bridge.recorder, then save()."""
 
     def __init__(self, model: mujoco.MjModel, fps: float = 30.0, width: int = 480, height: int = 480) -> None:
-        if not 1 <= fps <= 240:
-            raise ValueError(f"video fps must be 1..240, got {fps}")
+        if not FPS_RANGE[0] <= fps <= FPS_RANGE[1]:
+            raise ValueError(f"video fps must be {FPS_RANGE[0]:g}..{FPS_RANGE[1]:g}, got {fps}")
         self.fps = fps
         self.renderer = mujoco.Renderer(model, height, width)
         self.frames: list = []

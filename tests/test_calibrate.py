@@ -3,7 +3,6 @@ the log evidence recovers what wrote the log."""
 from __future__ import annotations
 
 import json
-import os
 import signal
 import sqlite3
 import subprocess
@@ -65,8 +64,12 @@ def test_a_tiny_search_is_interrupted_and_the_same_command_continues_it(tmp_path
                              "--out", str(out)], cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 300
     while time.monotonic() < deadline:             # interrupt once the first candidate is in and the second runs
-        if (out / "study.db").exists() and [s for _, s in _study_rows(out / "study.db")].count("COMPLETE") >= 1:
-            break
+        try:
+            states = [s for _, s in _study_rows(out / "study.db")] if (out / "study.db").exists() else []
+            if states.count("COMPLETE") >= 1 and "RUNNING" in states:
+                break
+        except sqlite3.OperationalError:           # the file exists before Optuna has made its tables
+            pass
         time.sleep(0.2)
     proc.send_signal(stop)
     _, err = proc.communicate(timeout=120)

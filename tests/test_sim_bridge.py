@@ -4,6 +4,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -193,14 +194,24 @@ def _cli(*args: str) -> subprocess.CompletedProcess:
 
 def test_sim_run_prints_json_and_writes_the_figure(tmp_path):
     proc = _cli("--duration", "2", "--json", "--out", str(tmp_path), "--start", "0.02,0", "--target", "0.0,0.0")
-    assert proc.returncode in (0, 1), proc.stderr
     result = json.loads(proc.stdout)
+    assert proc.returncode == (0 if result["success"] else 1), proc.stderr     # the exit status says the outcome
     for key in ("success", "final_error_m", "time_to_reach_s", "fell_off", "sim_time_s", "wall_time_s"):
         assert key in result
     assert result["sim_time_s"] == pytest.approx(2.0, abs=0.01)
-    assert (tmp_path / "sphere_manhattan_seed1.png").stat().st_size > 10_000
-    with np.load(tmp_path / "sphere_manhattan_seed1.npz") as saved:
+    assert Path(result["figure"]).parent == tmp_path and Path(result["figure"]).stat().st_size > 10_000
+    with np.load(result["trajectory"]) as saved:
         assert saved["true_xy_m"].shape == (25, 2)
+
+
+def test_sim_run_takes_negative_points_and_names_each_trial_apart(tmp_path):
+    """--target -0.05,0.05 is a point, not an option; two different trials never overwrite each other's files."""
+    first = json.loads(_cli("--duration", "0.2", "--json", "--out", str(tmp_path), "--target", "-0.05,0.05").stdout)
+    other = json.loads(_cli("--duration", "0.2", "--json", "--out", str(tmp_path), "--target", "-0.05,-0.05").stdout)
+    again = json.loads(_cli("--duration", "0.2", "--json", "--out", str(tmp_path), "--target=-0.05,0.05").stdout)
+    assert first["target_m"] == [-0.05, 0.05] and other["target_m"] == [-0.05, -0.05]
+    assert first["figure"] != other["figure"] and first["figure"] == again["figure"]
+    assert len(list(tmp_path.glob("*.npz"))) == 2
 
 
 @pytest.mark.parametrize("args, needle", [
@@ -210,11 +221,18 @@ def test_sim_run_prints_json_and_writes_the_figure(tmp_path):
     (("--latency", "0.2"), "camera latency"),
     (("--duration", "-1"), "duration"),
     (("--object", "teapot"), "invalid choice"),
+    (("--target", "-0.05"), "expected two numbers"),
+    (("--seed", "-1"), "seed must be"),
+    (("--alpha", "-1"), "noise amplitude alpha: -1 m is outside 0..0.25 m"),
+    (("--tolerance", "0"), "tolerance epsilon: 0 m is outside 0.001..0.5 m"),
+    (("--video", "--video-fps", "0"), "--video-fps must be 1..240"),
+    (("--out", "/proc/version/sub"), "cannot write into /proc/version/sub"),
 ])
-def test_sim_run_refuses_bad_input_in_one_line(args, needle):
+def test_sim_run_refuses_bad_input_in_one_line_before_any_work(args, needle, tmp_path):
     proc = _cli(*args)
-    assert proc.returncode == 2
+    assert proc.returncode == 2, proc.stderr
     assert "Traceback" not in proc.stderr and needle in proc.stderr
+    assert "sim s in" not in proc.stdout          # refused before a trial ran
 
 
 def test_sim_run_drives_the_rig_from_a_firmware_on_a_given_port(tmp_path):
