@@ -6,8 +6,8 @@ import math
 import signal
 import sys
 import time
-from pathlib import Path
 
+from mantaray.outputs import IMAGE_SUFFIXES, OutputError, writable_dir, writable_file
 from mantaray.protocol import messages as m
 from mantaray.protocol.codec import choices
 
@@ -65,7 +65,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from mantaray.sim.plots import path_phase_figure
 
     from .link import LinkError
-    from .session import RigSession, Setup
+    from .session import RigSession, Setup, check_port
     from .tracker import Calibration, FrameSource, Tracker
 
     if args.path is not None:
@@ -77,16 +77,17 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             parser.error(f"the circle of radius {args.radius:g} m about {cx:g},{cy:g} is not on the fabric "
                          f"(|x| <= {hx:g} m, |y| <= {hy:g} m)")
     try:
+        check_port(args.port)
         configure = m.Configure(controller=m.Controller[args.controller.upper()], tolerance=args.tolerance,
-                                noise_amplitude=args.alpha, telemetry_period=0)
+                                noise_amplitude=args.alpha, telemetry_period=0).check()
         calibration = Calibration.load(args.calibration) if args.calibration else None
-    except (ValueError, OSError, KeyError) as exc:
+        out = writable_dir(args.out)
+    except (ValueError, OSError, KeyError, LinkError) as exc:
         parser.error(str(exc))
     tracker = Tracker(marker_height_m=args.marker_height, camera_height_m=args.camera_height,
                       calibration=calibration, blob=args.blob)
     source = FrameSource(args.camera)
     stamp = time.strftime("%Y%m%d-%H%M%S")
-    out = Path(args.out)
     log = RunLog(out / f"rig-{stamp}.jsonl", {"args": {k: v for k, v in vars(args).items() if k != "func"}})
     events = []
 
@@ -177,8 +178,13 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 def cmd_monitor(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """Show the firmware's telemetry live, decoded, without changing anything on it (Ctrl-C ends)."""
 
-    from .session import connect
+    from .link import LinkError
+    from .session import check_port, connect
 
+    try:
+        check_port(args.port)
+    except LinkError as exc:
+        parser.error(str(exc))
     link, identity = connect(args.port)
     print(f"{args.port}: protocol {identity.protocol_version}, firmware {identity.firmware_major}."
           f"{identity.firmware_minor}.{identity.firmware_patch}, clock {m.Clock(identity.clock).name.lower()}")
@@ -210,6 +216,7 @@ def cmd_monitor(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
 
 # ------------------------------------------------------------------------------------------- markers
 A4_MM = (210.0, 297.0)
+DPI_RANGE = (72, 2400)    # [1/inch] a PNG sheet's resolution: from screen to the finest printers
 
 
 def cmd_markers(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
@@ -221,9 +228,12 @@ def cmd_markers(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
 
     from .markers import MarkerLayout, marker_image, quiet_scale
 
-    out = Path(args.out)
-    if out.suffix.lower() not in (".pdf", ".png"):
-        parser.error(f"--out must end in .pdf or .png, got {out.name!r}")
+    if not DPI_RANGE[0] <= args.dpi <= DPI_RANGE[1]:
+        parser.error(f"--dpi must be {DPI_RANGE[0]}..{DPI_RANGE[1]}, got {args.dpi}")
+    try:
+        out = writable_file(args.out, (".pdf", ".png"))
+    except OutputError as exc:
+        parser.error(str(exc))
     layout = MarkerLayout()
     items = [(f"corner {k} (id {i})", i, layout.corner_size_m) for k, i in enumerate(layout.corner_ids)]
     items += [(f"object (id {layout.object_id})", layout.object_id, layout.object_size_m)] * 2
@@ -243,7 +253,6 @@ def cmd_markers(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     ax.text(25, 18, "100 mm: check this after printing (print at 100 %, no fit-to-page)", fontsize=8)
     ax.text(25, 8, f"{layout.dictionary}; corner markers at (±{layout.corner_offset_m[0]}, ±{layout.corner_offset_m[1]})"
                    " m in the fabric frame, their tops toward +y", fontsize=7)
-    out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=args.dpi)
     plt.close(fig)
     print(f"{out}: {len(items)} markers on A4 at true size" + (f", {args.dpi} dpi" if out.suffix == ".png" else ""))
@@ -251,6 +260,16 @@ def cmd_markers(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
 
 
 # ------------------------------------------------------------------------------------------- calibrate
+def _squares(text: str) -> tuple[int, int]:
+    try:
+        nx, ny = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected squares like 7x5, got {text!r}") from None
+    if nx < 2 or ny < 2:
+        raise argparse.ArgumentTypeError(f"a ChArUco board needs at least 2 x 2 squares, got {text!r}")
+    return nx, ny
+
+
 def charuco_board(args):
     import cv2
 
@@ -289,13 +308,22 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
     camera from several angles (or give a video of that) and the intrinsics go to --out (.npz)."""
     import cv2
 
+    if not 0 < args.marker_mm < args.square_mm:
+        parser.error(f"the marker ({args.marker_mm:g} mm) must be smaller than its square ({args.square_mm:g} mm) "
+                     f"and larger than 0")
+    try:
+        if args.board_out:
+            writable_file(args.board_out, IMAGE_SUFFIXES)
+        if args.camera is not None:
+            writable_file(args.out, (".npz",))
+    except OutputError as exc:
+        parser.error(str(exc))
     board = charuco_board(args)
     if args.board_out:
         squares_x, squares_y = args.squares
         px_per_mm = 300 / 25.4
         image = board.generateImage((int(squares_x * args.square_mm * px_per_mm),
                                      int(squares_y * args.square_mm * px_per_mm)))
-        Path(args.board_out).parent.mkdir(parents=True, exist_ok=True)
         if not cv2.imwrite(args.board_out, image):
             parser.error(f"could not write {args.board_out!r} (an image: .png, .jpg, .tif ...)")
         print(f"{args.board_out}: {squares_x} x {squares_y} squares of {args.square_mm} mm at 300 dpi")
@@ -368,8 +396,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     calibrate.add_argument("--camera", help="camera index or video file showing the board")
     calibrate.add_argument("--out", default="out/camera.npz", help="the calibration (for mantaray rig --calibration)")
     calibrate.add_argument("--board-out", help="write the board to print (PNG at 300 dpi)")
-    calibrate.add_argument("--squares", type=lambda t: tuple(int(v) for v in t.split("x")), default=(7, 5),
-                           metavar="NXxNY", help="board squares")
+    calibrate.add_argument("--squares", type=_squares, default=(7, 5), metavar="NXxNY",
+                           help="board squares, at least 2 x 2")
     calibrate.add_argument("--square-mm", type=float, default=30.0, help="square side [mm]")
     calibrate.add_argument("--marker-mm", type=float, default=22.0, help="marker side [mm]")
     calibrate.add_argument("--frames", type=int, default=200, help="read at most this many frames")

@@ -9,6 +9,7 @@ and the target, and `start` if it was running: the user restarts nothing.
 from __future__ import annotations
 
 import os
+import stat
 import time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -24,6 +25,32 @@ UNO_RESET_WAIT_S = 2.5      # [s] the stock bootloader's delay after the DTR res
 def is_pty(port: str) -> bool:
     """A pseudo-terminal (virtual MCU, simulator) resets nothing when opened."""
     return os.path.realpath(port).startswith("/dev/pts/")
+
+
+def check_port(port: str) -> None:
+    """Raise LinkError at once when the path names no serial device: missing, a regular file, a folder.
+
+    The commands check their --port with it before anything else, where waiting would only be silence; a
+    reconnection (connect) waits for the port to come back instead."""
+    if not port.startswith("/"):            # COM3 and the like: only opening them tells
+        return
+    try:
+        mode = os.stat(port).st_mode
+    except FileNotFoundError:
+        raise LinkError(f"{port}: no such device; is the board plugged in? Serial devices here: "
+                        f"{', '.join(_serial_devices()) or 'none'}") from None
+    except OSError as exc:
+        raise LinkError(f"{port}: cannot look at it ({exc.strerror})") from None
+    if not stat.S_ISCHR(mode):
+        kind = "a folder" if stat.S_ISDIR(mode) else "a regular file" if stat.S_ISREG(mode) else "not a device"
+        raise LinkError(f"{port} is {kind}, not a serial device (a board is /dev/ttyACM0 or /dev/ttyUSB0, the "
+                        f"virtual MCU prints its /dev/pts/N)")
+
+
+def _serial_devices() -> list[str]:
+    from serial.tools import list_ports
+
+    return sorted(p.device for p in list_ports.comports())
 
 
 def connect(port: str, *, reset_wait_s: float | None = None, timeout_s: float = 30.0, ack_timeout_s: float = 0.2,

@@ -20,13 +20,18 @@ class Parser(argparse.ArgumentParser):
 
 
 def cmd_vmcu(args: argparse.Namespace) -> int:
-    """Start the virtual MCU on a pty, identify it, and keep it running until Ctrl-C."""
+    """Start the virtual MCU on a pty, identify it, and keep it running until Ctrl-C or SIGTERM."""
+    import signal
     import time
 
     from mantaray.host.link import Link
     from mantaray.host.transport import SerialTransport
     from mantaray.host.vmcu import VirtualMcu
 
+    def stop(signum, frame):
+        raise KeyboardInterrupt   # as Ctrl-C: the virtual MCU stops and its temporary folder goes
+
+    signal.signal(signal.SIGTERM, stop)
     with VirtualMcu(clock=args.clock) as vmcu:
         link = Link(SerialTransport(vmcu.path))
         reply = link.identify()

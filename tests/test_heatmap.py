@@ -210,6 +210,30 @@ def test_a_header_cut_off_as_the_run_began_starts_the_run_afresh(tmp_path):
     assert path.read_bytes() == b"something else entirely"
 
 
+def _compare(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "compare", *args], cwd=cwd,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_compare_refuses_runs_that_measure_success_differently_and_warns_of_incomplete_ones(tmp_path):
+    full = [_line(c, k, success=c % 2 == 0) for c in range(4) for k in range(2)]
+    _synthetic_file(tmp_path / "a.jsonl", SMALL, full)
+    _synthetic_file(tmp_path / "b.jsonl", dataclasses.replace(SMALL, controller="euclidean"), full[:5])
+    _synthetic_file(tmp_path / "t1.jsonl", dataclasses.replace(SMALL, duration_s=1.0), full)
+    _synthetic_file(tmp_path / "none.jsonl", dataclasses.replace(SMALL, controller="euclidean"),
+                    [_line(c, k, success=False, reached=False) for c in range(4) for k in range(2)])
+    ok = _compare("a.jsonl", "b.jsonl", "--out", "d.png", cwd=tmp_path)
+    assert ok.returncode == 0 and "b.jsonl is incomplete (3 of 8 trials not run)" in ok.stderr, ok.stderr
+    assert (tmp_path / "d.png").stat().st_size > 0
+    zero = _compare("a.jsonl", "none.jsonl", "--out", "z.png", cwd=tmp_path)
+    assert zero.returncode == 0 and "difference +2.0;" in zero.stdout and "%" not in zero.stdout   # no x / 0
+    for args, needle in [(("a.jsonl", "t1.jsonl", "--out", "d.png"), "duration_s 0.5 against 1.0"),
+                         (("a.jsonl", "b.jsonl", "--out", "d.txt"), "the file type must be one of .png, .pdf, .svg")]:
+        bad = _compare(*args, cwd=tmp_path)
+        assert bad.returncode == 2 and needle in bad.stderr and "Traceback" not in bad.stderr, bad.stderr
+    assert not (tmp_path / "d.txt").exists()
+
+
 # ------------------------------------------------------------------------------------------- the in-process core
 def test_in_process_core_gives_the_same_commands_as_the_virtual_mcu_over_the_pty():
     spec = TrialSpec((0.08, -0.06), (-0.05, 0.04), duration_s=3.0, alpha_m=0.03, seed=11)

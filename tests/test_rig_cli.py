@@ -110,10 +110,37 @@ def test_rig_refuses_bad_input_in_one_line(args, needle):
     assert proc.returncode == 2 and needle in proc.stderr and "Traceback" not in proc.stderr
 
 
-def test_rig_explains_a_missing_port_in_one_line(still_video):
-    proc = _mantaray("rig", "--port", "/dev/nonexistent-uno", "--camera", still_video, "--target", "0,0",
-                     "--timeout", "1")
-    assert proc.returncode == 1 and "cannot open" in proc.stderr and "Traceback" not in proc.stderr
+@pytest.mark.parametrize("command", ["rig", "monitor"])
+@pytest.mark.parametrize("port, needle", [
+    ("/dev/nonexistent-uno", "no such device; is the board plugged in?"),
+    ("/etc/hostname", "is a regular file, not a serial device"),
+    ("/tmp", "is a folder, not a serial device"),
+])
+def test_a_port_that_is_no_serial_device_is_refused_at_once_in_one_line(still_video, command, port, needle):
+    extra = ("--camera", still_video, "--target", "0,0", "--timeout", "1") if command == "rig" else ("--count", "1")
+    t0 = time.monotonic()
+    proc = _mantaray(command, "--port", port, *extra)
+    assert proc.returncode == 2 and needle in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+    assert time.monotonic() - t0 < 20          # not the 30 s reconnection wait (a loaded machine starts slowly)
+
+
+@pytest.mark.parametrize("args, needle", [
+    (("markers", "--dpi", "0"), "--dpi must be 72..2400"),
+    (("markers", "--out", "sheet.svg"), "the file type must be one of .pdf, .png"),
+    (("markers", "--out", "/proc/version/sheet.pdf"), "cannot write into /proc/version"),
+    (("calibrate", "--board-out", "board.svg"), "the file type must be one of .png"),
+    (("calibrate", "--board-out", "board.png", "--squares", "1x1"), "at least 2 x 2 squares"),
+    (("calibrate", "--board-out", "board.png", "--squares", "seven"), "expected squares like 7x5"),
+    (("calibrate", "--board-out", "board.png", "--marker-mm", "40", "--square-mm", "30"), "must be smaller than"),
+    (("calibrate", "--camera", "0", "--out", "camera.txt"), "the file type must be one of .npz"),
+    (("rig", "--port", "/dev/null", "--camera", "0", "--target", "0,0", "--alpha", "1"),
+     "noise_amplitude: 1 m is outside 0..0.25 m"),
+])
+def test_rig_tools_refuse_bad_input_in_one_line_before_any_work(args, needle, tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "mantaray.cli", *args], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 2 and needle in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+    assert list(tmp_path.iterdir()) == []      # nothing written
 
 
 def test_monitor_shows_decoded_telemetry_without_changing_anything():

@@ -32,3 +32,16 @@ def test_the_virtual_mcu_dies_with_a_killed_host():
     while _alive(int(pid)) and time.monotonic() < deadline:
         time.sleep(0.02)
     assert not _alive(int(pid))
+
+
+def test_mantaray_vmcu_stopped_by_sigterm_leaves_no_temporary_folder():
+    proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "vmcu"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    first = proc.stdout.readline()                  # "virtual MCU on /tmp/mantaray-vmcu-XXXX/tty: ..."
+    folder = os.path.dirname(first.split(" on ", 1)[1].split(":", 1)[0])
+    assert os.path.isdir(folder) and "mantaray-vmcu-" in folder, first
+    proc.stdout.readline()                          # "running; ..."
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0 and "Traceback" not in err, err
+    assert not os.path.exists(folder)
