@@ -162,7 +162,9 @@ class TrialResult:
                 "link_share": round(self.link_wall_s / max(self.wall_time_s, 1e-9), 3),
                 "object": self.object_name, "controller": self.spec.controller,
                 "start_m": list(self.spec.start_m), "target_m": list(self.spec.target_m),
-                "seed": self.spec.seed, "link_clean": self.watch.clean}
+                "seed": self.spec.seed, "link_clean": self.watch.clean,
+                "camera_frames": len(self.t_s), "unseen_frames": self.watch.unseen_frames,
+                "dropped_frames": self.watch.dropped_frames}
 
     @property
     def physics_share(self) -> float:

@@ -110,6 +110,11 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         summary["video"] = str(bridge.recorder.save(out / f"{stem}.mp4"))
     for message in result.watch.messages:
         print(f"mantaray sim run: link: {message}", file=sys.stderr)
+    if result.watch.unseen_frames:
+        print(f"mantaray sim run: warning: the tracker ({args.vision}) saw no object in {result.watch.unseen_frames} "
+              f"of {len(result.t_s)} camera frames; the firmware got those as not visible (NaN in the trajectory's "
+              f"measured_xy_m)" + (" — a marker on a rolling object turns away from the camera: track it with "
+                                   "--vision blob" if args.vision == "aruco" else ""), file=sys.stderr)
     if args.json:
         print(json.dumps(summary))
     else:

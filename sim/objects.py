@@ -84,7 +84,8 @@ OBJECTS: dict[str, ObjectSpec] = {o.name: o for o in (
                rgba=(0.7, 0.1, 0.1, 1.0),
                source="paper Table I: diameter 5-7.2 cm, 131.4 g; modelled 6.5 cm wide, 6.0 cm tall"),
     ObjectSpec("egg", 0.0667, "ellipsoid", 0.0205, size_m=(0.031, 0.0205, 0.0205),
-               rgba=(0.95, 0.9, 0.8, 1.0),
-               source="paper Table I: diameter 4.1-6.2 cm, 66.7 g; lying with its long axis along x"),
+               rgba=(0.80, 0.55, 0.35, 1.0),
+               source="paper Table I: diameter 4.1-6.2 cm, 66.7 g; lying with its long axis along x; a brown egg, "
+                      "whose colour the blob tracker tells from the blue fabric (a white one it cannot)"),
     _bunny(),
 )}

@@ -18,8 +18,12 @@ BLOB_MIN_VALUE = 60          # [0..255]
 
 
 def blob_colour(rgba: tuple[float, float, float, float]) -> BlobColour:
-    """An HSV window around an object's colour, for the colour-blob tracker."""
-    h, _, _ = colorsys.rgb_to_hsv(*rgba[:3])
+    """An HSV window around an object's colour, for the colour-blob tracker; a colour too pale or too dark for a
+    hue window (white, grey, black: the fabric's and the markers' greys would match it) is refused."""
+    h, s, v = colorsys.rgb_to_hsv(*rgba[:3])
+    if s * 255 < BLOB_MIN_SATURATION or v * 255 < BLOB_MIN_VALUE:
+        raise ValueError(f"the colour {rgba[:3]} is too pale or dark to track as a blob (saturation {s * 255:.0f}, "
+                         f"value {v * 255:.0f}; at least {BLOB_MIN_SATURATION} and {BLOB_MIN_VALUE} of 255)")
     hue = int(round(h * 179))
     low, high = max(0, hue - BLOB_HUE_WIDTH), min(179, hue + BLOB_HUE_WIDTH)
     return BlobColour((low, BLOB_MIN_SATURATION, BLOB_MIN_VALUE), (high, 255, 255))
