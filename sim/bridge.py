@@ -113,6 +113,11 @@ class TrialSpec:
         return out
 
 
+def is_success(fell_off: bool, final_error_m: float, tolerance_m: float) -> bool:
+    """A trial's success (the paper's Results): within epsilon at the end of T, and never fallen off."""
+    return (not fell_off) and final_error_m < tolerance_m
+
+
 @dataclass
 class LinkWatch:
     """What the frame counters showed during a trial: each count is something the bridge reported."""
@@ -347,7 +352,8 @@ class Bridge:
         final_error = float(np.hypot(*(final_xy - target)))
         sim_time = (data.time - t0_sim)
         return TrialResult(
-            spec=spec, object_name=self.rig.object.name, success=(not fell) and final_error < spec.tolerance_m, final_error_m=final_error,
+            spec=spec, object_name=self.rig.object.name, success=is_success(fell, final_error, spec.tolerance_m),
+            final_error_m=final_error,
             time_to_reach_s=reach_s, fell_off=fell, sim_time_s=sim_time,
             wall_time_s=time.perf_counter() - wall0, physics_wall_s=physics_s, link_wall_s=link_s,
             t_s=np.asarray(rows_t), true_xy_m=np.asarray(rows_true).reshape(-1, 2),

@@ -163,11 +163,6 @@ def controller_gains(controller: str, gains: tuple[float, float, float, float] |
     return out
 
 
-def is_success(fell_off: bool, final_error_m: float, tolerance_m: float) -> bool:
-    """The heatmap's rule: within epsilon at the end of T, and never fallen off."""
-    return (not fell_off) and final_error_m < tolerance_m
-
-
 # ------------------------------------------------------------------------------------------- results file
 @dataclass
 class ResultsFile:

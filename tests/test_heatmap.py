@@ -20,7 +20,7 @@ from mantaray.host.transport import InProcessTransport, SerialTransport
 from mantaray.host.vmcu import VirtualMcu
 from mantaray.paths import REPO
 from mantaray.sim import heatmap as H
-from mantaray.sim.bridge import Bridge, TrialSpec
+from mantaray.sim.bridge import Bridge, TrialSpec, is_success
 from mantaray.sim.rig import Rig
 
 MODULE = (0.5, 0.5)
@@ -83,9 +83,9 @@ def test_a_bad_protocol_is_refused_with_a_reason(kwargs, needle):
 
 # ------------------------------------------------------------------------------------------- success rule
 def test_success_needs_the_end_within_tolerance_and_no_fall():
-    assert H.is_success(False, 0.019, 0.02)
-    assert not H.is_success(False, 0.02, 0.02)
-    assert not H.is_success(True, 0.0, 0.02)          # within tolerance but fallen off: a failure
+    assert is_success(False, 0.019, 0.02)
+    assert not is_success(False, 0.02, 0.02)
+    assert not is_success(True, 0.0, 0.02)          # within tolerance but fallen off: a failure
 
 
 def _record(cell: int, k: int, success: bool, reached: bool = False, fell: bool = False) -> dict:

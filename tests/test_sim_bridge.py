@@ -16,15 +16,21 @@ from mantaray.host.vmcu import VirtualMcu
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
 from mantaray.protocol.framing import Frame, FrameDecoder, encode_packet
+from mantaray.sim import findings as F
+from mantaray.sim import heatmap as H
+from mantaray.sim import model as M
 from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
 from mantaray.sim.model import SimulationUnstable
 from mantaray.sim.rig import Rig
 
-# Central trials of the calibration protocol (benchmarks/calibrate.py --seed 2026: trials 0, 1 and 3, whose
-# Manhattan runs end 4, 2 and 7 mm from the target: margin to the 20 mm tolerance on another machine's floats).
-CENTRAL = [((-0.027, -0.0326), (-0.047, 0.0497)),
-           ((0.015, -0.0577), (0.0419, 0.0854)),
-           ((0.0014, -0.0797), (0.0329, -0.0638))]
+CENTRAL_SEED = 1        # the draw of the central trials below
+
+
+def central_trials(n: int = 8) -> list[H.Trial]:
+    """n trials of the paper's protocol whose targets lie in central cells (F1's |x|, |y| < 0.10 m), drawn from a
+    seed: one trial in each of n central cells, its start anywhere on the fabric."""
+    cells = np.random.default_rng(CENTRAL_SEED).choice(F.strata_cells(F.PAPER_CELLS)["centre"], n, replace=False)
+    return H.trials(H.Protocol(trials_per_cell=1, only_cells=tuple(int(c) for c in cells)))
 
 
 @pytest.fixture(scope="module")
@@ -35,26 +41,25 @@ def sphere_bridge():
 
 @pytest.mark.parametrize("controller", ["manhattan", "euclidean"])
 def test_central_trials_reach_the_target(sphere_bridge, controller):
-    """The calibrated model's central region (sim/README.md, Calibration), firmware in the loop over the pty.
+    """The paper's central region (F1: every central target reached), firmware in the loop over the pty.
 
-    Both controllers bring the sphere within the tolerance by T, which is where the paper's algorithms
-    stop (while ||p - p_d|| >= eps); Manhattan also holds it there to the end of T.
-    """
-    for i, (start, target) in enumerate(CENTRAL):
-        result = sphere_bridge.run(TrialSpec(start, target, controller=controller, seed=i + 1))
+    On the polyester plant the full maps reach 88 % (Manhattan) and 99 % (Euclidean) of central targets
+    (docs/results.md), so at least 6 of 8 drawn trials must reach: a plant or firmware change that loses the
+    centre fails this, the map's own misses do not."""
+    reached = 0
+    for trial in central_trials():
+        result = sphere_bridge.run(TrialSpec(trial.start_m, trial.target_m, controller=controller, seed=trial.seed))
         assert result.watch.clean, result.watch.messages
-        assert not result.fell_off
-        assert result.time_to_reach_s is not None, (controller, start, target)
-        if controller == "manhattan":
-            assert result.success, (start, target, result.final_error_m)
-        assert len(result.t_s) == 121                     # 12 Hz for 10 s, frames 0..120
-        assert np.all(np.abs(result.command_m) <= 0.25)   # what the firmware sent stays in range
+        assert len(result.t_s) == 121 or result.fell_off       # 12 Hz for 10 s, frames 0..120
+        assert np.all(np.abs(result.command_m) <= 0.25)        # what the firmware sent stays in range
+        reached += result.time_to_reach_s is not None and not result.fell_off
+    assert reached >= 6, reached
 
 
 def test_stopping_when_reached_ends_at_the_first_frame_within_tolerance_as_the_papers_loop(sphere_bridge):
-    start, target = CENTRAL[0]
-    full = sphere_bridge.run(TrialSpec(start, target, seed=1))
-    stopped = sphere_bridge.run(TrialSpec(start, target, seed=1, stop_when_reached=True))
+    trial = central_trials()[0]
+    full = sphere_bridge.run(TrialSpec(trial.start_m, trial.target_m, seed=trial.seed))
+    stopped = sphere_bridge.run(TrialSpec(trial.start_m, trial.target_m, seed=trial.seed, stop_when_reached=True))
     assert full.time_to_reach_s is not None and stopped.time_to_reach_s == full.time_to_reach_s
     assert stopped.success and stopped.final_error_m < stopped.spec.tolerance_m
     assert stopped.t_s[-1] < stopped.time_to_reach_s and len(stopped.t_s) < len(full.t_s)
@@ -71,12 +76,16 @@ def test_same_seed_gives_the_same_trajectory(sphere_bridge):
 
 
 def test_commands_from_telemetry_reach_the_simulated_actuators(sphere_bridge):
+    """The firmware's last commands move the rig's carriages there: each lift joint (+ lowers its corner) settles
+    at the commanded position once the model runs on with those commands held."""
     result = sphere_bridge.run(TrialSpec((0.0, 0.0), (0.1, 0.0), duration_s=1.0))
-    data, model = sphere_bridge.data, sphere_bridge.model
-    # After the stop that ends the trial the firmware levels the surface, but the last applied command stays
-    # on the simulated actuators: the controls equal the last telemetry's commands.
-    assert np.allclose(data.ctrl[:4], result.command_m[-1])
-    assert result.tilt_deg[-1, 0] > 0 and result.command_m[-1, 1] > 0   # target at +x: +x corners lowered
+    model, data = sphere_bridge.model, sphere_bridge.data
+    commanded = result.command_m[-1]
+    assert result.tilt_deg[-1, 0] > 0 and commanded[1] > 0     # target at +x: the +x corners lowered
+    M.set_commands(model, data, commanded)
+    M.step_until(model, data, data.time + 3.0)               # time for the belts at their speed to get there
+    lifts = np.array([data.joint(f"lift{i}").qpos[0] for i in range(M.N_ACTUATORS)])
+    assert np.allclose(lifts, commanded, atol=1e-3), (lifts, commanded)   # [m] within a servo's steady error
 
 
 def test_a_cube_with_noise_ends_closer_than_it_started():
