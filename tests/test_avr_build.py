@@ -29,10 +29,31 @@ sys.modules[spec.name] = avr_build  # dataclasses look their module up while the
 spec.loader.exec_module(avr_build)
 
 HAS_ARDUINO_CORE = (avr_build.ARDUINO_AVR / "cores" / "arduino").is_dir()
-needs_arduino_core = pytest.mark.skipif(not HAS_ARDUINO_CORE, reason="needs the Debian package arduino-core-avr")
-needs_toolchain = pytest.mark.skipif(
-    shutil.which("avr-g++") is None or not HAS_ARDUINO_CORE,
-    reason="needs the Debian packages gcc-avr, binutils-avr, avr-libc and arduino-core-avr")
+# One rule for the whole suite: what scripts/setup.sh installs or builds is required, and a test without it fails
+# saying what is missing (never a skip: a green run means every test ran).
+def _require(present: bool, what: str) -> None:
+    if not present:
+        pytest.fail(f"needs {what}: run scripts/setup.sh")
+
+
+@pytest.fixture
+def arduino_core() -> None:
+    _require(HAS_ARDUINO_CORE, "the Debian package arduino-core-avr")
+
+
+@pytest.fixture
+def avr_toolchain() -> None:
+    _require(shutil.which("avr-g++") is not None and HAS_ARDUINO_CORE,
+             "the Debian packages gcc-avr, binutils-avr, avr-libc and arduino-core-avr")
+
+
+@pytest.fixture
+def simavr_tool() -> None:
+    _require(shutil.which("simavr") is not None, "the Debian package simavr")
+
+
+needs_arduino_core = pytest.mark.usefixtures("arduino_core")
+needs_toolchain = pytest.mark.usefixtures("avr_toolchain")
 
 
 def run_script(*args: str) -> subprocess.CompletedProcess:
@@ -183,7 +204,7 @@ def as_simavr_shows(frame: bytes) -> bytes:
 
 
 @needs_toolchain
-@pytest.mark.skipif(shutil.which("simavr") is None, reason="needs the Debian package simavr")
+@pytest.mark.usefixtures("simavr_tool")
 def test_firmware_sends_boot_then_telemetry_in_simavr(build):
     out, _ = build
     uart = simavr_uart(out / "firmware.elf", want=64)

@@ -337,4 +337,6 @@ def test_euclidean_direction_is_a_unit_vector_for_tiny_errors():
         h.link.position(m.ObjectPosition(frame=100 + i, capture_time=h.capture_us, x=-0.25, y=0.0))
     h.capture_us += 100_000
     tel = h.link.position(m.ObjectPosition(frame=200, capture_time=h.capture_us, x=-4.5e-23, y=0.0))
-    assert math.hypot(tel.tilt_zx, tel.tilt_zy) <= 26.0 + 0.005, tel
+    # the full wound-up angle, along the (tiny) error's direction: neither lost to underflow nor grown past it
+    assert math.hypot(tel.tilt_zx, tel.tilt_zy) == pytest.approx(26.0, abs=0.005), tel
+    assert tel.tilt_zx > 0 and abs(tel.tilt_zy) < 1e-6, tel

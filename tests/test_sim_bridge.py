@@ -248,8 +248,9 @@ def test_sim_run_drives_the_rig_from_a_firmware_on_a_given_port(tmp_path):
     """--port: the way a board or the AVR simulator takes the virtual MCU's place."""
     with VirtualMcu(clock="sim") as vmcu:
         proc = _cli("--port", vmcu.path, "--duration", "1", "--json", "--out", str(tmp_path))
-    assert proc.returncode in (0, 1), proc.stderr
-    assert json.loads(proc.stdout)["sim_time_s"] == pytest.approx(1.0, abs=0.01)
+    result = json.loads(proc.stdout)
+    assert proc.returncode == (0 if result["success"] else 1), proc.stderr   # the exit status says the outcome
+    assert result["sim_time_s"] == pytest.approx(1.0, abs=0.01)
 
 
 def test_sim_run_explains_a_clock_mismatch_in_one_line():

@@ -43,8 +43,6 @@ def test_sim_clock_backwards_is_out_of_range_and_changes_nothing(dut, back_us):
 
 
 @simulated
-@pytest.mark.xfail(strict=True, reason="firmware deviation: a backwards sim_clock is nacked out_of_range with "
-                   "nack.field 255, but the schema says nack.field names the field for out_of_range (here 0, now)")
 def test_sim_clock_backwards_names_the_now_field(dut):
     dut.set_sim_clock(dut.sim_now_us + 1000)
     dut.refuse(m.SimClock(dut.sim_now_us - 1), m.ErrorCode.OUT_OF_RANGE, field=0)

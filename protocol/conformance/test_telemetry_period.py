@@ -30,10 +30,13 @@ def test_periodic_telemetry_on_a_wall_clock(dut, advance):
     dut.configure(telemetry_period=20)
     got = advance(0.3)
     times = [t.time for t in got]
-    assert 10 <= len(times) <= 16
+    # never early, and on average close to the period; "close" leaves a scheduler slice (~10 ms) per frame for a
+    # busy 2-core machine, where the firmware and this host share the cores (the simulated-clock test above
+    # checks the period to the millisecond)
+    assert 8 <= len(times) <= 16
     gaps = [(b - a) & 0xFFFFFFFF for a, b in zip(times, times[1:])]
     assert min(gaps) >= 20
-    assert sum(gaps) / len(gaps) <= 25
+    assert sum(gaps) / len(gaps) <= 30
 
 
 @pytest.mark.parametrize("state", ["running", "fault", "estop"])

@@ -119,6 +119,7 @@ ErrorCode Firmware::handle_command(uint8_t& field) {
     case proto::SimClock::kId: {
       const ErrorCode code = hal::sim_clock_set(decoded<proto::SimClock>(payload).now);
       if (code == ErrorCode::kOk) poll();  // what is due at the new time happens before the ack
+      if (code == ErrorCode::kOutOfRange) field = 0;  // the one field, now, went backwards
       return code;
     }
     default:
