@@ -20,7 +20,7 @@ from mantaray.sim.fig3 import run_fig3
 from mantaray.sim.findings import MODULE_M, fig3_finding
 from mantaray.sim.heatmap import LocalPool, Protocol
 from mantaray.sim.parameters import plant_names
-from mantaray.sim.plots import fig3_figure
+from mantaray.plots import fig3_figure
 
 REPO = Path(__file__).resolve().parents[1]
 

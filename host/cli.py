@@ -62,7 +62,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     for --hold seconds (a fixed target), at --timeout, or on Ctrl-C, which levels the surface and stops the
     motors. Every run writes one log (configuration, every position and telemetry frame) and the paper's
     Fig. 3-style plot."""
-    from mantaray.sim.plots import path_phase_figure
+    from mantaray.plots import path_phase_figure
 
     from .link import LinkError
     from .session import RigSession, Setup, check_port

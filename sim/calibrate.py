@@ -231,7 +231,7 @@ def pareto_figure(study, evidence, path: Path) -> Path | None:
     """Each pair of objectives, every candidate a dot, the Pareto front ringed: where the findings conflict."""
     import numpy as np
 
-    from .plots import pareto_figure as draw
+    from mantaray.plots import pareto_figure as draw
 
     done = completed(study)
     if len(evidence.objective_names) < 2 or not done:

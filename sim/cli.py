@@ -48,7 +48,7 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from .bridge import Bridge, Tracking, TrialSpec
     from .heatmap import controller_gains
     from .plant import Plant
-    from .plots import trajectory_figure
+    from mantaray.plots import path_phase_figure
 
     plant = Plant(args.plant)
     rig = plant.rig(args.object)
@@ -103,8 +103,13 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         bar.close()
 
     summary = result.summary()
-    summary["figure"] = str(trajectory_figure(result, (rig.frame.size_x_m, rig.frame.size_y_m),
-                                              m.Configure.tilt_limit, out / f"{stem}.png"))
+    spec = result.spec
+    outcome = "fell off" if result.fell_off else ("success" if result.success else "not within ε at T")
+    summary["figure"] = str(path_phase_figure(
+        result.true_xy_m, result.tilt_deg, spec.start_m, [spec.target_m], spec.tolerance_m,
+        f"{result.object_name}, {spec.controller}, α = {spec.alpha_m:g} m: {outcome}\n"
+        f"final error {result.final_error_m * 100:.1f} cm (ε = {spec.tolerance_m * 100:g} cm)",
+        (rig.frame.size_x_m, rig.frame.size_y_m), m.Configure.tilt_limit, out / f"{stem}.png"))
     summary["trajectory"] = str(_save_trajectory(result, out / f"{stem}.npz"))
     if args.video:
         summary["video"] = str(bridge.recorder.save(out / f"{stem}.mp4"))
@@ -179,7 +184,7 @@ def _cells(text: str) -> tuple[int, ...]:
 def _heatmap_outputs(results, out: Path, title: str) -> dict:
     """Write per-cell rates (CSV), the summary (JSON) and the figure beside the results file; return the summary."""
     from .heatmap import cell_bounds, summarize
-    from .plots import heatmap_figure
+    from mantaray.plots import heatmap_figure
 
     s = summarize(results)
     p = results.protocol
@@ -275,7 +280,7 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
 def cmd_compare(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """The difference map of two heatmap runs (first minus second), like the paper's Euclidean - Manhattan."""
     from .heatmap import ResultsFile, summarize
-    from .plots import heatmap_figure
+    from mantaray.plots import heatmap_figure
 
     _output(parser, writable_file, args.out, FIGURE_SUFFIXES)
     runs = []
@@ -431,7 +436,7 @@ def _fig3_for(best, args: argparse.Namespace, pool, out: Path) -> dict:
     from .fig3 import run_fig3
     from .findings import MODULE_M, fig3_finding
     from .heatmap import Protocol
-    from .plots import fig3_figure
+    from mantaray.plots import fig3_figure
 
     records = run_fig3(pool, args.plant, best.user_attrs["values"], resolution=args.resolution,
                        timestep_s=args.timestep)

@@ -1,4 +1,4 @@
-"""Figures of a trial in the style of the paper's Fig. 3: the object's path over the fabric and the tilt phase plot."""
+"""The figures from plain arrays, shared by the rig and the simulation: Fig. 3 paths and phases, Fig. 2 heatmaps, Pareto fronts."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -9,19 +9,6 @@ matplotlib.use("Agg")  # files only: runs headless
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Circle, Rectangle  # noqa: E402
-
-from .bridge import TrialResult  # noqa: E402
-
-
-def trajectory_figure(result: TrialResult, module_m: tuple[float, float], tilt_limit_deg: float,
-                      path: str | Path) -> Path:
-    """Save the Fig. 3-style figure of a simulated trial (path_phase_figure); returns the file written."""
-    spec = result.spec
-    outcome = "fell off" if result.fell_off else ("reached" if result.success else "not reached")
-    title = (f"{result.object_name}, {spec.controller}, α = {spec.alpha_m:g} m: {outcome}\n"
-             f"final error {result.final_error_m * 100:.1f} cm (ε = {spec.tolerance_m * 100:g} cm)")
-    return path_phase_figure(result.true_xy_m, result.tilt_deg, spec.start_m, [spec.target_m], spec.tolerance_m,
-                             title, module_m, tilt_limit_deg, path)
 
 
 def path_phase_figure(xy_m: np.ndarray, tilt_deg: np.ndarray, start_m, targets_m, tolerance_m: float, title: str,
