@@ -16,7 +16,6 @@ from .runlog import RunLog
 
 def _half_module_m() -> tuple[float, float]:
     """[m] half the module's sides, as configured on the firmware (protocol defaults)."""
-
     return m.Configure.module_x / 2, m.Configure.module_y / 2
 
 
@@ -106,6 +105,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
     previous = signal.getsignal(signal.SIGINT)
     xy_rows, tilt_rows, target_rows, outcome = [], [], [], "timeout"
+    half_m = _half_module_m()
     session = RigSession(args.port, Setup(configure, target=targets_along(args, 0.0)), report=report)
     try:
         session.open()
@@ -133,6 +133,10 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             obs = tracker.observe(image, capture_s)
             frame = (frame + 1) & 0xFFFF
             x, y = obs.xy_m if obs.visible else (0.0, 0.0)
+            if obs.visible and (abs(x) > 2 * half_m[0] or abs(y) > 2 * half_m[1]):   # what the firmware refuses
+                report(f"the object was seen at {x:+.3f},{y:+.3f} m, off the fabric by more than half a module")
+                outcome = "fell off"
+                break
             msg = m.ObjectPosition(frame=frame, capture_time=int(run_s * 1e6) & 0xFFFFFFFF, x=x, y=y,
                                    flags=0 if obs.visible else m.PositionFlags.NOT_VISIBLE)
             log.write("position", {"frame": frame, "capture_s": round(run_s, 6), "status": obs.status,

@@ -301,8 +301,8 @@ class ObjectPosition(Message):
 
     frame: int = 0  # Camera frame counter, +1 per frame (wraps).
     capture_time: int = 0  # [us] When the frame was captured, host clock; the controller's dt is the difference of these.
-    x: float = 0.0  # [m] Object x in the fabric frame.
-    y: float = 0.0  # [m] Object y in the fabric frame.
+    x: float = 0.0  # [m] Object x in the fabric frame; within +-module_x (the fabric and half a module beside it), else out_of_range.
+    y: float = 0.0  # [m] Object y in the fabric frame; within +-module_y, else out_of_range.
     flags: PositionFlags = PositionFlags(0)  # not_visible: the camera lost the object; x and y are ignored. (flags position_flags)
 
 
@@ -397,7 +397,7 @@ class Telemetry(Message):
         FieldSpec('frame_errors', 'H', 1, None, None, None, None, ''),
     )
 
-    time: int = 0  # [ms] Firmware clock.
+    time: int = 0  # [ms] Firmware clock: every microsecond counted, so it wraps at 2^32 ms (49.7 days).
     state: State = State.IDLE  # Supervisor state. (enum state)
     faults: Faults = Faults(0)  # Latched fault flags. (flags faults)
     position_frame: int = 0  # Frame counter of the last accepted object_position.

@@ -239,22 +239,26 @@ class Rig:
         self.capture_us = (self.capture_us + gap_us) & 0xFFFFFFFF
         msg = m.ObjectPosition(frame=self.frame, capture_time=self.capture_us, x=x, y=y,
                                flags=m.PositionFlags(0) if visible else m.PositionFlags.NOT_VISIBLE)
-        field = None
+        config, refusal = self.model.config, None
         if visible and not finite(f32(x)):
-            field = 2
+            refusal = (E.NOT_FINITE, 2)
         elif visible and not finite(f32(y)):
-            field = 3
+            refusal = (E.NOT_FINITE, 3)
+        elif visible and abs(f32(x)) > f32(config.module_x):      # beyond the module by more than half of it
+            refusal = (E.OUT_OF_RANGE, 2)
+        elif visible and abs(f32(y)) > f32(config.module_y):
+            refusal = (E.OUT_OF_RANGE, 3)
         try:
             tel = self.link.position(msg)
         except CommandRefused as refused:
-            assert field is not None, (msg, refused.nack)
-            assert (refused.nack.code, refused.nack.field) == (E.NOT_FINITE, field)
+            assert refusal is not None, (msg, refused.nack)
+            assert (refused.nack.code, refused.nack.field) == refusal
             self.check_bounds()
             # refused whole: its frame counter and capture time were not taken, so they are still fresh
             self.capture_us = (self.capture_us - gap_us) & 0xFFFFFFFF
             self.frame = (self.frame - 1) & 0xFFFF
             return None
-        assert field is None, f"{msg} accepted"
+        assert refusal is None, f"{msg} accepted"
         self.check_bounds()
         return tel
 

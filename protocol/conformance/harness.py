@@ -87,7 +87,8 @@ class Dut:
         self.clock = m.Clock(identity.clock)
         self.log: list[Message] = []  # every message received, in arrival order
         link.on_message = self.log.append
-        self.sim_now_us = 0  # simulated clock: the firmware's time as last set
+        self.sim_now_us = 0  # simulated clock: the firmware's time as last set (u32, wraps at 71.6 min)
+        self.sim_total_us = 0  # ... and the same unwrapped: what telemetry's millisecond clock counts
         self.frame = 0  # camera frame counter of the last frame sent
         self.capture_us = 0  # capture time of the last frame sent [us]
         self.first_start: m.ErrorCode | None = None  # what start answered before any test set a target
@@ -194,8 +195,14 @@ class Dut:
 
     def set_sim_clock(self, now_us: int) -> Message:
         reply = self.command(m.SimClock(now_us & 0xFFFFFFFF))
+        self.sim_total_us += (now_us - self.sim_now_us) & 0xFFFFFFFF
         self.sim_now_us = now_us & 0xFFFFFFFF
         return reply
+
+    @property
+    def sim_now_ms(self) -> int:
+        """What telemetry.time must read on the simulated clock [ms]: every microsecond counted, wrapping at 2^32 ms."""
+        return (self.sim_total_us // 1000) & 0xFFFFFFFF
 
     def advance(self, seconds: float) -> list[m.Telemetry]:
         """Lets `seconds` of firmware time pass (sim_clock, or sleeping while listening); returns the

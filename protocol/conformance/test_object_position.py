@@ -288,3 +288,31 @@ def test_commands_stay_within_the_actuator_range(dut):
         t = dut.position(-0.25 + 0.01 * (i % 3), -0.25)
         worst = max(worst, *(abs(a) for a in t.command))
     assert 0.2 < worst <= 0.25 + COMMAND_TOL / 2
+
+
+# ---------------------------------------------------------------------------------------- bounds and pauses
+@pytest.mark.parametrize("xy, field", [((0.51, 0.0), 2), ((-0.51, 0.0), 2), ((0.0, 0.51), 3), ((0.0, -0.51), 3),
+                                       ((1e38, 0.0), 2), ((0.0, -3e38), 3)])
+def test_a_position_beyond_the_module_by_more_than_half_of_it_is_out_of_range(dut, xy, field):
+    """On the 0.5 m module a measurement is within +-0.5 m (the fabric and half a module beside it); farther is
+    no measurement of the object (and near 1e38 m would overflow the Euclidean distance)."""
+    dut.configure(module_x=0.5, module_y=0.5)
+    dut.set_target(0.1, 0.0)
+    dut.start()
+    before = dut.position(0.0, 0.0)
+    bad = dut.next_position(*xy)
+    dut.refuse_position(bad, m.ErrorCode.OUT_OF_RANGE, field)
+    after = dut.send_position(m.ObjectPosition(bad.frame, bad.capture_time, 0.0, 0.0, VISIBLE))   # still new
+    assert after.state == before.state                  # refused whole: it entered no history
+    assert dut.position(0.5, -0.5).state == m.State.RUNNING   # the bound itself is a measurement
+
+
+@pytest.mark.clock("simulated")
+def test_frames_after_a_pause_longer_than_the_deadman_start_afresh_however_far_the_capture_time_jumped(dut):
+    """A camera paused for 36 min or more (a capture-time jump of 2^31 us or more) would read as going backwards."""
+    dut.configure(deadman=500)
+    dut.position(0.0, 0.0)
+    dut.set_sim_clock(dut.sim_now_us + 600_000)         # more than the deadman without a frame
+    dut.capture_us = (dut.capture_us + 0x80000000 - 20_000) & 0xFFFFFFFF   # position() adds its 20 ms
+    assert dut.position(0.0, 0.0).position_frame == dut.frame
+    dut.refuse_position(same_frame(dut, capture_delta=1000), STALE, 0)   # within a stream, still stale

@@ -34,7 +34,17 @@ void Firmware::boot(proto::ResetCause cause) {
   uint8_t payload[proto::Boot::kSize];
   proto::encode(msg, payload);
   send(proto::Boot::kId, payload, sizeof payload);
-  last_telemetry_us_ = hal::now_us();
+  last_telemetry_us_ = clock_us_ = hal::now_us();
+  clock_ms_ = clock_us_ / 1000u;
+  clock_rest_us_ = static_cast<uint16_t>(clock_us_ % 1000u);
+}
+
+uint32_t Firmware::millis(uint32_t now_us) {
+  const uint32_t elapsed_us = now_us - clock_us_ + clock_rest_us_;  // unsigned: right across the us wrap
+  clock_us_ = now_us;
+  clock_ms_ += elapsed_us / 1000u;
+  clock_rest_us_ = static_cast<uint16_t>(elapsed_us % 1000u);
+  return clock_ms_;
 }
 
 void Firmware::rx_byte(uint8_t byte) {
@@ -43,6 +53,7 @@ void Firmware::rx_byte(uint8_t byte) {
 
 void Firmware::poll() {
   const uint32_t now = hal::now_us();
+  millis(now);
   supervisor_.tick(now);
   const uint16_t actuator_faults = hal::actuator_faults();
   if (actuator_faults & ~supervisor_.faults()) supervisor_.shutdown(actuator_faults);
@@ -161,7 +172,7 @@ void Firmware::send_telemetry(uint32_t now_us) {
   float measured[kActuatorCount];
   hal::actuators_measured(measured);
   T t;
-  t.time = now_us / 1000u;
+  t.time = millis(now_us);
   t.state = static_cast<uint8_t>(supervisor_.state());
   t.faults = supervisor_.faults();
   t.position_frame = supervisor_.last_frame();

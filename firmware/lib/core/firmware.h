@@ -30,11 +30,17 @@ class Firmware {
   void send_identify_reply();
   void send_telemetry(uint32_t now_us);
   void apply_outputs();
+  // The telemetry's clock [ms]: the microsecond clock's elapsed time accumulated, so it wraps at 2^32 ms
+  // (49.7 days), not with the microseconds (71.6 min); needs a call at least every 71 min (poll makes one).
+  uint32_t millis(uint32_t now_us);
 
   FrameDecoder decoder_;
   Supervisor supervisor_;
   uint8_t tx_seq_ = 0;
   uint32_t last_telemetry_us_ = 0;
+  uint32_t clock_us_ = 0;      // [us] firmware clock at the last millis()
+  uint32_t clock_ms_ = 0;      // [ms] accumulated
+  uint16_t clock_rest_us_ = 0; // [us] below a millisecond, carried
   // The last command answered, to answer a retransmission again without applying it twice.
   bool has_last_ = false;
   uint8_t last_id_ = 0;

@@ -321,8 +321,8 @@ struct ObjectPosition {
   static constexpr uint8_t kSize = 15;  // [bytes] payload
   uint16_t frame;  // Camera frame counter, +1 per frame (wraps).
   uint32_t capture_time;  // [us] When the frame was captured, host clock; the controller's dt is the difference of these.
-  float x;  // [m] Object x in the fabric frame.
-  float y;  // [m] Object y in the fabric frame.
+  float x;  // [m] Object x in the fabric frame; within +-module_x (the fabric and half a module beside it), else out_of_range.
+  float y;  // [m] Object y in the fabric frame; within +-module_y, else out_of_range.
   uint8_t flags;  // not_visible: the camera lost the object; x and y are ignored. (flags position_flags)
 };
 inline void encode(const ObjectPosition& m, uint8_t* out) {
@@ -419,7 +419,7 @@ inline void decode(const uint8_t* in, Nack& m) {
 struct Telemetry {
   static constexpr uint8_t kId = 0x84;
   static constexpr uint8_t kSize = 35;  // [bytes] payload
-  uint32_t time;  // [ms] Firmware clock.
+  uint32_t time;  // [ms] Firmware clock: every microsecond counted, so it wraps at 2^32 ms (49.7 days).
   uint8_t state;  // Supervisor state. (enum state)
   uint16_t faults;  // Latched fault flags. (flags faults)
   uint16_t position_frame;  // Frame counter of the last accepted object_position.

@@ -149,6 +149,21 @@ ErrorCode Supervisor::position(const proto::ObjectPosition& msg, uint32_t now_us
   if (visible) {
     const ErrorCode local = proto::validate(msg, field);
     if (local != ErrorCode::kOk) return local;
+    // On the fabric, or beside it by at most half the module (an object falling off): anything farther is no
+    // measurement of it, and near 1e38 m would overflow the Euclidean distance.
+    if (msg.x > config_.module_x || msg.x < -config_.module_x) {
+      field = 2;
+      return ErrorCode::kOutOfRange;
+    }
+    if (msg.y > config_.module_y || msg.y < -config_.module_y) {
+      field = 3;
+      return ErrorCode::kOutOfRange;
+    }
+  }
+  // Frames more than a deadman apart are no longer one stream (the camera paused): the next one starts afresh,
+  // however far its capture time jumped (a jump of 2^31 us or more would otherwise read as going backwards).
+  if (has_frame_ && now_us - last_frame_at_us_ > static_cast<uint32_t>(config_.deadman) * 1000u) {
+    has_frame_ = false;
   }
   if (has_frame_) {
     if (msg.frame == last_frame_) {
@@ -163,6 +178,7 @@ ErrorCode Supervisor::position(const proto::ObjectPosition& msg, uint32_t now_us
   has_frame_ = true;
   last_frame_ = msg.frame;
   last_capture_us_ = msg.capture_time;
+  last_frame_at_us_ = now_us;
   if (!visible) return ErrorCode::kOk;  // no measurement: commands hold, the deadman keeps counting
   has_valid_ = true;
   last_valid_us_ = now_us;
