@@ -14,6 +14,19 @@ from mantaray.protocol.codec import choices
 from .runlog import RunLog
 
 
+def parse_gains(text: str) -> tuple[float, float, float, float]:
+    """KP,KI,KD[,ILIMIT] of a PID [deg/m, deg/(m s), deg s/m, deg]; without ILIMIT the firmware's boot default."""
+    try:
+        values = tuple(float(v) for v in text.replace(",", " ").split())
+    except ValueError:
+        values = ()
+    if len(values) == 3:
+        values += (m.PID_DEFAULTS[m.Axis.X]["integral_limit"],)
+    if len(values) != 4 or not all(math.isfinite(v) and v >= 0 for v in values):
+        raise argparse.ArgumentTypeError(f"expected KP,KI,KD or KP,KI,KD,ILIMIT (numbers >= 0), got {text!r}")
+    return values
+
+
 def _half_module_m() -> tuple[float, float]:
     """[m] half the module's sides, as configured on the firmware (protocol defaults)."""
     return m.Configure.module_x / 2, m.Configure.module_y / 2
@@ -64,7 +77,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from mantaray.plots import path_phase_figure
 
     from .link import LinkError
-    from .session import RigSession, Setup, check_port
+    from .session import RigSession, Setup, check_port, controller_axes
     from .tracker import Calibration, FrameSource, Tracker
 
     if args.path is not None:
@@ -79,6 +92,10 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         check_port(args.port)
         configure = m.Configure(controller=m.Controller[args.controller.upper()], tolerance=args.tolerance,
                                 noise_amplitude=args.alpha, telemetry_period=0).check()
+        gains = {} if args.gains is None else {
+            axis: m.ConfigurePid(axis, *args.gains).check().as_dict() for axis in controller_axes(args.controller)}
+        for fields in gains.values():
+            del fields["axis"]
         calibration = Calibration.load(args.calibration) if args.calibration else None
         out = writable_dir(args.out)
     except (ValueError, OSError, KeyError, LinkError) as exc:
@@ -106,7 +123,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     previous = signal.getsignal(signal.SIGINT)
     xy_rows, tilt_rows, target_rows, outcome = [], [], [], "timeout"
     half_m = _half_module_m()
-    session = RigSession(args.port, Setup(configure, target=targets_along(args, 0.0)), report=report)
+    session = RigSession(args.port, Setup(configure, gains, target=targets_along(args, 0.0)), report=report)
     try:
         session.open()
         log.write("identify", {k: int(v) for k, v in vars(session.identity).items()})
@@ -179,9 +196,8 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
 
 # ------------------------------------------------------------------------------------------- monitor
-def cmd_monitor(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
-    """Show the firmware's telemetry live, decoded, without changing anything on it (Ctrl-C ends)."""
-
+def _connect(args: argparse.Namespace, parser: argparse.ArgumentParser):
+    """The firmware on --port, identified and announced; a path that is no serial device is a usage error."""
     from .link import LinkError
     from .session import check_port, connect
 
@@ -192,6 +208,12 @@ def cmd_monitor(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     link, identity = connect(args.port)
     print(f"{args.port}: protocol {identity.protocol_version}, firmware {identity.firmware_major}."
           f"{identity.firmware_minor}.{identity.firmware_patch}, clock {m.Clock(identity.clock).name.lower()}")
+    return link
+
+
+def cmd_monitor(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """Show the firmware's telemetry live, decoded, without changing anything on it (Ctrl-C ends)."""
+    link = _connect(args, parser)
     shown = 0
     try:
         deadline = time.monotonic() + args.seconds if args.seconds else math.inf
@@ -216,6 +238,80 @@ def cmd_monitor(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
         print("no telemetry arrived: the firmware's telemetry_period is 0 (set by a host), or nothing is running",
               file=sys.stderr)
     return 0
+
+
+# ------------------------------------------------------------------------------------------- jog, zero
+JOG_SETTLE_M = 1e-3     # [m] a carriage this close to its jog target has arrived
+
+
+def cmd_jog(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """Move one carriage to a position (+ lowers its corner) and report where its encoder says it got to, to check
+    each motor's and encoder's direction and the pulley. The firmware must be idle; the carriage then holds there
+    until `stop` (which levels the surface) or `start`."""
+    from .link import CommandRefused
+
+    jog = m.Jog(actuator=args.actuator, position=args.position)
+    try:
+        jog.check()
+    except ValueError as exc:
+        parser.error(str(exc))
+    link = _connect(args, parser)
+    try:
+        link.command(jog)
+        t0, frame = time.monotonic(), 0
+        while True:       # telemetry on demand: a not-visible frame steps nothing and feeds no deadman
+            frame += 1
+            t = link.position(m.ObjectPosition(frame=frame, capture_time=frame * 50_000,
+                                               flags=m.PositionFlags.NOT_VISIBLE))
+            arrived = abs(t.measured[args.actuator] - args.position) < JOG_SETTLE_M
+            if arrived or time.monotonic() - t0 > args.wait:
+                break
+            time.sleep(0.05)
+    except CommandRefused as exc:
+        print(f"mantaray jog: {exc}", file=sys.stderr)
+        return 2
+    finally:
+        link.close()
+    measured = t.measured[args.actuator]
+    print(f"actuator {args.actuator}: commanded {args.position:+.4f} m, measured {measured:+.4f} m "
+          + (f"after {time.monotonic() - t0:.1f} s" if arrived else f"after {args.wait:g} s: NOT ARRIVED "
+             f"(check the motor's and the encoder's direction, and the wiring)"))
+    return 0 if arrived else 1
+
+
+def cmd_zero(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """Take the present position of the named carriages as 0 m, the reference height z0 (homing), after jogging
+    them there. The firmware must be idle."""
+    from .link import CommandRefused
+
+    zero = m.Zero(actuators=sum(1 << i for i in args.actuators))
+    try:
+        zero.check()
+    except ValueError as exc:
+        parser.error(str(exc))
+    link = _connect(args, parser)
+    try:
+        link.command(zero)
+    except CommandRefused as exc:
+        print(f"mantaray zero: {exc}", file=sys.stderr)
+        return 2
+    finally:
+        link.close()
+    print(f"actuators {', '.join(map(str, args.actuators))}: their present positions are now 0 m")
+    return 0
+
+
+def _actuators(text: str) -> list[int]:
+    spec = next(f for f in m.Jog.FIELDS if f.name == "actuator")
+    if text == "all":
+        return list(range(int(spec.min), int(spec.max) + 1))
+    try:
+        chosen = sorted({int(v) for v in text.split(",")})
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected actuator indices like 0,2 or all, got {text!r}") from None
+    if not all(spec.min <= i <= spec.max for i in chosen):
+        raise argparse.ArgumentTypeError(f"actuators are {spec.min:g}..{spec.max:g}, got {text!r}")
+    return chosen
 
 
 # ------------------------------------------------------------------------------------------- markers
@@ -370,6 +466,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     rig.add_argument("--controller", choices=choices(m.Controller), default="manhattan")
     rig.add_argument("--alpha", type=float, default=0.05, help="noise amplitude α [m] (paper's hardware: 0.05)")
     rig.add_argument("--tolerance", type=float, default=0.02, help="ε [m]")
+    rig.add_argument("--gains", type=parse_gains, metavar="KP,KI,KD[,ILIM]",
+                     help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
     rig.add_argument("--hold", type=float, default=1.0, help="seconds within ε that count as reached")
     rig.add_argument("--timeout", type=float, default=60.0, help="give up after this many seconds (paper: 60)")
     rig.add_argument("--marker-height", type=float, default=0.0,
@@ -388,6 +486,22 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     monitor.add_argument("--count", type=int, default=0, help="stop after this many telemetry frames (0: never)")
     monitor.add_argument("--seconds", type=float, default=0.0, help="stop after this long (0: never)")
     monitor.set_defaults(func=lambda args: cmd_monitor(args, monitor))
+
+    actuator = next(f for f in m.Jog.FIELDS if f.name == "actuator")
+    jog = sub.add_parser("jog", help="move one carriage and read its encoder (bring-up)", description=cmd_jog.__doc__,
+                         formatter_class=fmt)
+    jog.add_argument("--port", required=True, help="serial device path of the firmware")
+    jog.add_argument("--actuator", type=int, required=True, choices=range(int(actuator.min), int(actuator.max) + 1),
+                     help="which carriage (PROTOCOL.md, geometry: 0 -x-y, 1 +x-y, 2 -x+y, 3 +x+y)")
+    jog.add_argument("--position", type=float, required=True, help="where to [m], + lowers the corner")
+    jog.add_argument("--wait", type=float, default=10.0, help="give up waiting for the carriage after this [s]")
+    jog.set_defaults(func=lambda args: cmd_jog(args, jog))
+
+    zero = sub.add_parser("zero", help="take the carriages' present positions as 0 m (homing)",
+                          description=cmd_zero.__doc__, formatter_class=fmt)
+    zero.add_argument("--port", required=True, help="serial device path of the firmware")
+    zero.add_argument("--actuators", type=_actuators, default="all", metavar="I,J|all", help="which carriages")
+    zero.set_defaults(func=lambda args: cmd_zero(args, zero))
 
     markers = sub.add_parser("markers", help="a printable marker sheet at true size", description=cmd_markers.__doc__,
                              formatter_class=fmt)

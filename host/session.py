@@ -27,6 +27,11 @@ def is_pty(port: str) -> bool:
     return os.path.realpath(port).startswith("/dev/pts/")
 
 
+def controller_axes(controller: str) -> tuple[m.Axis, ...]:
+    """The PIDs a controller runs: Manhattan's x and y (Algorithm 1), Euclidean's radial one (Algorithm 2)."""
+    return (m.Axis.X, m.Axis.Y) if controller == "manhattan" else (m.Axis.RADIAL,)
+
+
 def check_port(port: str) -> None:
     """Raise LinkError at once when the path names no serial device: missing, a regular file, a folder.
 

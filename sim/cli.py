@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from mantaray.protocol import messages as m
+from mantaray.host.cli import parse_gains
 from mantaray.outputs import FIGURE_SUFFIXES, OutputError, writable_dir, writable_file
 from mantaray.protocol.codec import choices
 
@@ -63,7 +64,7 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
                             noise_m=args.noise, drop_rate=args.drop, vision=args.vision)
         spec = TrialSpec(args.start, args.target, controller=args.controller, duration_s=args.duration,
                          alpha_m=args.alpha, tolerance_m=args.tolerance, seed=args.seed,
-                         gains=controller_gains(args.controller, None, plant.gain_scale))
+                         gains=controller_gains(args.controller, args.gains, plant.gain_scale))
     except ValueError as exc:
         parser.error(str(exc))
 
@@ -160,18 +161,6 @@ def _save_trajectory(result, path: Path) -> Path:
                         tilt_deg=result.tilt_deg, command_m=result.command_m, state=result.state,
                         start_m=result.spec.start_m, target_m=result.spec.target_m)
     return path
-
-
-def _gains(text: str) -> tuple[float, float, float, float]:
-    try:
-        values = tuple(float(v) for v in text.replace(",", " ").split())
-    except ValueError:
-        values = ()
-    if len(values) == 3:
-        values += (m.PID_DEFAULTS[m.Axis.X]["integral_limit"],)   # [deg] the firmware's boot default
-    if len(values) != 4 or not all(math.isfinite(v) and v >= 0 for v in values):
-        raise argparse.ArgumentTypeError(f"expected KP,KI,KD or KP,KI,KD,ILIMIT (numbers >= 0), got {text!r}")
-    return values
 
 
 def _cells(text: str) -> tuple[int, ...]:
@@ -469,6 +458,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--seed", type=int, default=1, help="seed of the actuator noise and the camera model")
     run.add_argument("--alpha", type=float, default=0.0, help="noise amplitude α [m] (paper: 0.1 cube, 0.05 bunny)")
     run.add_argument("--tolerance", type=float, default=0.02, help="ε [m]")
+    run.add_argument("--gains", type=parse_gains, metavar="KP,KI,KD[,ILIM]",
+                     help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
     run.add_argument("--plant", choices=plant_names(), default=DEFAULT_PLANT,
                      help="the simulated plant (sim/plant.toml): its parameters, camera latency and readings")
     run.add_argument("--rate", type=float, help="camera rate [Hz] (default the plant's: the paper's 12)")
@@ -499,7 +490,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     heat.add_argument("--tolerance", type=float, default=0.02, help="ε [m]")
     heat.add_argument("--duration", type=float, default=10.0, help="runtime T [s] (paper: 10)")
     heat.add_argument("--alpha", type=float, default=0.0, help="noise amplitude α [m] (paper: 0.1 cube, 0.05 bunny)")
-    heat.add_argument("--gains", type=_gains, metavar="KP,KI,KD[,ILIM]",
+    heat.add_argument("--gains", type=parse_gains, metavar="KP,KI,KD[,ILIM]",
                       help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
     heat.add_argument("--seed", type=int, default=2026, help="seed of the whole run: starts, targets and noise")
     heat.add_argument("--plant", choices=plant_names(), default=DEFAULT_PLANT, help="the simulated plant (sim/plant.toml)")

@@ -25,6 +25,7 @@ from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
+from mantaray.host.session import controller_axes
 from mantaray.protocol import messages as m
 
 from .bridge import Gains, TrialSpec
@@ -155,11 +156,10 @@ def controller_gains(controller: str, gains: tuple[float, float, float, float] |
     the PID's unit: 180/pi when the paper's gains are per radian). Empty: the firmware's own defaults as they are."""
     if gains is None and scale == 1.0:
         return {}
-    axes = ("x", "y") if controller == "manhattan" else ("radial",)
     out = {}
-    for axis in axes:
-        kp, ki, kd, limit = gains if gains is not None else m.PID_DEFAULTS[m.Axis[axis.upper()]].values()
-        out[axis] = Gains(kp * scale, ki * scale, kd * scale, limit)
+    for axis in controller_axes(controller):
+        kp, ki, kd, limit = gains if gains is not None else m.PID_DEFAULTS[axis].values()
+        out[axis.name.lower()] = Gains(kp * scale, ki * scale, kd * scale, limit)
     return out
 
 

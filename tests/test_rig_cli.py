@@ -64,6 +64,16 @@ def test_rig_runs_the_loop_on_a_video_logs_every_frame_and_plots(still_video, tm
     assert len(list(tmp_path.glob("rig-*.png"))) == 1
 
 
+def test_rig_takes_the_gains_it_is_given(still_video, tmp_path):
+    """--gains reaches the firmware's PIDs: with kP alone the tilt is kP times the error [deg/m x m]."""
+    with VirtualMcu(clock="wall") as vmcu:
+        proc = _mantaray("rig", "--port", vmcu.path, "--camera", still_video, "--target=-0.1,0.1", "--gains",
+                         "20,0,0", "--alpha", "0", "--timeout", "1", "--out", str(tmp_path))
+    assert proc.returncode == 1, proc.stderr
+    telemetry = [r for r in _log(tmp_path) if r["kind"] == "telemetry"]
+    assert telemetry and all(r["tilt_zx"] == pytest.approx(20 * (-0.1 - 0.1), abs=0.1) for r in telemetry[1:])
+
+
 def test_rig_stops_when_the_object_holds_the_target(still_video, tmp_path):
     with VirtualMcu(clock="wall") as vmcu:
         proc = _mantaray("rig", "--port", vmcu.path, "--camera", still_video, "--target", "0.105,-0.05",
@@ -135,6 +145,10 @@ def test_a_port_that_is_no_serial_device_is_refused_at_once_in_one_line(still_vi
     (("calibrate", "--camera", "0", "--out", "camera.txt"), "the file type must be one of .npz"),
     (("rig", "--port", "/dev/null", "--camera", "0", "--target", "0,0", "--alpha", "1"),
      "noise_amplitude: 1 m is outside 0..0.25 m"),
+    (("jog", "--port", "/dev/null", "--actuator", "4", "--position", "0.1"), "invalid choice: 4"),
+    (("jog", "--port", "/dev/null", "--actuator", "0", "--position", "nan"), "jog.position: must be a finite number"),
+    (("zero", "--port", "/dev/null", "--actuators", "0,9"), "actuators are 0..3"),
+    (("zero", "--port", "/dev/null", "--actuators", "one"), "expected actuator indices"),
 ])
 def test_rig_tools_refuse_bad_input_in_one_line_before_any_work(args, needle, tmp_path):
     proc = subprocess.run([sys.executable, "-m", "mantaray.cli", *args], cwd=tmp_path, capture_output=True,
@@ -150,6 +164,22 @@ def test_monitor_shows_decoded_telemetry_without_changing_anything():
     lines = proc.stdout.splitlines()
     assert "clock wall" in lines[0] and len(lines) == 4
     assert all(re.search(r"\d+\.\d{3} s  idle", line) for line in lines[1:])
+
+
+def test_jog_moves_one_carriage_and_zero_takes_it_as_the_reference():
+    """The bring-up pair (firmware/README.md): each carriage goes where it is told, then counts from there."""
+    with VirtualMcu(clock="wall") as vmcu:
+        jog = _mantaray("jog", "--port", vmcu.path, "--actuator", "2", "--position", "0.03")
+        assert jog.returncode == 0 and "actuator 2: commanded +0.0300 m, measured +0.0300 m" in jog.stdout, jog
+        far = _mantaray("jog", "--port", vmcu.path, "--actuator", "2", "--position", "0.3")
+        assert far.returncode == 2 and "jog refused: out_of_range (field position)" in far.stderr
+        zero = _mantaray("zero", "--port", vmcu.path, "--actuators", "2")
+        assert zero.returncode == 0 and "actuators 2: their present positions are now 0 m" in zero.stdout
+        link = Link(SerialTransport(vmcu.path))
+        link.identify()
+        t = link.position(m.ObjectPosition(frame=1, capture_time=1000, flags=m.PositionFlags.NOT_VISIBLE))
+        link.close()
+    assert t.measured[2] == pytest.approx(0.0, abs=1e-4) and t.command[2] == 0.0
 
 
 def test_markers_sheet_is_at_true_size(tmp_path):

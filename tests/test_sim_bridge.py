@@ -213,6 +213,13 @@ def test_sim_run_prints_json_and_writes_the_figure(tmp_path):
         assert saved["true_xy_m"].shape == (25, 2)
 
 
+def test_sim_run_takes_the_gains_it_is_given(tmp_path):
+    """--gains reaches the firmware's PIDs: with all gains 0 the surface never tilts."""
+    result = json.loads(_cli("--duration", "1", "--json", "--out", str(tmp_path), "--gains", "0,0,0").stdout)
+    with np.load(result["trajectory"]) as saved:
+        assert np.all(saved["tilt_deg"] == 0.0) and np.all(saved["command_m"] == 0.0)
+
+
 def test_sim_run_takes_negative_points_and_names_each_trial_apart(tmp_path):
     """--target -0.05,0.05 is a point, not an option; two different trials never overwrite each other's files."""
     first = json.loads(_cli("--duration", "0.2", "--json", "--out", str(tmp_path), "--target", "-0.05,0.05").stdout)
