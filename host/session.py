@@ -19,6 +19,11 @@ from mantaray.protocol import messages as m
 from .link import CommandRefused, IncompatibleFirmware, Link, LinkError
 from .transport import SerialTransport, Transport
 
+class EmergencyStopLatched(RuntimeError):
+    """A start while the session's emergency stop is latched: the user clears it with stop() first."""
+
+
+MISSES_BEFORE_RECONNECT = 3  # camera frames in a row without telemetry that mean a lost board, not a lost frame
 UNO_RESET_WAIT_S = 2.5      # [s] the stock bootloader's delay after the DTR reset, with margin
 
 
@@ -135,7 +140,11 @@ class RigSession:
         self.link: Link | None = None
         self.identity: m.IdentifyReply | None = None
         self.running = False
+        self.estopped = False        # emergency_stop() latched it; only stop() clears it
+        self._setup_pending = False  # a (re)connection during the emergency stop sent only the stop
         self.reconnects = 0          # times the link was reopened
+        self.lost_telemetry = 0      # camera frames whose telemetry never came (skipped)
+        self._missed_in_a_row = 0
         self.restores = 0            # times the setup was re-applied after a reset or reconnection
         self._resets_seen = 0
 
@@ -151,6 +160,10 @@ class RigSession:
         self._resets_seen = self.link.resets
 
     def _apply(self) -> None:
+        if self.estopped:            # latched across resets and replugs: nothing is powered until stop() clears it
+            self.link.command(m.EmergencyStop())
+            self._setup_pending = True
+            return
         s = self.setup
         self.link.command(m.Stop())
         self.link.command(s.configure)
@@ -175,7 +188,10 @@ class RigSession:
         self._apply()
         self.restores += 1
         self._resets_seen = self.link.resets
-        self.report(f"{why}: configuration, gains, target{' and start' if self.running else ''} sent again")
+        if self.estopped:
+            self.report(f"{why}: the emergency stop is latched again; stop() clears it")
+        else:
+            self.report(f"{why}: configuration, gains, target{' and start' if self.running else ''} sent again")
 
     # ----------------------------------------------------------------------------------- commands
     def command(self, msg) -> m.Message:
@@ -193,23 +209,46 @@ class RigSession:
         self.command(m.SetTarget(x=x_m, y=y_m))
 
     def start(self) -> None:
+        if self.estopped:
+            raise EmergencyStopLatched("the emergency stop is latched: stop() clears it before a start")
         self.command(m.Start())
         self.running = True
 
     def stop(self) -> None:
-        """Levels the surface and stops the controller."""
+        """Levels the surface and stops the controller; also how the user clears an emergency stop."""
         self.running = False
-        self.command(m.Stop())
+        self.estopped = False
+        if self._setup_pending:      # a board met during the emergency stop has not had its setup yet
+            self._setup_pending = False
+            self._apply()
+        else:
+            self.command(m.Stop())
+
+    def emergency_stop(self) -> None:
+        """Cuts the actuators' power at once; latched, also across resets and replugs, until stop()."""
+        self.running = False
+        self.estopped = True
+        self.command(m.EmergencyStop())
 
     def position(self, msg: m.ObjectPosition) -> m.Telemetry | None:
-        """One camera frame; None when it got no answer (the link is then recovered for the next one)."""
+        """One camera frame; None when it got no answer. A lost answer is skipped (the next frame carries fresh
+        news, and a reconnect would level the surface and reset the PIDs); a port that fails, or
+        MISSES_BEFORE_RECONNECT answers lost in a row, mean a lost board: the session reconnects and restores."""
         try:
             telemetry = self.link.position(msg)
         except CommandRefused:
             raise
-        except (LinkError, OSError) as exc:
-            self._recover(f"no telemetry ({exc})")
+        except OSError as exc:
+            self._recover(f"the port failed ({exc})")
             return None
+        except LinkError as exc:
+            self.lost_telemetry += 1
+            self._missed_in_a_row += 1
+            if self._missed_in_a_row >= MISSES_BEFORE_RECONNECT:
+                self._missed_in_a_row = 0
+                self._recover(f"{MISSES_BEFORE_RECONNECT} camera frames in a row got no telemetry ({exc})")
+            return None
+        self._missed_in_a_row = 0
         if self.link.resets != self._resets_seen:    # the board restarted (its boot came in): idle, defaults
             self.report("the firmware reset")
             self._restore("after the reset")
