@@ -34,6 +34,9 @@ class CommandRefused(LinkError):
         super().__init__(f"{command.NAME} refused: {name}{field}: {doc}")
 
 
+SEQ_WINDOW = 128   # a sequence number 1..127 ahead of the newest is newer (lost between), the rest is older: wraps
+
+
 class Link:
     """Talks to one firmware over a transport.
 
@@ -54,6 +57,7 @@ class Link:
         self.seq = 0
         self.last_rx_seq: int | None = None
         self.lost_frames = 0  # firmware frames missing from the firmware's sequence
+        self.stale_frames = 0  # firmware frames that came twice or after a newer one (a duplicating or reordering link)
         self.resets = 0  # boot messages seen
         self._pending: collections.deque[Message] = collections.deque()
 
@@ -66,9 +70,13 @@ class Link:
             self._accept(item)
 
     def _accept(self, frame: Frame) -> None:
-        if self.last_rx_seq is not None and frame.id != m.Boot.ID:
-            self.lost_frames += (frame.seq - self.last_rx_seq - 1) & 0xFF
-        self.last_rx_seq = frame.seq
+        ahead = None if self.last_rx_seq is None or frame.id == m.Boot.ID else (frame.seq - self.last_rx_seq) & 0xFF
+        if ahead is not None and not 0 < ahead < SEQ_WINDOW:     # a copy, or older than the newest: out of order
+            self.stale_frames += 1
+        else:
+            if ahead is not None:
+                self.lost_frames += ahead - 1
+            self.last_rx_seq = frame.seq
         try:
             msg = frame.message()
         except ValueError:

@@ -70,13 +70,13 @@ def connect(port: str, *, reset_wait_s: float | None = None, timeout_s: float = 
     Changes nothing on the firmware: a monitor can attach to a running rig. IncompatibleFirmware is raised
     at once; a port that does not open or a firmware that does not answer raise LinkError at the timeout.
     """
-    if reset_wait_s is None:
-        reset_wait_s = 0.0 if is_pty(port) else UNO_RESET_WAIT_S
     deadline = time.monotonic() + timeout_s
     while True:
         link = Link(_open(port, deadline, open_transport), ack_timeout=ack_timeout_s)
         try:
-            boot_deadline = time.monotonic() + reset_wait_s
+            # judged once the port is there: a replugged pty is briefly missing, and is no Uno that resets
+            wait_s = reset_wait_s if reset_wait_s is not None else 0.0 if is_pty(port) else UNO_RESET_WAIT_S
+            boot_deadline = time.monotonic() + wait_s
             while (remaining := boot_deadline - time.monotonic()) > 0:   # the Uno's bootloader runs first
                 if isinstance(link.receive(remaining), m.Boot):
                     break

@@ -228,3 +228,32 @@ def test_a_port_that_goes_away_while_identifying_is_opened_again():
         link, identity = connect(vmcu.path, timeout_s=5.0, open_transport=open_transport)
         link.close()
     assert len(opened) == 2 and identity.protocol_version == m.PROTOCOL_VERSION
+
+
+class _Replay:
+    """A transport that hands the link prepared bytes, once."""
+
+    def __init__(self, data: bytes) -> None:
+        self.data = data
+
+    def write(self, data: bytes) -> None:
+        pass
+
+    def read(self, timeout: float) -> bytes:
+        data, self.data = self.data, b""
+        return data
+
+    def close(self) -> None:
+        pass
+
+
+def test_duplicated_and_reordered_frames_are_not_counted_as_lost():
+    """Sequence numbers compared in a wrap-safe window: a copy or a late frame is stale, not 255 frames lost."""
+    from mantaray.protocol.framing import encode_frame
+
+    seqs = [254, 255, 255, 0, 254, 3, 3, 2, 4]       # a copy, the wrap, a late 254, 1 and 2 lost, 2 late, in order
+    wire = b"".join(encode_frame(m.Ack(ref_id=1, ref_seq=0), seq) for seq in seqs)
+    link = Link(_Replay(wire))
+    while link.receive() is not None:
+        pass
+    assert link.lost_frames == 2 and link.stale_frames == 4
