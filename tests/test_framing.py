@@ -245,6 +245,23 @@ def test_generator_check_passes():
     assert result.returncode == 0, result.stderr
 
 
+def test_vectors_are_what_their_generator_writes():
+    """vectors.json is written by protocol/make_vectors.py from cases stated once; a hand edit is caught."""
+    result = subprocess.run([sys.executable, str(PROTOCOL / "make_vectors.py"), "--check"],
+                            capture_output=True, text=True, cwd=REPO, timeout=60)
+    assert result.returncode == 0, result.stderr
+
+
+def test_vector_generator_check_fails_on_an_edited_copy(tmp_path, monkeypatch):
+    from mantaray.protocol import make_vectors
+
+    edited = tmp_path / "vectors.json"
+    edited.write_text(make_vectors.render().replace('"seq": 6', '"seq": 7', 1))
+    monkeypatch.setattr(make_vectors, "VECTORS", edited)
+    assert make_vectors.main(["--check"]) == 1
+    assert make_vectors.main([]) == 0 and make_vectors.main(["--check"]) == 0   # rewritten: fresh again
+
+
 def _load_generate(path: Path):
     spec = importlib.util.spec_from_file_location(f"_generate_{abs(hash(str(path)))}", path)
     module = importlib.util.module_from_spec(spec)
