@@ -46,7 +46,7 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from mantaray.host.transport import SerialTransport
     from mantaray.host.vmcu import VirtualMcu
 
-    from .bridge import Bridge, Tracking, TrialSpec
+    from .bridge import Bridge, TrialSpec
     from .heatmap import controller_gains
     from .plant import Plant
     from mantaray.plots import path_phase_figure
@@ -59,9 +59,8 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     _inside(parser, "--start", args.start, half)
     _inside(parser, "--target", args.target, half)
     try:
-        tracking = Tracking(rate_hz=plant.values["tracking.rate_hz"] if args.rate is None else args.rate,
-                            latency_s=plant.values["tracking.latency_s"] if args.latency is None else args.latency,
-                            noise_m=args.noise, drop_rate=args.drop, vision=args.vision)
+        tracking = plant.tracking(rate_hz=args.rate, latency_s=args.latency, noise_m=args.noise,
+                                  drop_rate=args.drop, vision=args.vision)
         spec = TrialSpec(args.start, args.target, controller=args.controller, duration_s=args.duration,
                          alpha_m=args.alpha, tolerance_m=args.tolerance, seed=args.seed,
                          gains=controller_gains(args.controller, args.gains, plant.gain_scale))

@@ -44,9 +44,12 @@ class Plant:
         return rig
 
     def tracking(self, **kwargs):
-        """The camera model (sim/bridge.py Tracking) of this plant; kwargs set the rest (noise, drops, vision)."""
+        """The camera model (sim/bridge.py Tracking) of this plant; kwargs set the rest (noise, drops, vision) or
+        override its rate and latency (a None keeps the plant's)."""
         from .bridge import Tracking
-        return Tracking(rate_hz=self.values["tracking.rate_hz"], latency_s=self.values["tracking.latency_s"], **kwargs)
+        given = {k: v for k, v in kwargs.items() if v is not None}
+        return Tracking(**{"rate_hz": self.values["tracking.rate_hz"], "latency_s": self.values["tracking.latency_s"],
+                           **given})
 
     @property
     def gain_scale(self) -> float:
