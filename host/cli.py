@@ -121,7 +121,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         signal.signal(signal.SIGINT, signal.default_int_handler)
 
     previous = signal.getsignal(signal.SIGINT)
-    xy_rows, tilt_rows, target_rows, outcome = [], [], [], "timeout"
+    xy_rows, tilt_rows, target_rows, t_rows, command_rows, outcome = [], [], [], [], [], "timeout"
     half_m = _half_module_m()
     session = RigSession(args.port, Setup(configure, gains, target=targets_along(args, 0.0)), report=report)
     try:
@@ -162,9 +162,11 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             if telemetry is not None:
                 log.write("telemetry", {k: (list(v) if isinstance(v, tuple) else int(v) if isinstance(v, int)
                                             else v) for k, v in vars(telemetry).items()})
-                tilt_rows.append((telemetry.tilt_zx, telemetry.tilt_zy))
+            tilt_rows.append((telemetry.tilt_zx, telemetry.tilt_zy) if telemetry is not None else (math.nan,) * 2)
+            command_rows.append(telemetry.command if telemetry is not None else (math.nan,) * 4)
             xy_rows.append(obs.xy_m if obs.visible else (math.nan, math.nan))
             target_rows.append(target)
+            t_rows.append(run_s)
             if args.path is None and obs.visible:
                 near = math.hypot(x - target[0], y - target[1]) < args.tolerance
                 within_since = (within_since if within_since is not None else run_s) if near else None
@@ -190,7 +192,8 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     targets = target_rows if args.path is not None and target_rows else [args.target]   # a path, or one target
     figure = path_phase_figure(xy_rows, tilt_rows, xy_rows[0] if xy_rows and math.isfinite(xy_rows[0][0]) else None,
                                targets, args.tolerance, f"rig: {outcome}", (configure.module_x, configure.module_y),
-                               configure.tilt_limit, out / f"rig-{stamp}.png")
+                               configure.tilt_limit, out / f"rig-{stamp}.png", t_s=t_rows or None,
+                               command_m=command_rows or None)
     print(f"{outcome}: {len(xy_rows)} frames; log {log.path}; figure {figure}")
     return {"reached": 0, "interrupted": 130}.get(outcome, 1)
 

@@ -12,17 +12,64 @@ from matplotlib.patches import Circle, Rectangle  # noqa: E402
 
 
 def path_phase_figure(xy_m: np.ndarray, tilt_deg: np.ndarray, start_m, targets_m, tolerance_m: float, title: str,
-                      module_m: tuple[float, float], tilt_limit_deg: float, path: str | Path) -> Path:
+                      module_m: tuple[float, float], tilt_limit_deg: float, path: str | Path, t_s=None,
+                      command_m=None, range_m: float | None = None) -> Path:
     """Save the object's path (start, targets with their tolerance circles, the module's outline) above the
     phase plot theta_zx vs theta_zy with the tilt-limit square, as the paper's Fig. 3 draws them. targets_m
-    is one target, or the successive targets of a path; returns the file written."""
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(4.2, 8.0))
+    is one target, or each frame's target along a path. With t_s [s] (one per row of xy_m and tilt_deg; NaN rows
+    are frames without a measurement), a column beside them shows over time the distance to the target against
+    epsilon, both tilts against the limit and, with command_m, the four actuator commands [m] against +-range_m.
+    Returns the file written."""
+    if t_s is None:
+        fig, (top, bottom) = plt.subplots(2, 1, figsize=(4.2, 8.0))
+    else:
+        fig = plt.figure(figsize=(9.6, 8.0))
+        grid = fig.add_gridspec(6, 2, width_ratios=(1.0, 1.15))
+        top, bottom = fig.add_subplot(grid[0:3, 0]), fig.add_subplot(grid[3:6, 0])
+        _draw_over_time(fig, grid, np.asarray(t_s, dtype=float), xy_m, targets_m, tolerance_m, tilt_deg,
+                        tilt_limit_deg, command_m, range_m)
     _draw_paths(top, [(xy_m, start_m, targets_m)], tolerance_m, module_m)
     top.set_title(title, fontsize=9)
     top.legend(fontsize=7, loc="upper right")
     _draw_phase(bottom, [tilt_deg], tilt_limit_deg)
     bottom.set_title(f"controller output; red: ±{tilt_limit_deg:.1f}° tilt limit", fontsize=9)
     return _save(fig, path)
+
+
+def _draw_over_time(fig, grid, t_s: np.ndarray, xy_m, targets_m, tolerance_m: float, tilt_deg, tilt_limit_deg: float,
+                    command_m, range_m: float | None) -> None:
+    """The right-hand column of path_phase_figure: error, tilts and commands against time."""
+    xy = np.asarray(xy_m, dtype=float).reshape(-1, 2)
+    targets = np.asarray(targets_m, dtype=float).reshape(-1, 2)
+    targets = targets if len(targets) == len(xy) else np.broadcast_to(targets[-1], xy.shape)
+    rows = 3 if command_m is not None else 2
+    span = 6 // rows
+    error = fig.add_subplot(grid[0:span, 1])
+    error.plot(t_s, np.hypot(*(xy - targets).T) * 100, color="tab:cyan", lw=1.2)
+    error.axhline(tolerance_m * 100, ls="--", color="tab:blue", lw=1.0, label=f"ε = {tolerance_m * 100:g} cm")
+    error.set_ylabel("distance to target [cm]")
+    error.legend(fontsize=7, loc="upper right")
+    tilts = fig.add_subplot(grid[span:2 * span, 1], sharex=error)
+    tilt = np.asarray(tilt_deg, dtype=float).reshape(-1, 2)
+    tilts.plot(t_s[:len(tilt)], tilt[:, 0], lw=1.0, label="θ_zx")
+    tilts.plot(t_s[:len(tilt)], tilt[:, 1], lw=1.0, label="θ_zy")
+    for sign in (1, -1):
+        tilts.axhline(sign * tilt_limit_deg, ls=":", color="tab:red", lw=1.2)
+    tilts.set_ylabel("tilt [deg]")
+    tilts.legend(fontsize=7, loc="upper right", ncol=2)
+    last = tilts
+    if command_m is not None:
+        commands = fig.add_subplot(grid[2 * span:6, 1], sharex=error)
+        command = np.asarray(command_m, dtype=float).reshape(-1, 4)
+        for i in range(4):
+            commands.plot(t_s[:len(command)], command[:, i] * 100, lw=1.0, label=f"a{i}")
+        if range_m is not None:
+            for sign in (1, -1):
+                commands.axhline(sign * range_m * 100, ls=":", color="tab:red", lw=1.2)
+        commands.set_ylabel("command [cm], + lowers")
+        commands.legend(fontsize=7, loc="upper right", ncol=4)
+        last = commands
+    last.set_xlabel("time [s]")
 
 
 def fig3_figure(runs: dict[str, list[dict]], tolerance_m: float, module_m: tuple[float, float],

@@ -109,7 +109,8 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         result.true_xy_m, result.tilt_deg, spec.start_m, [spec.target_m], spec.tolerance_m,
         f"{result.object_name}, {spec.controller}, α = {spec.alpha_m:g} m: {outcome}\n"
         f"final error {result.final_error_m * 100:.1f} cm (ε = {spec.tolerance_m * 100:g} cm)",
-        (rig.frame.size_x_m, rig.frame.size_y_m), m.Configure.tilt_limit, out / f"{stem}.png"))
+        (rig.frame.size_x_m, rig.frame.size_y_m), m.Configure.tilt_limit, out / f"{stem}.png",
+        t_s=result.t_s, command_m=result.command_m, range_m=rig.actuators.range_m))
     summary["trajectory"] = str(_save_trajectory(result, out / f"{stem}.npz"))
     if args.video:
         summary["video"] = str(bridge.recorder.save(out / f"{stem}.mp4"))
