@@ -51,7 +51,7 @@ def main() -> int:
     bench = uno.stats
 
     uno = SimulatedUno(DEFAULT_ELF, bench=False, run_for_s=args.seconds)
-    link = Link(SerialTransport(uno.path), ack_timeout=2.0)
+    link = Link(SerialTransport(uno.path), ack_timeout_s=2.0)
     link.identify()
     link.command(m.Configure(telemetry_period=100))
     sign = 1.0
@@ -64,7 +64,7 @@ def main() -> int:
     except (LinkError, OSError):                # the simulation ended under a command
         pass
     link.close()
-    uno.wait(timeout=600)
+    uno.wait(timeout_s=600)
     rig = uno.stats
 
     report = {"bench": bench, "rig": rig, "trial": result.summary()}

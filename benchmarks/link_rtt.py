@@ -34,7 +34,7 @@ def measure(clock: str, frames: int) -> list[float]:
                 link.command(m.SimClock(now=capture_us))
             msg = m.ObjectPosition(frame=i & 0xFFFF, capture_time=capture_us, x=0.001 * (i % 50), y=0.0)
             t0 = time.perf_counter()
-            link.position(msg, timeout=1.0)
+            link.position(msg, timeout_s=1.0)
             rtts.append(time.perf_counter() - t0)
         link.close()
     return rtts

@@ -50,8 +50,8 @@ class FaultInjector:
     def write(self, data: bytes) -> None:
         self.inner.write(self._mangle(data))
 
-    def read(self, timeout: float) -> bytes:
-        return self._mangle(self.inner.read(timeout))
+    def read(self, timeout_s: float) -> bytes:
+        return self._mangle(self.inner.read(timeout_s))
 
     def close(self) -> None:
         self.inner.close()

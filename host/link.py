@@ -40,16 +40,16 @@ SEQ_WINDOW = 128   # a sequence number 1..127 ahead of the newest is newer (lost
 class Link:
     """Talks to one firmware over a transport.
 
-    Commands wait for their ack (or the identify_reply); without one within ack_timeout [s] the same
+    Commands wait for their ack (or the identify_reply); without one within ack_timeout_s [s] the same
     frame, same sequence number, is sent again, up to `retries` times; the firmware answers a
     retransmission again without applying it twice. Frames that arrive while waiting (telemetry,
     boot) go to `on_message` and are kept in `received` (the last 1000).
     """
 
-    def __init__(self, transport: Transport, ack_timeout: float = 0.2, retries: int = 3,
+    def __init__(self, transport: Transport, ack_timeout_s: float = 0.2, retries: int = 3,
                  on_message: Callable[[Message], None] | None = None) -> None:
         self.transport = transport
-        self.ack_timeout = ack_timeout
+        self.ack_timeout_s = ack_timeout_s
         self.retries = retries
         self.on_message = on_message
         self.received: collections.deque[Message] = collections.deque(maxlen=1000)
@@ -62,8 +62,8 @@ class Link:
         self._pending: collections.deque[Message] = collections.deque()
 
     # ---------------------------------------------------------------------------------- receiving
-    def _pump(self, timeout: float) -> None:
-        data = self.transport.read(timeout)
+    def _pump(self, timeout_s: float) -> None:
+        data = self.transport.read(timeout_s)
         for item in self.decoder.feed(data):
             if isinstance(item, FrameError):
                 continue
@@ -85,9 +85,9 @@ class Link:
             self.resets += 1
         self._pending.append(msg)
 
-    def receive(self, timeout: float = 0.0) -> Message | None:
-        """The next message from the firmware, waiting up to timeout [s]."""
-        deadline = time.monotonic() + timeout
+    def receive(self, timeout_s: float = 0.0) -> Message | None:
+        """The next message from the firmware, waiting up to timeout_s [s]."""
+        deadline = time.monotonic() + timeout_s
         while not self._pending:
             remaining = deadline - time.monotonic()
             self._pump(max(remaining, 0.0))
@@ -109,12 +109,12 @@ class Link:
     def _await_reply(self, frame: bytes, accept: Callable[[Message], bool]) -> Message:
         for _ in range(self.retries + 1):
             self.transport.write(frame)
-            deadline = time.monotonic() + self.ack_timeout
+            deadline = time.monotonic() + self.ack_timeout_s
             while (remaining := deadline - time.monotonic()) > 0:
                 msg = self.receive(remaining)
                 if msg is not None and accept(msg):
                     return msg
-        raise LinkError(f"no answer after {self.retries + 1} tries of {self.ack_timeout:.3f} s each")
+        raise LinkError(f"no answer after {self.retries + 1} tries of {self.ack_timeout_s:.3f} s each")
 
     def command(self, msg: Message) -> Message:
         """Sends a command and returns its ack (identify_reply for identify); raises CommandRefused on a nack."""
@@ -130,11 +130,11 @@ class Link:
             raise CommandRefused(msg, reply)
         return reply
 
-    def position(self, msg: m.ObjectPosition, timeout: float | None = None) -> m.Telemetry:
+    def position(self, msg: m.ObjectPosition, timeout_s: float | None = None) -> m.Telemetry:
         """Sends one camera frame and returns the telemetry that answers it (not retransmitted: stale by then)."""
         seq = self._next_seq()
         self.transport.write(encode_frame(msg, seq))
-        deadline = time.monotonic() + (self.ack_timeout if timeout is None else timeout)
+        deadline = time.monotonic() + (self.ack_timeout_s if timeout_s is None else timeout_s)
         while (remaining := deadline - time.monotonic()) > 0:
             reply = self.receive(remaining)
             if isinstance(reply, m.Nack) and reply.ref_id == msg.ID and reply.ref_seq == seq:

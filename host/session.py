@@ -72,7 +72,7 @@ def connect(port: str, *, reset_wait_s: float | None = None, timeout_s: float = 
     """
     deadline = time.monotonic() + timeout_s
     while True:
-        link = Link(_open(port, deadline, open_transport), ack_timeout=ack_timeout_s)
+        link = Link(_open(port, deadline, open_transport), ack_timeout_s=ack_timeout_s)
         try:
             # judged once the port is there: a replugged pty is briefly missing, and is no Uno that resets
             wait_s = reset_wait_s if reset_wait_s is not None else 0.0 if is_pty(port) else UNO_RESET_WAIT_S

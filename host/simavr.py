@@ -40,7 +40,7 @@ class SimulatedUno:
     """
 
     def __init__(self, elf: Path = DEFAULT_ELF, bench: bool = True, realtime: bool = False,
-                 run_for_s: float | None = None, start_timeout: float = 10.0) -> None:
+                 run_for_s: float | None = None, start_timeout_s: float = 10.0) -> None:
         self.elf = Path(elf)
         if not self.elf.exists():
             raise FileNotFoundError(f"{self.elf} does not exist; build it first: python3 scripts/avr_build.py")
@@ -53,12 +53,12 @@ class SimulatedUno:
                   (["--run-for", str(run_for_s)] if run_for_s is not None else [])
         self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                         preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None)
-        self.path = self._read_pty(start_timeout)
+        self.path = self._read_pty(start_timeout_s)
 
-    def _read_pty(self, timeout: float) -> str:
+    def _read_pty(self, timeout_s: float) -> str:
         """The path from the harness's "pty PATH" line (read unbuffered: the line may share a read with others)."""
         fd, seen = self.process.stdout.fileno(), b""
-        deadline = time.monotonic() + timeout
+        deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
             ready, _, _ = select.select([fd], [], [], 0.1)
             chunk = os.read(fd, 4096) if ready else b""
@@ -70,12 +70,12 @@ class SimulatedUno:
                 break
         err = self.process.stderr.read() if self.process.poll() is not None else b""
         self.close()
-        raise RuntimeError(f"mantaray-simavr did not report its pty within {timeout} s: "
+        raise RuntimeError(f"mantaray-simavr did not report its pty within {timeout_s} s: "
                            f"{err.decode(errors='replace').strip()}")
 
-    def wait(self, timeout: float) -> None:
+    def wait(self, timeout_s: float) -> None:
         """Waits for a run_for_s simulation to end by itself, then closes."""
-        self.process.wait(timeout=timeout)
+        self.process.wait(timeout=timeout_s)
         self.close()
 
     def close(self) -> None:

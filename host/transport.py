@@ -12,7 +12,7 @@ from mantaray.paths import native_artifact
 
 class Transport(Protocol):
     def write(self, data: bytes) -> None: ...
-    def read(self, timeout: float) -> bytes: ...
+    def read(self, timeout_s: float) -> bytes: ...
     def close(self) -> None: ...
 
 
@@ -26,9 +26,9 @@ class SerialTransport:
     def write(self, data: bytes) -> None:
         self._port.write(data)
 
-    def read(self, timeout: float) -> bytes:
-        """Whatever arrives within timeout [s]: returns as soon as any byte is there."""
-        self._port.timeout = timeout
+    def read(self, timeout_s: float) -> bytes:
+        """Whatever arrives within timeout_s [s]: returns as soon as any byte is there."""
+        self._port.timeout = timeout_s
         first = self._port.read(1)
         if not first:
             return b""
@@ -56,10 +56,10 @@ class InProcessTransport:
     def write(self, data: bytes) -> None:
         self._lib.mr_vmcu_write(data, len(data))
 
-    def read(self, timeout: float) -> bytes:
+    def read(self, timeout_s: float) -> bytes:
         n = self._lib.mr_vmcu_read(self._buf, len(self._buf))
-        if n == 0 and timeout > 0:
-            time.sleep(min(timeout, 0.001))  # a wall-clock core may owe periodic telemetry later
+        if n == 0 and timeout_s > 0:
+            time.sleep(min(timeout_s, 0.001))  # a wall-clock core may owe periodic telemetry later
             self._lib.mr_vmcu_write(b"", 0)
             n = self._lib.mr_vmcu_read(self._buf, len(self._buf))
         return self._buf.raw[:n]

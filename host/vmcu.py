@@ -23,7 +23,7 @@ def _die_with_parent() -> None:
 class VirtualMcu:
     """A `mantaray-vmcu --pty LINK` process; use as a context manager. `path` is the serial device path."""
 
-    def __init__(self, clock: str = "sim", start_timeout: float = 5.0, path: str | None = None) -> None:
+    def __init__(self, clock: str = "sim", start_timeout_s: float = 5.0, path: str | None = None) -> None:
         """path: where to put the serial device's symlink (default: a fresh temporary directory); a new
         virtual MCU on the path of one that exited plays a board that reset or was plugged back in."""
         self._dir = tempfile.TemporaryDirectory(prefix="mantaray-vmcu-")
@@ -33,13 +33,13 @@ class VirtualMcu:
             [str(native_artifact("mantaray-vmcu")), "--pty", self.path, "--clock", clock],
             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
             preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None)
-        deadline = time.monotonic() + start_timeout
+        deadline = time.monotonic() + start_timeout_s
         while not Path(self.path).exists():
             if self.process.poll() is not None:
                 raise RuntimeError(f"virtual MCU exited: {self.process.stderr.read().decode().strip()}")
             if time.monotonic() > deadline:
                 self.close()
-                raise RuntimeError(f"virtual MCU did not create {self.path} within {start_timeout} s")
+                raise RuntimeError(f"virtual MCU did not create {self.path} within {start_timeout_s} s")
             time.sleep(0.005)
 
     def close(self) -> None:

@@ -186,7 +186,7 @@ class Bridge:
     def __init__(self, link: Link, rig: Rig, tracking: Tracking = Tracking(), lockstep: bool = True) -> None:
         self.link, self.rig, self.tracking, self.lockstep = link, rig, tracking, lockstep
         if lockstep:
-            link.ack_timeout = max(link.ack_timeout, LOCKSTEP_ACK_TIMEOUT_S)
+            link.ack_timeout_s = max(link.ack_timeout_s, LOCKSTEP_ACK_TIMEOUT_S)
         identity = link.identify()
         simulated = identity.clock == m.Clock.SIMULATED
         if lockstep and not simulated:

@@ -24,7 +24,7 @@ def _probe(link: Link, frame: int, tries: int = 20) -> m.Telemetry:
     for k in range(tries):
         try:
             return link.position(m.ObjectPosition(frame=(frame * 32 + k) & 0xFFFF, capture_time=frame * 32 + k + 1,
-                                                  flags=m.PositionFlags.NOT_VISIBLE), timeout=0.1)
+                                                  flags=m.PositionFlags.NOT_VISIBLE), timeout_s=0.1)
         except LinkError:
             continue
     raise AssertionError("no telemetry through the faulty link")
@@ -34,7 +34,7 @@ def test_no_corrupted_command_is_ever_applied_through_drops_flips_and_bursts():
     rng = np.random.default_rng(7)
     with VirtualMcu(clock="wall") as vmcu:
         faulty = FaultInjector(SerialTransport(vmcu.path), p_drop=0.01, p_flip=0.01, p_burst=0.05, seed=3)
-        link = Link(faulty, ack_timeout=0.1, retries=12)
+        link = Link(faulty, ack_timeout_s=0.1, retries=12)
         link.identify()
         link.command(m.Configure(telemetry_period=0))
         sent = {i: {0.0} for i in range(4)}
@@ -212,7 +212,7 @@ def test_a_port_that_goes_away_while_identifying_is_opened_again():
         def write(self, data: bytes) -> None:
             raise OSError("device disconnected")
 
-        def read(self, timeout: float) -> bytes:
+        def read(self, timeout_s: float) -> bytes:
             raise OSError("device disconnected")
 
         def close(self) -> None:
@@ -239,7 +239,7 @@ class _Replay:
     def write(self, data: bytes) -> None:
         pass
 
-    def read(self, timeout: float) -> bytes:
+    def read(self, timeout_s: float) -> bytes:
         data, self.data = self.data, b""
         return data
 

@@ -123,9 +123,9 @@ class Tamper:
     def write(self, data: bytes) -> None:
         self.inner.write(data)
 
-    def read(self, timeout: float) -> bytes:
+    def read(self, timeout_s: float) -> bytes:
         out = b""
-        for item in self.decoder.feed(self.inner.read(timeout)):
+        for item in self.decoder.feed(self.inner.read(timeout_s)):
             if isinstance(item, Frame):
                 out += encode_packet(item.id, item.seq, item.payload) * self.rule(item.message())
         return out
@@ -171,8 +171,8 @@ def test_a_firmware_reset_mid_trial_is_reported():
                 transport._lib.mr_vmcu_boot(1)   # power cycle: the firmware boots afresh, idle, clock 0
             transport.write(data)
 
-        def read(self, timeout: float) -> bytes:
-            return transport.read(timeout)
+        def read(self, timeout_s: float) -> bytes:
+            return transport.read(timeout_s)
 
         def close(self) -> None:
             pass

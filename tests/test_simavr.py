@@ -67,7 +67,7 @@ class Probe:
 
 def test_the_rig_build_drives_modelled_motors_to_their_setpoints_and_stops_them(elf):
     with SimulatedUno(elf, bench=False, realtime=True) as uno:
-        link = Link(SerialTransport(uno.path), ack_timeout=1.0)
+        link = Link(SerialTransport(uno.path), ack_timeout_s=1.0)
         assert link.identify().clock == m.Clock.WALL
         link.command(m.Configure(telemetry_period=0))
         link.command(m.Jog(actuator=0, position=0.05))
@@ -114,7 +114,7 @@ def test_a_closed_loop_trial_runs_with_the_avr_binary_in_place_of_the_virtual_mc
 def test_positions_as_fast_as_the_link_allows_lose_no_byte_while_the_loops_run(elf):
     """Running on the rig side (loops on modelled motors), one position in flight at a time, back to back."""
     with SimulatedUno(elf, bench=False, realtime=True) as uno:
-        link = Link(SerialTransport(uno.path), ack_timeout=1.0)
+        link = Link(SerialTransport(uno.path), ack_timeout_s=1.0)
         link.identify()
         link.command(m.Configure(telemetry_period=0))
         link.command(m.SetTarget(x=0.1, y=-0.05))

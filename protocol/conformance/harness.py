@@ -235,9 +235,9 @@ class Dut:
         for i in range(0, len(data), chunk):
             self.link.send_raw(data[i:i + chunk])
 
-    def reply_to(self, msg_id: int, seq: int, timeout: float | None = None) -> m.Ack | m.Nack:
+    def reply_to(self, msg_id: int, seq: int, timeout_s: float | None = None) -> m.Ack | m.Nack:
         """The ack or nack whose ref_id and ref_seq are these."""
-        deadline = time.monotonic() + (self.link.ack_timeout * 2 if timeout is None else timeout)
+        deadline = time.monotonic() + (self.link.ack_timeout_s * 2 if timeout_s is None else timeout_s)
         while (remaining := deadline - time.monotonic()) > 0:
             msg = self.link.receive(remaining)
             if isinstance(msg, (m.Ack, m.Nack)) and msg.ref_id == msg_id and msg.ref_seq == seq:
