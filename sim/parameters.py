@@ -130,16 +130,23 @@ def plant_names() -> list[str]:
 
 
 def markdown_table() -> str:
-    """The table for sim/README.md (generated: the README never restates a value by hand)."""
-    rows = ["| parameter | value | range | MuJoCo's default | searched | kind | source; why this range |",
-            "|---|---|---|---|---|---|---|"]
+    """The table for sim/README.md (generated: the README never restates a value by hand). "value" is the default,
+    the polyester plant's; each other named plant has a column with its own value where it sets one."""
+    others = [name for name in plant_names() if plant_values(name)]
+    rows = ["| parameter | value | " + "".join(f"`{name}` plant | " for name in others)
+            + "range | MuJoCo's default | searched | kind | source; why this range |",
+            "|---|---|" + "---|" * len(others) + "---|---|---|---|---|"]
     for p in parameters().values():
         unit = "" if p.unit in ("", "-") else f" {p.unit}"
+
+        def shown(value) -> str:
+            return value if p.choices else f"{value:g}{unit}"
+
         span = " / ".join(p.choices) if p.choices else f"{p.low:g} – {p.high:g}{unit}"
         mujoco = "" if p.mujoco is None else f"{p.mujoco:g}"
-        value = p.value if p.choices else f"{p.value:g}{unit}"
-        rows.append(f"| `{p.key}` | {value} | {span} | {mujoco} | {'yes' if p.search else 'no'} | {p.kind} | "
-                    f"{p.source}; {p.reason} |")
+        named = "".join(f"{shown(plant_values(n)[p.key]) if p.key in plant_values(n) else ''} | " for n in others)
+        rows.append(f"| `{p.key}` | {shown(p.value)} | {named}{span} | {mujoco} | {'yes' if p.search else 'no'} | "
+                    f"{p.kind} | {p.source}; {p.reason} |")
     return "\n".join(rows)
 
 
