@@ -4,7 +4,8 @@
 // at 115200 baud it takes 5.6 ms to overflow), runs the actuator loops if their 4 ms period is due,
 // and polls the core (deadman, periodic telemetry). The controller runs inside the core on each
 // object_position frame. A pass that hangs for 250 ms trips the watchdog: its interrupt cuts every
-// motor, and the MCU resets 250 ms later; the next boot reports reset_cause watchdog.
+// motor and leaves a mark in RAM, and the MCU resets 250 ms later; the next boot reports reset_cause
+// watchdog, also behind the stock bootloader, which clears MCUSR.
 #include <Arduino.h>        // setup()/loop() contract, Serial, pin helpers
 #include <avr/interrupt.h>  // ISR, cli, sei
 #include <avr/io.h>         // MCUSR, WDTCSR
@@ -31,16 +32,8 @@ void save_reset_flags() {
   wdt_disable();
 }
 
-// Why the MCU started. Several flags can be set at once (a power-on ramp also trips the brown-out
-// detector): the first listed wins. The stock Uno bootloader (Optiboot) clears MCUSR before it starts
-// the sketch, so behind it this reads kUnknown; flashed without a bootloader (ISP) the cause comes through.
-mr::proto::ResetCause reset_cause() {
-  if (g_reset_flags & _BV(PORF)) return mr::proto::ResetCause::kPowerOn;
-  if (g_reset_flags & _BV(BORF)) return mr::proto::ResetCause::kBrownOut;
-  if (g_reset_flags & _BV(WDRF)) return mr::proto::ResetCause::kWatchdog;
-  if (g_reset_flags & _BV(EXTRF)) return mr::proto::ResetCause::kExternal;
-  return mr::proto::ResetCause::kUnknown;
-}
+// Written by the watchdog's interrupt, read at the next boot (board::reset_cause): it survives the reset.
+mr::board::ResetMark g_reset_mark __attribute__((section(".noinit")));
 
 // Interrupt-then-reset mode, 250 ms: the first timeout runs the interrupt, the second resets.
 void watchdog_start() {
@@ -62,14 +55,14 @@ mr::board::Probe g_probe_loop;
 
 }  // namespace
 
-ISR(WDT_vect) { mr::board::on_watchdog_timeout(); }
+ISR(WDT_vect) { mr::board::on_watchdog_timeout(g_reset_mark); }
 
 void setup() {
   Serial.begin(115200);  // [baud] the host link's rate (platformio.ini monitor_speed)
   g_probe_frame.begin(mr::board::kProbeControllerPin);
   g_probe_loop.begin(mr::board::kProbeLoopPin);
   mr::board::begin();
-  g_firmware.boot(reset_cause());
+  g_firmware.boot(mr::board::reset_cause(g_reset_flags, g_reset_mark));
   watchdog_start();
 }
 

@@ -70,7 +70,21 @@ void UnoActuatorIo::motor_write(uint8_t actuator, float duty) {
 
 void UnoActuatorIo::motors_off() { all_pwm_off(); }
 
-void on_watchdog_timeout() { all_pwm_off(); }
+void on_watchdog_timeout(ResetMark& survives) {
+  all_pwm_off();
+  survives.mark = kWatchdogMark;
+  survives.check = static_cast<uint16_t>(~kWatchdogMark);
+}
+
+proto::ResetCause reset_cause(uint8_t mcusr, ResetMark& survives) {
+  const bool marked = survives.mark == kWatchdogMark && survives.check == static_cast<uint16_t>(~kWatchdogMark);
+  survives.mark = survives.check = 0;
+  if (mcusr & (1u << 0)) return proto::ResetCause::kPowerOn;   // PORF
+  if (marked || (mcusr & (1u << 3))) return proto::ResetCause::kWatchdog;   // WDRF
+  if (mcusr & (1u << 2)) return proto::ResetCause::kBrownOut;  // BORF
+  if (mcusr & (1u << 1)) return proto::ResetCause::kExternal;  // EXTRF
+  return proto::ResetCause::kUnknown;
+}
 
 void Probe::begin(uint8_t pin) {
   pinMode(pin, OUTPUT);

@@ -4,6 +4,7 @@
 #include <stdint.h>  // uint8_t, uint16_t
 
 #include "actuators.h"  // ActuatorIo
+#include "protocol_gen.h"  // proto::ResetCause
 
 namespace mr {
 namespace board {
@@ -28,8 +29,21 @@ struct Probe {
   void toggle() const { *port ^= mask; }
 };
 
-// The watchdog's interrupt, one timeout before it resets the MCU: every motor off, nothing else.
-void on_watchdog_timeout();
+// What survives a watchdog reset in memory the C runtime leaves alone (.noinit): the interrupt writes a mark
+// and its complement, so a reset that follows it is known for one even behind a bootloader that clears MCUSR.
+struct ResetMark {
+  uint16_t mark;
+  uint16_t check;  // ~mark: random RAM at power-on passes both with odds of 1 in 2^32
+};
+constexpr uint16_t kWatchdogMark = 0x57D6;
+
+// The watchdog's interrupt, one timeout before it resets the MCU: every motor off, and the mark written.
+void on_watchdog_timeout(ResetMark& survives);
+
+// Why the MCU started, from MCUSR as the reset left it (bits as the ATmega328P's: PORF 0, EXTRF 1, BORF 2,
+// WDRF 3) and the mark, which it clears. Power-on wins (RAM is random then), then the watchdog (by flag or
+// mark), brown-out and external; nothing known (the stock bootloader cleared the flags) is unknown.
+proto::ResetCause reset_cause(uint8_t mcusr, ResetMark& survives);
 
 }  // namespace board
 }  // namespace mr

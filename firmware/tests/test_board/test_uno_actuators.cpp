@@ -200,11 +200,28 @@ TEST_CASE("the emergency-stop path (power off) zeroes every PWM at once and keep
   CHECK_FALSE(s.rig.all_pwm_zero());
 }
 
-TEST_CASE("the watchdog interrupt's path zeroes every PWM") {
+TEST_CASE("the watchdog interrupt's path zeroes every PWM and marks the reset it precedes") {
   Stack s;
   s.drive_away();
-  mr::board::on_watchdog_timeout();
+  mr::board::ResetMark survives{0x1234, 0x0000};  // whatever RAM held
+  mr::board::on_watchdog_timeout(survives);
   CHECK(s.rig.all_pwm_zero());
+  // the stock bootloader clears MCUSR: the mark alone says watchdog, once
+  CHECK(mr::board::reset_cause(0, survives) == mr::proto::ResetCause::kWatchdog);
+  CHECK(mr::board::reset_cause(0, survives) == mr::proto::ResetCause::kUnknown);
+}
+
+TEST_CASE("the reset cause: power-on first, then the watchdog, brown-out and external") {
+  using mr::proto::ResetCause;
+  mr::board::ResetMark none{0, 0};
+  CHECK(mr::board::reset_cause(0x01 | 0x04, none) == ResetCause::kPowerOn);  // a power-on ramp trips BOR too
+  CHECK(mr::board::reset_cause(0x08, none) == ResetCause::kWatchdog);
+  CHECK(mr::board::reset_cause(0x04, none) == ResetCause::kBrownOut);
+  CHECK(mr::board::reset_cause(0x02, none) == ResetCause::kExternal);
+  mr::board::ResetMark marked{mr::board::kWatchdogMark, static_cast<uint16_t>(~mr::board::kWatchdogMark)};
+  CHECK(mr::board::reset_cause(0x01, marked) == ResetCause::kPowerOn);   // RAM is random at power-on
+  mr::board::ResetMark half{mr::board::kWatchdogMark, 0};                // the mark without its complement
+  CHECK(mr::board::reset_cause(0x02, half) == ResetCause::kExternal);
 }
 
 TEST_CASE("soft limits: a setpoint beyond the travel stops the carriage at the limit") {
