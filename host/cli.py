@@ -214,6 +214,14 @@ def _connect(args: argparse.Namespace, parser: argparse.ArgumentParser):
     return link
 
 
+def _checked(parser: argparse.ArgumentParser, command: m.Message) -> m.Message:
+    """The command once the schema's field rules pass (Message.check); a field they refuse is a usage error."""
+    try:
+        return command.check()
+    except ValueError as exc:
+        parser.error(str(exc))
+
+
 def cmd_monitor(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """Show the firmware's telemetry live, decoded, without changing anything on it (Ctrl-C ends)."""
     link = _connect(args, parser)
@@ -253,11 +261,7 @@ def cmd_jog(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     until `stop` (which levels the surface) or `start`."""
     from .link import CommandRefused
 
-    jog = m.Jog(actuator=args.actuator, position=args.position)
-    try:
-        jog.check()
-    except ValueError as exc:
-        parser.error(str(exc))
+    jog = _checked(parser, m.Jog(actuator=args.actuator, position=args.position))
     link = _connect(args, parser)
     try:
         link.command(jog)
@@ -287,11 +291,7 @@ def cmd_zero(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     them there. The firmware must be idle."""
     from .link import CommandRefused
 
-    zero = m.Zero(actuators=sum(1 << i for i in args.actuators))
-    try:
-        zero.check()
-    except ValueError as exc:
-        parser.error(str(exc))
+    zero = _checked(parser, m.Zero(actuators=sum(1 << i for i in args.actuators)))
     link = _connect(args, parser)
     try:
         link.command(zero)

@@ -136,18 +136,25 @@ def test_the_session_rides_out_a_board_reset_and_an_unplug_without_the_user():
         board.join()
 
 
-def test_an_emergency_stop_stays_latched_across_a_reset_until_the_user_clears_it():
-    """A reconnect or a board reset must not undo an emergency stop (it restored the run before)."""
-    from mantaray.host.session import EmergencyStopLatched
+def _running_in_process_session(events: list):
+    """A session on an in-process wall-clock firmware, running toward (-0.1, 0.1); (session, transport)."""
     from mantaray.host.transport import InProcessTransport
 
     transport = InProcessTransport(simulated_clock=False)
-    events = []
     session = RigSession("in-process", Setup(m.Configure(telemetry_period=0), target=(-0.1, 0.1)),
                          reset_wait_s=0.0, report=events.append, open_transport=lambda port: transport).open()
     session.start()
-    assert m.State(session.position(m.ObjectPosition(frame=1, capture_time=1000, x=0.0, y=0.0)).state) == \
-        m.State.RUNNING
+    t = session.position(m.ObjectPosition(frame=1, capture_time=1000, x=0.0, y=0.0))
+    assert m.State(t.state) == m.State.RUNNING
+    return session, transport
+
+
+def test_an_emergency_stop_stays_latched_across_a_reset_until_the_user_clears_it():
+    """A reconnect or a board reset must not undo an emergency stop (it restored the run before)."""
+    from mantaray.host.session import EmergencyStopLatched
+
+    events = []
+    session, transport = _running_in_process_session(events)
     session.emergency_stop()
     transport._lib.mr_vmcu_boot(0)                         # the board restarts: idle, powered, defaults
     session.position(m.ObjectPosition(frame=2, capture_time=84000, x=0.0, y=0.0))   # the session sees the reset
@@ -180,15 +187,8 @@ def test_a_lost_telemetry_frame_is_skipped_not_a_reconnect():
 
 def test_a_board_that_resets_on_its_own_gets_its_setup_back():
     """A reset without unplugging (watchdog, brown-out): the boot message mid-session triggers the restore."""
-    from mantaray.host.transport import InProcessTransport
-
-    transport = InProcessTransport(simulated_clock=False)
     events = []
-    session = RigSession("in-process", Setup(m.Configure(telemetry_period=0), target=(-0.1, 0.1)),
-                         reset_wait_s=0.0, report=events.append, open_transport=lambda port: transport).open()
-    session.start()
-    t = session.position(m.ObjectPosition(frame=1, capture_time=1000, x=0.0, y=0.0))
-    assert m.State(t.state) == m.State.RUNNING
+    session, transport = _running_in_process_session(events)
     transport._lib.mr_vmcu_boot(0)                          # the board restarts: idle, no target, boot message
     t = session.position(m.ObjectPosition(frame=2, capture_time=84000, x=0.0, y=0.0))
     assert t is not None and m.State(t.state) == m.State.IDLE  # what the reset left; the session notices ...
