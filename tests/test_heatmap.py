@@ -305,7 +305,8 @@ def test_reduced_heatmap_end_to_end_with_figures_and_difference_map(tmp_path):
 
 def test_ctrl_c_on_a_parallel_run_says_how_to_continue_without_a_traceback(tmp_path):
     out = tmp_path / "run"
-    proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--cells", "2", "--trials", "4",
+    # 40 trials: far more than can finish between the first result and the signal, even on a loaded machine
+    proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--cells", "2", "--trials", "10",
                              "--duration", "3", "--jobs", "2", "--out", str(out)], cwd=REPO, stderr=subprocess.PIPE,
                             stdout=subprocess.DEVNULL, text=True, start_new_session=True)
     deadline = time.monotonic() + 120
