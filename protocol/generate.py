@@ -468,8 +468,17 @@ def outputs() -> dict[Path, str]:
     files = {CPP_OUT: render_cpp(schema), PY_OUT: render_py(schema),
              SPEC: splice_spec(SPEC.read_text(), render_md(schema))}
     if VECTORS.exists():
-        files[CPP_VECTORS_OUT] = render_cpp_vectors(schema, json.loads(VECTORS.read_text())["vectors"])
+        try:
+            files[CPP_VECTORS_OUT] = render_cpp_vectors(schema, json.loads(VECTORS.read_text())["vectors"])
+        except KeyError as exc:     # a field the schema gained: make_vectors.py writes it, from messages.py
+            raise StaleVectors(f"vectors.json has no field {exc} the schema now has (messages.py and protocol_gen.h are "
+                               f"written): "
+                               f"run python protocol/make_vectors.py, then this again") from None
     return files
+
+
+class StaleVectors(Exception):
+    """vectors.json predates a schema change (a new field); the code it is generated from must come first."""
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -477,7 +486,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--check", action="store_true", help="fail if a generated file differs from the schema")
     args = parser.parse_args(argv)
     stale = []
-    for path, text in outputs().items():
+    try:
+        files = outputs()
+    except StaleVectors as exc:
+        if not args.check:
+            schema = load_schema()
+            PY_OUT.write_text(render_py(schema))
+            CPP_OUT.write_text(render_cpp(schema))
+        print(exc, file=sys.stderr)
+        return 1
+    for path, text in files.items():
         if args.check:
             if not path.exists() or path.read_text() != text:
                 stale.append(path.relative_to(ROOT))

@@ -58,10 +58,11 @@ FRAMES = [
     ("telemetry running", m.Telemetry(time=123456, state=m.State.RUNNING, faults=m.Faults(0), position_frame=513,
                                       position_age=42, tilt_zx=3.09, tilt_zy=-26.56,
                                       command=(0.0, 0.12345, -0.25, 0.25), measured=(0.00001, 0.1234, -0.2499, 0.25),
-                                      crc_errors=2, frame_errors=65535), 3),
+                                      crc_errors=2, frame_errors=65535, loop_overruns=7), 3),
     ("telemetry estop", m.Telemetry(time=0, state=m.State.ESTOP, faults=m.Faults.POSITION_TIMEOUT | m.Faults.ESTOP,
                                     position_frame=0, position_age=65535, tilt_zx=0.0, tilt_zy=0.0,
-                                    command=(0.0,) * 4, measured=(0.0,) * 4, crc_errors=0, frame_errors=0), 4),
+                                    command=(0.0,) * 4, measured=(0.0,) * 4, crc_errors=0, frame_errors=0,
+                                    loop_overruns=0), 4),
     ("boot after watchdog", m.Boot(m.ResetCause.WATCHDOG), 0),
 ]
 

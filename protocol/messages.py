@@ -9,7 +9,7 @@ from typing import ClassVar
 from .codec import FieldSpec, Message
 
 PROTOCOL_VERSION = 1
-SCHEMA_HASH = 0xA7E052E0
+SCHEMA_HASH = 0x78100C22
 MAX_PACKET = 44  # [bytes] id + seq + payload + CRC
 MAX_WIRE = 46  # [bytes] COBS packet + delimiter
 NO_FIELD = 255
@@ -382,7 +382,7 @@ class Telemetry(Message):
     NAME: ClassVar[str] = 'telemetry'
     DIRECTION: ClassVar[str] = 'mcu_to_host'
     REPLY: ClassVar[str | None] = None
-    SIZE: ClassVar[int] = 35  # [bytes] payload
+    SIZE: ClassVar[int] = 37  # [bytes] payload
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('time', 'I', 1, None, None, None, None, 'ms'),
         FieldSpec('state', 'B', 1, None, State, None, None, ''),
@@ -395,6 +395,7 @@ class Telemetry(Message):
         FieldSpec('measured', 'h', 4, 1e-05, None, None, None, 'm'),
         FieldSpec('crc_errors', 'H', 1, None, None, None, None, ''),
         FieldSpec('frame_errors', 'H', 1, None, None, None, None, ''),
+        FieldSpec('loop_overruns', 'H', 1, None, None, None, None, ''),
     )
 
     time: int = 0  # [ms] Firmware clock: every microsecond counted, so it wraps at 2^32 ms (49.7 days).
@@ -408,6 +409,7 @@ class Telemetry(Message):
     measured: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)  # [m] Measured actuator positions, same convention. (wire = value / 1e-05)
     crc_errors: int = 0  # Frames dropped for a bad CRC since boot (wraps).
     frame_errors: int = 0  # Frames dropped for bad COBS, oversize or truncation since boot (wraps).
+    loop_overruns: int = 0  # Actuator-loop runs that started a whole period or more late since boot (saturates at 65535; 0 where the actuators are ideal).
 
 
 @dataclass(frozen=True)

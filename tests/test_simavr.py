@@ -75,6 +75,7 @@ def test_the_rig_build_drives_modelled_motors_to_their_setpoints_and_stops_them(
         probe = Probe(link)
         t = probe.until(lambda t: abs(t.measured[0] - 0.05) < 1e-3 and abs(t.measured[3] + 0.03) < 1e-3)
         assert t.faults == 0 and t.measured[0] == pytest.approx(0.05, abs=1e-3)
+        assert t.loop_overruns == 0                      # telemetry reports the loops' lateness: none here
         assert t.measured[3] == pytest.approx(-0.03, abs=1e-3)
         link.command(m.EmergencyStop())
         stopped = probe().measured[0]

@@ -77,6 +77,7 @@ void actuators_power(bool on) {
 void actuators_zero(uint8_t mask) { g_actuators.zero(mask); }
 
 uint16_t actuator_faults() { return g_injected_faults; }
+uint32_t actuator_overruns() { return 0; }  // ideal actuators have no loop to run late
 
 proto::Clock clock_kind() { return g_clock; }
 

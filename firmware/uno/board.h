@@ -1,8 +1,6 @@
 // What the Uno's main loop calls on its board layer (hal_uno.cpp), besides the HAL the core uses.
 #pragma once
 
-#include <stdint.h>  // uint32_t
-
 namespace mr {
 namespace board {
 
@@ -11,8 +9,6 @@ namespace board {
 bool begin();
 // Runs the actuator loops when their period is due; call on every main-loop pass.
 void actuators_tick();
-// Loop runs that started more than a period late since boot.
-uint32_t actuator_overruns();
 
 }  // namespace board
 }  // namespace mr

@@ -42,8 +42,6 @@ void actuators_tick() {
   g_probe_actuators.low();
 }
 
-uint32_t actuator_overruns() { return g_bank.overruns(); }
-
 }  // namespace board
 
 namespace hal {
@@ -79,6 +77,7 @@ void actuators_zero(uint8_t mask) {
 }
 
 uint16_t actuator_faults() { return g_bench ? 0 : g_bank.faults(); }
+uint32_t actuator_overruns() { return g_bank.overruns(); }
 
 proto::Clock clock_kind() { return g_bench ? proto::Clock::kSimulated : proto::Clock::kWall; }
 

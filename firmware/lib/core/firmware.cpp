@@ -185,6 +185,8 @@ void Firmware::send_telemetry(uint32_t now_us) {
   }
   t.crc_errors = decoder_.crc_errors();
   t.frame_errors = decoder_.frame_errors();
+  const uint32_t overruns = hal::actuator_overruns();
+  t.loop_overruns = overruns > 0xFFFFu ? 0xFFFF : static_cast<uint16_t>(overruns);
   uint8_t payload[T::kSize];
   proto::encode(t, payload);
   send(T::kId, payload, sizeof payload);

@@ -26,6 +26,8 @@ void actuators_power(bool on);
 void actuators_zero(uint8_t mask);
 // proto::faults bits the actuators latched (stall, encoder); cleared when power comes back on.
 uint16_t actuator_faults();
+// Actuator-loop runs that started a whole period or more late since boot (0 for ideal actuators).
+uint32_t actuator_overruns();
 
 // Which clock now_us() reads.
 proto::Clock clock_kind();

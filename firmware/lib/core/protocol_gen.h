@@ -9,7 +9,7 @@ namespace mr {
 namespace proto {
 
 constexpr uint16_t kProtocolVersion = 1;
-constexpr uint32_t kSchemaHash = 0xA7E052E0u;
+constexpr uint32_t kSchemaHash = 0x78100C22u;
 constexpr uint8_t kMaxPacket = 44;  // [bytes] id + seq + payload + CRC
 constexpr uint8_t kMaxWire = 46;  // [bytes] COBS packet + delimiter
 constexpr uint8_t kNoField = 255;  // nack.field when no single field is at fault
@@ -418,7 +418,7 @@ inline void decode(const uint8_t* in, Nack& m) {
 // Firmware state; after every accepted object_position and every telemetry_period.
 struct Telemetry {
   static constexpr uint8_t kId = 0x84;
-  static constexpr uint8_t kSize = 35;  // [bytes] payload
+  static constexpr uint8_t kSize = 37;  // [bytes] payload
   uint32_t time;  // [ms] Firmware clock: every microsecond counted, so it wraps at 2^32 ms (49.7 days).
   uint8_t state;  // Supervisor state. (enum state)
   uint16_t faults;  // Latched fault flags. (flags faults)
@@ -430,6 +430,7 @@ struct Telemetry {
   int16_t measured[4];  // [m] Measured actuator positions, same convention. (wire = value / 1e-05)
   uint16_t crc_errors;  // Frames dropped for a bad CRC since boot (wraps).
   uint16_t frame_errors;  // Frames dropped for bad COBS, oversize or truncation since boot (wraps).
+  uint16_t loop_overruns;  // Actuator-loop runs that started a whole period or more late since boot (saturates at 65535; 0 where the actuators are ideal).
   static constexpr float kTiltZxScale = 0.01f;  // [deg] per wire unit
   static constexpr float kTiltZyScale = 0.01f;  // [deg] per wire unit
   static constexpr float kCommandScale = 1e-05f;  // [m] per wire unit
@@ -453,6 +454,7 @@ inline void encode(const Telemetry& m, uint8_t* out) {
   put_i16(out + 29, m.measured[3]);
   put_u16(out + 31, m.crc_errors);
   put_u16(out + 33, m.frame_errors);
+  put_u16(out + 35, m.loop_overruns);
 }
 inline void decode(const uint8_t* in, Telemetry& m) {
   m.time = get_u32(in + 0);
@@ -472,6 +474,7 @@ inline void decode(const uint8_t* in, Telemetry& m) {
   m.measured[3] = get_i16(in + 29);
   m.crc_errors = get_u16(in + 31);
   m.frame_errors = get_u16(in + 33);
+  m.loop_overruns = get_u16(in + 35);
 }
 
 // Sent once when the firmware starts, so the host notices a reset.
