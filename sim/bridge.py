@@ -261,6 +261,8 @@ class Bridge:
         self.link.command(m.Start())
         link_s += time.perf_counter() - t
         wall_start = time.perf_counter()                  # real time: trial time 0 on the wall
+        if self.recorder is not None:
+            self.recorder.mark_target(spec.target_m, spec.tolerance_m, self.rig.frame.z0_m, t0_sim)
 
         n_frames = int(math.floor(spec.duration_s * tracking.rate_hz + 1e-9)) + 1
         rows_t, rows_true, rows_meas, rows_tilt, rows_cmd, rows_state = [], [], [], [], [], []

@@ -4,14 +4,21 @@ from __future__ import annotations
 from pathlib import Path
 
 import mujoco
+import numpy as np
 
 from . import model as M
 
 FPS_RANGE = (1.0, 240.0)   # [1/s] video frame rates a recorder takes
 
 
+TARGET_RGBA = (1.0, 0.0, 1.0, 0.5)   # the target's tolerance disk in the video: translucent magenta
+DISK_HALF_THICKNESS_M = 0.0005       # [m]
+
+
 class Recorder:
-    """Renders the overhead camera every 1/fps simulated seconds; attach to Bridge.recorder, then save()."""
+    """Renders the overhead camera every 1/fps simulated seconds; attach to Bridge.recorder, then save().
+
+    With mark_target(), every frame also shows the target's tolerance disk and the trial's time."""
 
     def __init__(self, model: mujoco.MjModel, fps: float = 30.0, width: int = 480, height: int = 480) -> None:
         if not FPS_RANGE[0] <= fps <= FPS_RANGE[1]:
@@ -20,6 +27,11 @@ class Recorder:
         self.renderer = mujoco.Renderer(model, height, width)
         self.frames: list = []
         self.next_s: float | None = None
+        self._target: tuple[np.ndarray, float, float] | None = None   # (centre [m, world], radius [m], t0 [s])
+
+    def mark_target(self, target_m, tolerance_m: float, z_m: float, t0_s: float) -> None:
+        """Show the target as a disk of radius tolerance_m at height z_m [m, world], and the time since t0_s [s]."""
+        self._target = (np.array([target_m[0], target_m[1], z_m], dtype=float), tolerance_m, t0_s)
 
     def capture(self, data: mujoco.MjData) -> None:
         """Render a frame if data.time has reached the next video frame time (cheap otherwise)."""
@@ -27,8 +39,23 @@ class Recorder:
             self.next_s = data.time
         if data.time + 1e-9 >= self.next_s:
             self.renderer.update_scene(data, camera=M.OVERHEAD)
-            self.frames.append(self.renderer.render())
+            frame = self._with_target(data) if self._target is not None else self.renderer.render()
+            self.frames.append(frame)
             self.next_s += 1.0 / self.fps
+
+    def _with_target(self, data: mujoco.MjData) -> np.ndarray:
+        import cv2
+
+        centre, radius, t0 = self._target
+        scene = self.renderer.scene
+        if scene.ngeom < scene.maxgeom:
+            mujoco.mjv_initGeom(scene.geoms[scene.ngeom], mujoco.mjtGeom.mjGEOM_CYLINDER,
+                                np.array([radius, radius, DISK_HALF_THICKNESS_M]), centre, np.eye(3).ravel(),
+                                np.array(TARGET_RGBA, dtype=np.float32))
+            scene.ngeom += 1
+        frame = np.ascontiguousarray(self.renderer.render())
+        cv2.putText(frame, f"t = {data.time - t0:5.2f} s", (10, 30), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (255, 255, 255), 2)
+        return frame
 
     def save(self, path: str | Path) -> Path:
         """Write the frames as MP4 (H.264 through imageio-ffmpeg)."""
