@@ -230,6 +230,20 @@ def render_cpp(schema: dict) -> str:
     out.append("    default: return -1;")
     out.append("  }")
     out.append("}")
+    out.append("")
+    out.append("// Payload size [bytes] of a message id travelling MCU -> host, or -1 if the MCU sends no such id.")
+    out.append("inline int8_t mcu_to_host_size(uint8_t id) {")
+    out.append("  switch (id) {")
+    for msg in schema["messages"]:
+        if msg["direction"] == "mcu_to_host":
+            out.append(f"    case {camel(msg['name'])}::kId: return {camel(msg['name'])}::kSize;")
+    out.append("    default: return -1;")
+    out.append("  }")
+    out.append("}")
+    out.append("")
+    host_ids = ", ".join(f"{camel(msg['name'])}::kId" for msg in schema["messages"] if msg["direction"] == "host_to_mcu")
+    out.append("// Every message id travelling host -> MCU, in schema order (for the fuzzer and the tests: no hand-kept list).")
+    out.append(f"constexpr uint8_t kHostToMcuIds[] = {{{host_ids}}};")
     out += ["", "}  // namespace proto", "}  // namespace mr", ""]
     return "\n".join(out)
 

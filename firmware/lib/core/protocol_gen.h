@@ -508,5 +508,20 @@ inline int8_t host_to_mcu_size(uint8_t id) {
   }
 }
 
+// Payload size [bytes] of a message id travelling MCU -> host, or -1 if the MCU sends no such id.
+inline int8_t mcu_to_host_size(uint8_t id) {
+  switch (id) {
+    case IdentifyReply::kId: return IdentifyReply::kSize;
+    case Ack::kId: return Ack::kSize;
+    case Nack::kId: return Nack::kSize;
+    case Telemetry::kId: return Telemetry::kSize;
+    case Boot::kId: return Boot::kSize;
+    default: return -1;
+  }
+}
+
+// Every message id travelling host -> MCU, in schema order (for the fuzzer and the tests: no hand-kept list).
+constexpr uint8_t kHostToMcuIds[] = {Identify::kId, Configure::kId, ConfigurePid::kId, SetTarget::kId, Start::kId, Stop::kId, EmergencyStop::kId, Jog::kId, SimClock::kId, Zero::kId, ObjectPosition::kId};
+
 }  // namespace proto
 }  // namespace mr

@@ -42,23 +42,6 @@ using mr::FrameDecoder;
 // The harness's own branches are not coverage for the fuzzer to chase (and tracing them costs time).
 #define HARNESS __attribute__((no_sanitize("coverage")))
 
-// Payload size of a firmware -> host message, or -1.
-HARNESS int mcu_to_host_size(uint8_t id) {
-  switch (id) {
-    case proto::IdentifyReply::kId: return proto::IdentifyReply::kSize;
-    case proto::Ack::kId: return proto::Ack::kSize;
-    case proto::Nack::kId: return proto::Nack::kSize;
-    case proto::Telemetry::kId: return proto::Telemetry::kSize;
-    case proto::Boot::kId: return proto::Boot::kSize;
-    default: return -1;
-  }
-}
-
-const uint8_t kHostIds[] = {proto::Identify::kId, proto::Configure::kId, proto::ConfigurePid::kId,
-                            proto::SetTarget::kId, proto::Start::kId, proto::Stop::kId,
-                            proto::EmergencyStop::kId, proto::Jog::kId, proto::SimClock::kId,
-                            proto::ObjectPosition::kId};
-
 struct OutFrame {
   uint8_t id, seq, len;
   uint8_t payload[proto::kMaxPacket];
@@ -225,7 +208,7 @@ class Harness {
         pending_ = 0;
         FUZZ_CHECK(out_.seq() == next_seq_);
         next_seq_ = static_cast<uint8_t>(next_seq_ + 1);
-        FUZZ_CHECK(mcu_to_host_size(out_.id()) == out_.payload_len());
+        FUZZ_CHECK(proto::mcu_to_host_size(out_.id()) == out_.payload_len());
         FUZZ_CHECK(n < cap);
         OutFrame& f = frames[n++];
         f.id = out_.id();
@@ -283,7 +266,7 @@ class Messages {
       advance_us = 0;
       return;
     }
-    id = kHostIds[sel % sizeof kHostIds];
+    id = proto::kHostToMcuIds[sel % sizeof proto::kHostToMcuIds];
     advance_us = (sel / 10u) * 4001u;
     seq = u8();
     len = static_cast<uint8_t>(proto::host_to_mcu_size(id));
@@ -322,7 +305,12 @@ class Messages {
         const uint8_t flags = static_cast<uint8_t>(u8() & 0x81);
         return proto::encode(proto::ObjectPosition{frame_, capture_, x, y, flags}, payload);
       }
-      default:  // identify, start, stop, emergency_stop: no payload
+      case proto::Zero::kId: {
+        const uint8_t a = u8();
+        return proto::encode(proto::Zero{static_cast<uint8_t>(a < 0xF0 ? a & 0x0F : a)}, payload);
+      }
+      default:  // identify, start, stop, emergency_stop (no payload), and any message added since: raw bytes
+        for (uint8_t k = 0; k < len; ++k) payload[k] = u8();
         return;
     }
   }
