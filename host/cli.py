@@ -9,7 +9,7 @@ import time
 
 from mantaray.outputs import IMAGE_SUFFIXES, OutputError, writable_dir, writable_file
 from mantaray.protocol import messages as m
-from mantaray.protocol.codec import choices
+from mantaray.protocol.codec import bounds_text, choices
 
 from .runlog import RunLog
 
@@ -467,8 +467,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     rig.add_argument("--radius", type=float, default=0.1, help="circle radius [m]")
     rig.add_argument("--period", type=float, default=30.0, help="time for one lap of the circle [s]")
     rig.add_argument("--controller", choices=choices(m.Controller), default="manhattan")
-    rig.add_argument("--alpha", type=float, default=0.05, help="noise amplitude α [m] (paper's hardware: 0.05)")
-    rig.add_argument("--tolerance", type=float, default=0.02, help="ε [m]")
+    rig.add_argument("--alpha", type=float, default=0.05, help=f"noise amplitude α [m], {bounds_text(m.Configure, 'noise_amplitude')} (paper's hardware: 0.05)")
+    rig.add_argument("--tolerance", type=float, default=0.02, help=f"ε [m], {bounds_text(m.Configure, 'tolerance')}")
     rig.add_argument("--gains", type=parse_gains, metavar="KP,KI,KD[,ILIM]",
                      help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
     rig.add_argument("--hold", type=float, default=1.0, help="seconds within ε that count as reached")

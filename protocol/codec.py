@@ -20,6 +20,13 @@ def choices(kind: type[enum.Enum]) -> list[str]:
     return [member.name.lower() for member in kind]
 
 
+def bounds_text(message: type["Message"], field: str) -> str:
+    """A field's bounds as the schema declares them, for help texts: "0.001..0.5 m"."""
+    spec = next(f for f in message.FIELDS if f.name == field)
+    unit = f" {spec.unit}" if spec.unit else ""
+    return f"{spec.min:g}..{spec.max:g}{unit}"
+
+
 class FieldRefused(ValueError):
     """A field the firmware would refuse by the schema's field-local rules; code and field as its nack would say."""
 

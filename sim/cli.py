@@ -14,7 +14,7 @@ from pathlib import Path
 from mantaray.protocol import messages as m
 from mantaray.host.cli import parse_gains
 from mantaray.outputs import FIGURE_SUFFIXES, OutputError, writable_dir, writable_file
-from mantaray.protocol.codec import choices
+from mantaray.protocol.codec import bounds_text, choices
 
 from .objects import OBJECTS
 from .parameters import plant_names
@@ -456,8 +456,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--target", type=_point, default=(-0.05, 0.05), metavar="X,Y", help="target p_d [m]")
     run.add_argument("--duration", type=float, default=10.0, help="runtime T [s]; success is judged at its end")
     run.add_argument("--seed", type=int, default=1, help="seed of the actuator noise and the camera model")
-    run.add_argument("--alpha", type=float, default=0.0, help="noise amplitude α [m] (paper: 0.1 cube, 0.05 bunny)")
-    run.add_argument("--tolerance", type=float, default=0.02, help="ε [m]")
+    run.add_argument("--alpha", type=float, default=0.0, help=f"noise amplitude α [m], {bounds_text(m.Configure, 'noise_amplitude')} (paper: 0.1 cube, 0.05 bunny)")
+    run.add_argument("--tolerance", type=float, default=0.02, help=f"ε [m], {bounds_text(m.Configure, 'tolerance')}")
     run.add_argument("--gains", type=parse_gains, metavar="KP,KI,KD[,ILIM]",
                      help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
     run.add_argument("--plant", choices=plant_names(), default=DEFAULT_PLANT,
@@ -487,9 +487,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     heat.add_argument("--controller", choices=choices(m.Controller), default="manhattan")
     heat.add_argument("--cells", type=int, default=20, help="cells per side of the workspace (paper: 20)")
     heat.add_argument("--trials", type=int, default=10, help="trials per cell, N (paper: 10)")
-    heat.add_argument("--tolerance", type=float, default=0.02, help="ε [m]")
+    heat.add_argument("--tolerance", type=float, default=0.02, help=f"ε [m], {bounds_text(m.Configure, 'tolerance')}")
     heat.add_argument("--duration", type=float, default=10.0, help="runtime T [s] (paper: 10)")
-    heat.add_argument("--alpha", type=float, default=0.0, help="noise amplitude α [m] (paper: 0.1 cube, 0.05 bunny)")
+    heat.add_argument("--alpha", type=float, default=0.0, help=f"noise amplitude α [m], {bounds_text(m.Configure, 'noise_amplitude')} (paper: 0.1 cube, 0.05 bunny)")
     heat.add_argument("--gains", type=parse_gains, metavar="KP,KI,KD[,ILIM]",
                       help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
     heat.add_argument("--seed", type=int, default=2026, help="seed of the whole run: starts, targets and noise")
