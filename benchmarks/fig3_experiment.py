@@ -18,7 +18,7 @@ from pathlib import Path
 from mantaray.protocol import messages as m
 from mantaray.sim.fig3 import run_fig3
 from mantaray.sim.findings import MODULE_M, fig3_finding
-from mantaray.sim.heatmap import LocalPool, Protocol
+from mantaray.sim.heatmap import LocalPool, Experiment
 from mantaray.sim.parameters import plant_names
 from mantaray.plots import fig3_figure
 
@@ -45,7 +45,7 @@ def main() -> int:
             runs: dict[str, list[dict]] = {}
             for r in records:
                 runs.setdefault(r["object"], []).append(r)
-            figure = fig3_figure(runs, Protocol.tolerance_m, MODULE_M, m.Configure.tilt_limit,
+            figure = fig3_figure(runs, Experiment.tolerance_m, MODULE_M, m.Configure.tilt_limit,
                                  f"Fig. 3 in simulation, {plant} plant: Manhattan, 60 s, from the centre",
                                  REPO / args.figures / f"fig3_{plant}.png")
             out = REPO / args.results / f"fig3_{plant}.json"

@@ -46,7 +46,7 @@ def batched_stepping(steps: int = 500) -> None:
 
     from mantaray.sim import model as M
 
-    model, data = M.load(H.Protocol().rig())
+    model, data = M.load(H.Experiment().rig())
     M.drop_object(model, data, 0.05, 0.02)
     for _ in range(200):
         mujoco.mj_step(model, data)
@@ -71,7 +71,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--configs", default="15:0.001,11:0.002,11:0.004,15:0.002",
                         help="comma-separated RESOLUTION:TIMESTEP[:SEED] (seed of the trials' draw, default "
-                             f"{H.Protocol.seed}); the first is the reference")
+                             f"{H.Experiment.seed}); the first is the reference")
     parser.add_argument("--controller", default="manhattan")
     parser.add_argument("--object", default="sphere")
     parser.add_argument("--alpha", type=float, default=0.0)
@@ -92,10 +92,10 @@ def main() -> int:
           f"per rate: mean, and against the reference mean |Δ| / max |Δ| / bias "
           f"(tolerance {MEAN_ABS_TOLERANCE} / - / ±{BIAS_TOLERANCE})")
     for resolution, timestep, seed in configs:
-        protocol = H.Protocol(object_name=args.object, controller=args.controller, alpha_m=args.alpha,
+        protocol = H.Experiment(object_name=args.object, controller=args.controller, alpha_m=args.alpha,
                               resolution=resolution, timestep_s=timestep, seed=seed, only_cells=cells,
                               plant=args.plant)
-        drawn = "" if seed == H.Protocol.seed else f"_seed{seed}"
+        drawn = "" if seed == H.Experiment.seed else f"_seed{seed}"
         plant = "" if args.plant == DEFAULT_PLANT else f"_{args.plant}"
         results = H.ResultsFile.open(
             Path(args.out) / f"{args.object}_{args.controller}_{resolution}_{timestep:g}{drawn}{plant}.jsonl", protocol)
@@ -130,7 +130,7 @@ def parse_config(text: str) -> tuple[int, float, int]:
     try:
         if len(fields) not in (2, 3):
             raise ValueError
-        return int(fields[0]), float(fields[1]), int(fields[2]) if len(fields) == 3 else H.Protocol.seed
+        return int(fields[0]), float(fields[1]), int(fields[2]) if len(fields) == 3 else H.Experiment.seed
     except ValueError:
         raise SystemExit(f"heatmap_speed: a config is RESOLUTION:TIMESTEP[:SEED] (like 15:0.001:7), got {text!r}") from None
 

@@ -23,10 +23,10 @@ from typing import Protocol as Interface
 
 from . import findings as F
 from . import parameters as P
-from .heatmap import Protocol, trials
+from .heatmap import Experiment, trials
 from .plant import DEFAULT_PLANT, Plant
 
-CELLS = Protocol.cells            # the paper's 20 x 20 grid, on which the strata and the totals are defined
+CELLS = Experiment.cells            # the paper's 20 x 20 grid, on which the strata and the totals are defined
 
 STUDY_NAME = "calibrate"
 
@@ -79,10 +79,10 @@ class FindingsEvidence:
                                         "log distance of the totals (F5)")
     penalty: tuple[float, ...] = F.WORST_OBJECTIVES   # what a plant that cannot be simulated scores
 
-    def protocols(self, values: dict[str, float | str]) -> dict[str, Protocol]:
+    def protocols(self, values: dict[str, float | str]) -> dict[str, Experiment]:
         rule = Plant(self.plant).set(values).success_rule
         sample = F.stratified_sample(CELLS, self.cells_per_stratum, self.seed)
-        return {c: Protocol(controller=c, trials_per_cell=self.trials_per_cell, duration_s=self.duration_s,
+        return {c: Experiment(controller=c, trials_per_cell=self.trials_per_cell, duration_s=self.duration_s,
                             seed=self.seed, resolution=self.resolution, timestep_s=self.timestep_s,
                             only_cells=sample, plant=self.plant, plant_set=tuple(values.items()),
                             stop_when_reached=rule == "reached")

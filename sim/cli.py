@@ -203,10 +203,10 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     a trial succeeds if the object ends within ε of its target at the end of T without falling off. The
     firmware core runs in-process (the same C++ as the virtual MCU). Results go to OUT/results.jsonl, one
     line per trial as it finishes: interrupt the run and the same command continues where it stopped."""
-    from .heatmap import Protocol, ProtocolMismatch, ResultsFile, run, run_local, run_ray
+    from .heatmap import Experiment, ExperimentMismatch, ResultsFile, run, run_local, run_ray
 
     try:
-        protocol = Protocol(object_name=args.object, controller=args.controller, cells=args.cells,
+        protocol = Experiment(object_name=args.object, controller=args.controller, cells=args.cells,
                             trials_per_cell=args.trials, tolerance_m=args.tolerance, duration_s=args.duration,
                             alpha_m=args.alpha, seed=args.seed, gains=args.gains, resolution=args.resolution,
                             timestep_s=args.timestep, only_cells=args.only_cells, plant=args.plant,
@@ -221,7 +221,7 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     out = _output(parser, writable_dir, args.out or f"out/heatmap/{args.object}_{args.controller}_alpha{args.alpha:g}{plant}")
     try:
         results = ResultsFile.open(out / "results.jsonl", protocol)
-    except (ProtocolMismatch, ValueError) as exc:
+    except (ExperimentMismatch, ValueError) as exc:
         print(f"mantaray sim heatmap: {exc}", file=sys.stderr)
         return 2
     for warning in results.warnings():
@@ -424,7 +424,7 @@ def _fig3_for(best, args: argparse.Namespace, pool, out: Path) -> dict:
 
     from .fig3 import run_fig3
     from .findings import MODULE_M, fig3_finding
-    from .heatmap import Protocol
+    from .heatmap import Experiment
     from mantaray.plots import fig3_figure
 
     records = run_fig3(pool, args.plant, best.user_attrs["values"], resolution=args.resolution,
@@ -433,7 +433,7 @@ def _fig3_for(best, args: argparse.Namespace, pool, out: Path) -> dict:
     runs: dict[str, list[dict]] = {}
     for r in records:
         runs.setdefault(r["object"], []).append(r)
-    figure = fig3_figure(runs, Protocol.tolerance_m, MODULE_M, m.Configure.tilt_limit,
+    figure = fig3_figure(runs, Experiment.tolerance_m, MODULE_M, m.Configure.tilt_limit,
                          f"Fig. 3 on calibration candidate #{best.number}", out / "fig3.png")
     return {"holds": finding.holds, "measured": finding.measured, "figure": str(figure)}
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import findings as F
-from .heatmap import Protocol, Trial
+from .heatmap import Experiment, Trial
 from .model import SimulationUnstable
 from .plant import DEFAULT_PLANT
 
@@ -19,7 +19,7 @@ def fig3_jobs(plant_name: str, values: dict, seed: int, resolution: int, timeste
     """One (protocol, trial) per object and k."""
     jobs = []
     for name, alpha_m in F.FIG3_ALPHA_M.items():
-        protocol = Protocol(object_name=name, controller="manhattan", cells=1, trials_per_cell=F.FIG3_TRIALS,
+        protocol = Experiment(object_name=name, controller="manhattan", cells=1, trials_per_cell=F.FIG3_TRIALS,
                             duration_s=F.FIG3_DURATION_S, alpha_m=alpha_m, seed=seed, resolution=resolution,
                             timestep_s=timestep_s, plant=plant_name, plant_set=tuple(values.items()),
                             stop_when_reached=True)

@@ -39,12 +39,12 @@ SUCCESS_REGION_AT = 0.9    # [-] cells with at least this success rate form the 
 FAILURE_REGION_AT = 0.1    # [-] ... at most this the failure region; those between are uncertain
 
 
-class ProtocolMismatch(ValueError):
-    """The results file was written by a different protocol: continuing it would mix two experiments."""
+class ExperimentMismatch(ValueError):
+    """The results file was written by a different experiment: continuing it would mix the two."""
 
 
 @dataclass(frozen=True)
-class Protocol:
+class Experiment:
     """Everything that decides a heatmap's trials and how they run."""
     object_name: str = "sphere"
     controller: str = "manhattan"
@@ -98,7 +98,7 @@ class Protocol:
         return {k: (list(v) if isinstance(v, tuple) else v) for k, v in dataclasses.asdict(self).items()}
 
     @classmethod
-    def from_json(cls, data: dict) -> Protocol:
+    def from_json(cls, data: dict) -> Experiment:
         fields = {k: (tuple(v) if isinstance(v, list) else v) for k, v in data.items()}
         fields["plant_set"] = tuple(tuple(kv) for kv in fields.get("plant_set", ()))
         return cls(**fields)
@@ -118,7 +118,7 @@ class Trial:
         return f"{self.cell}:{self.k}"
 
 
-def cell_bounds(protocol: Protocol, module_m: tuple[float, float], cell: int) -> tuple[float, float, float, float]:
+def cell_bounds(protocol: Experiment, module_m: tuple[float, float], cell: int) -> tuple[float, float, float, float]:
     """(x_lo, x_hi, y_lo, y_hi) [m] of a cell in the fabric frame."""
     ix, iy = cell % protocol.cells, cell // protocol.cells
     wx, wy = module_m[0] / protocol.cells, module_m[1] / protocol.cells
@@ -126,7 +126,7 @@ def cell_bounds(protocol: Protocol, module_m: tuple[float, float], cell: int) ->
     return x0 + ix * wx, x0 + (ix + 1) * wx, y0 + iy * wy, y0 + (iy + 1) * wy
 
 
-def make_trial(protocol: Protocol, module_m: tuple[float, float], cell: int, k: int) -> Trial:
+def make_trial(protocol: Experiment, module_m: tuple[float, float], cell: int, k: int) -> Trial:
     """Trial k of a cell: target uniform in the cell, start uniform over the workspace, from (seed, cell, k) alone."""
     rng = np.random.default_rng([protocol.seed, cell, k])
     x_lo, x_hi, y_lo, y_hi = cell_bounds(protocol, module_m, cell)
@@ -136,14 +136,14 @@ def make_trial(protocol: Protocol, module_m: tuple[float, float], cell: int, k: 
     return Trial(cell, k, start, target, int(rng.integers(1, 2 ** 31)))
 
 
-def trials(protocol: Protocol) -> list[Trial]:
+def trials(protocol: Experiment) -> list[Trial]:
     """Every trial of the protocol, cell by cell."""
     f = protocol.rig().frame
     module = (f.size_x_m, f.size_y_m)
     return [make_trial(protocol, module, c, k) for c in protocol.cell_ids() for k in range(protocol.trials_per_cell)]
 
 
-def trial_spec(protocol: Protocol, trial: Trial) -> TrialSpec:
+def trial_spec(protocol: Experiment, trial: Trial) -> TrialSpec:
     return TrialSpec(trial.start_m, trial.target_m, controller=protocol.controller, duration_s=protocol.duration_s,
                      alpha_m=protocol.alpha_m, tolerance_m=protocol.tolerance_m, seed=trial.seed,
                      gains=controller_gains(protocol.controller, protocol.gains, protocol.plant_model().gain_scale),
@@ -172,12 +172,12 @@ class ResultsFile:
     `rejected`; continuing the run moves it to <file>.rejected, so nothing is lost, and its trial runs again. A last
     line cut off by an interruption is dropped quietly: its trial runs again too."""
     path: Path
-    protocol: Protocol
+    protocol: Experiment
     records: dict[str, dict] = field(default_factory=dict)   # trial key -> record
     rejected: list[tuple[int, str]] = field(default_factory=list)   # (line number from 1, why) of refused lines
 
     @classmethod
-    def open(cls, path: str | Path, protocol: Protocol) -> ResultsFile:
+    def open(cls, path: str | Path, protocol: Experiment) -> ResultsFile:
         """Open for this protocol: create the file, or read what an earlier run of the same protocol left."""
         path = Path(path)
         results = cls(path, protocol)
@@ -189,11 +189,11 @@ class ResultsFile:
         now = protocol.plant_model().values
         if stored.plant_values is not None and stored.plant_values != now:
             changed = sorted(k for k in now if stored.plant_values.get(k) != now[k])
-            raise ProtocolMismatch(f"{path} was run on the plant {protocol.plant!r} when its values were others "
+            raise ExperimentMismatch(f"{path} was run on the plant {protocol.plant!r} when its values were others "
                                    f"({', '.join(changed)} differ in sim/plant.toml since); use another --out")
         if stored.protocol != protocol and not _extends(stored.protocol, protocol):
             changed = sorted(k for k, v in protocol.to_json().items() if stored.protocol.to_json().get(k) != v)
-            raise ProtocolMismatch(f"{path} holds a run with other options ({', '.join(changed)} differ); "
+            raise ExperimentMismatch(f"{path} holds a run with other options ({', '.join(changed)} differ); "
                                    f"use another --out, the same options to continue it, or more trials or "
                                    f"cells to add to it")
         if stored.bad_lines:                    # kept aside, never lost
@@ -239,7 +239,7 @@ def _replace(path: Path, content: bytes) -> None:
     os.replace(tmp, path)
 
 
-def _extends(stored: Protocol, wanted: Protocol) -> bool:
+def _extends(stored: Experiment, wanted: Experiment) -> bool:
     """Whether wanted only adds trials to stored (more per cell, or more cells), so every stored trial is one of
     wanted's: trials are drawn from (seed, cell, k) alone."""
     same_otherwise = dataclasses.replace(stored, trials_per_cell=wanted.trials_per_cell,
@@ -250,7 +250,7 @@ def _extends(stored: Protocol, wanted: Protocol) -> bool:
     return same_otherwise and more_per_cell and more_cells
 
 
-def _header(protocol: Protocol) -> dict:
+def _header(protocol: Experiment) -> dict:
     """A results file's first line: the protocol, and the values its plant had (a named plant may be refitted)."""
     return {"format": RESULTS_FORMAT, "protocol": protocol.to_json(), "plant_values": protocol.plant_model().values}
 
@@ -260,7 +260,7 @@ RECORD_TYPES = {"key": str, "cell": int, "k": int, "success": bool, "reached": b
 TYPE_NAMES = {str: "a string", int: "a whole number", bool: "true or false", list: "a list"}
 
 
-def record_problem(record, protocol: Protocol) -> str | None:
+def record_problem(record, protocol: Experiment) -> str | None:
     """Why a parsed line is not a trial record of this protocol, or None when it is one."""
     if not isinstance(record, dict):
         return f"not a trial record (a JSON {type(record).__name__})"
@@ -280,7 +280,7 @@ def record_problem(record, protocol: Protocol) -> str | None:
 @dataclass
 class _Contents:
     """What a results file holds, line by line."""
-    protocol: Protocol
+    protocol: Experiment
     plant_values: dict | None
     records: dict[str, dict] = field(default_factory=dict)
     good_lines: list[bytes] = field(default_factory=list)
@@ -302,7 +302,7 @@ def _read(path: Path) -> _Contents:
     if not isinstance(header, dict) or header.get("format") != RESULTS_FORMAT:
         raise ValueError(f"{path} is not a heatmap results file ({RESULTS_FORMAT})")
     try:
-        protocol = Protocol.from_json(header["protocol"])
+        protocol = Experiment.from_json(header["protocol"])
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"{path}: its header's protocol is not valid ({exc})") from None
     out = _Contents(protocol, header.get("plant_values"), cut=lines[-1] != b"")
@@ -403,7 +403,7 @@ class TrialRunner:
     the last one's (the two controllers of one plant share it).
     """
 
-    def __init__(self, protocol: Protocol | None = None) -> None:
+    def __init__(self, protocol: Experiment | None = None) -> None:
         from mantaray.host.link import Link
         from mantaray.host.transport import InProcessTransport
 
@@ -413,7 +413,7 @@ class TrialRunner:
         self._bridge_now = None
         self._unstable: tuple[str, SimulationUnstable] | None = None   # the last rig that would not load
 
-    def _bridge(self, protocol: Protocol):
+    def _bridge(self, protocol: Experiment):
         from .bridge import Bridge
         key = json.dumps([protocol.object_name, protocol.plant, protocol.plant_set, protocol.resolution,
                           protocol.timestep_s])
@@ -428,7 +428,7 @@ class TrialRunner:
             self._rig_key = key
         return self._bridge_now
 
-    def result(self, trial: Trial, protocol: Protocol | None = None):
+    def result(self, trial: Trial, protocol: Experiment | None = None):
         """The bridge.TrialResult of one trial of protocol (default: the runner's own)."""
         protocol = protocol or self.protocol
         bridge = self._bridge(protocol)
@@ -438,7 +438,7 @@ class TrialRunner:
             self._unstable = (self._rig_key, exc)
             raise
 
-    def run(self, trial: Trial, protocol: Protocol | None = None) -> dict:
+    def run(self, trial: Trial, protocol: Experiment | None = None) -> dict:
         """The record of one trial of protocol (default: the runner's own)."""
         try:
             result = self.result(trial, protocol)
@@ -464,7 +464,7 @@ def _init_worker() -> None:
 
 def _run_in_worker(job: tuple[dict, Trial]) -> dict:
     protocol_json, trial = job
-    return _worker.run(trial, Protocol.from_json(protocol_json))
+    return _worker.run(trial, Experiment.from_json(protocol_json))
 
 
 def _call_in_worker(job: tuple[Callable, object]) -> object:
@@ -491,7 +491,7 @@ class LocalPool:
             self._pool.terminate() if exc[0] is not None else self._pool.close()
             self._pool.join()
 
-    def imap(self, jobs: list[tuple[Protocol, Trial]], ordered: bool = False) -> Iterator[dict]:
+    def imap(self, jobs: list[tuple[Experiment, Trial]], ordered: bool = False) -> Iterator[dict]:
         """Records as the jobs finish (in any order), or in the jobs' order."""
         if self._pool is None:
             for protocol, trial in jobs:
@@ -500,7 +500,7 @@ class LocalPool:
         mapper = self._pool.imap if ordered else self._pool.imap_unordered
         yield from mapper(_run_in_worker, [(p.to_json(), t) for p, t in jobs], chunksize=1)
 
-    def map(self, jobs: list[tuple[Protocol, Trial]]) -> list[dict]:
+    def map(self, jobs: list[tuple[Experiment, Trial]]) -> list[dict]:
         """The jobs' records, in the jobs' order."""
         return list(self.imap(jobs, ordered=True))
 
@@ -531,12 +531,12 @@ class RayPool:
     def __exit__(self, *exc) -> None:
         pass
 
-    def imap(self, jobs: list[tuple[Protocol, Trial]], ordered: bool = False) -> Iterator[dict]:
+    def imap(self, jobs: list[tuple[Experiment, Trial]], ordered: bool = False) -> Iterator[dict]:
         """Records as the jobs finish (in any order), or in the jobs' order."""
         mapper = self._pool.map if ordered else self._pool.map_unordered
         yield from mapper(lambda actor, job: actor.run.remote(job[1], job[0]), jobs)
 
-    def map(self, jobs: list[tuple[Protocol, Trial]]) -> list[dict]:
+    def map(self, jobs: list[tuple[Experiment, Trial]]) -> list[dict]:
         """The jobs' records, in the jobs' order."""
         return list(self.imap(jobs, ordered=True))
 
@@ -545,13 +545,13 @@ class RayPool:
         return list(self._pool.map(lambda actor, a: actor.call.remote(fn, a), args))
 
 
-def run_local(protocol: Protocol, todo: list[Trial], jobs: int) -> Iterator[dict]:
+def run_local(protocol: Experiment, todo: list[Trial], jobs: int) -> Iterator[dict]:
     """Records of the trials as they finish, on `jobs` processes of this machine (1: this process)."""
     with LocalPool(jobs) as pool:
         yield from pool.imap([(protocol, t) for t in todo])
 
 
-def run_ray(protocol: Protocol, todo: list[Trial], jobs: int | None, address: str | None) -> Iterator[dict]:
+def run_ray(protocol: Experiment, todo: list[Trial], jobs: int | None, address: str | None) -> Iterator[dict]:
     """Records of the trials as they finish, on Ray actors (a cluster at address, or a local Ray instance)."""
     with RayPool(jobs, address) as pool:
         yield from pool.imap([(protocol, t) for t in todo])

@@ -24,14 +24,14 @@ from mantaray.sim.bridge import Bridge, TrialSpec, is_success
 from mantaray.sim.rig import Rig
 
 MODULE = (0.5, 0.5)
-SMALL = H.Protocol(cells=2, trials_per_cell=2, duration_s=0.5)   # four cells, eight short trials
+SMALL = H.Experiment(cells=2, trials_per_cell=2, duration_s=0.5)   # four cells, eight short trials
 
 
 # ------------------------------------------------------------------------------------------- sampling
 @settings(max_examples=200, deadline=None)
 @given(seed=st.integers(0, 2 ** 32 - 1), cells=st.integers(1, 40), data=st.data())
 def test_targets_lie_in_their_cell_and_starts_on_the_workspace(seed, cells, data):
-    protocol = H.Protocol(cells=cells, seed=seed)
+    protocol = H.Experiment(cells=cells, seed=seed)
     cell = data.draw(st.integers(0, cells ** 2 - 1))
     k = data.draw(st.integers(0, 50))
     trial = H.make_trial(protocol, MODULE, cell, k)
@@ -42,7 +42,7 @@ def test_targets_lie_in_their_cell_and_starts_on_the_workspace(seed, cells, data
 
 
 def test_cells_tile_the_workspace_in_x_then_y():
-    protocol = H.Protocol()
+    protocol = H.Experiment()
     assert H.cell_bounds(protocol, MODULE, 0) == pytest.approx((-0.25, -0.225, -0.25, -0.225))
     assert H.cell_bounds(protocol, MODULE, 1) == pytest.approx((-0.225, -0.2, -0.25, -0.225))
     assert H.cell_bounds(protocol, MODULE, 20) == pytest.approx((-0.25, -0.225, -0.225, -0.2))
@@ -50,19 +50,19 @@ def test_cells_tile_the_workspace_in_x_then_y():
 
 
 def test_starts_are_uniform_over_the_workspace_and_the_seed_decides_them():
-    protocol = H.Protocol()                     # the paper's 4,000 trials
+    protocol = H.Experiment()                     # the paper's 4,000 trials
     starts = np.array([t.start_m for t in H.trials(protocol)])
     assert len(starts) == 4000
     counts, _, _ = np.histogram2d(starts[:, 0], starts[:, 1], bins=4, range=[[-0.25, 0.25], [-0.25, 0.25]])
     assert counts.min() > 250 - 4 * np.sqrt(250) and counts.max() < 250 + 4 * np.sqrt(250)   # 16 bins of 250
-    again = np.array([t.start_m for t in H.trials(H.Protocol())])
-    other = np.array([t.start_m for t in H.trials(H.Protocol(seed=7))])
+    again = np.array([t.start_m for t in H.trials(H.Experiment())])
+    other = np.array([t.start_m for t in H.trials(H.Experiment(seed=7))])
     assert np.array_equal(starts, again) and not np.array_equal(starts, other)
 
 
 def test_a_subset_of_cells_draws_the_same_trials_as_the_full_run():
-    full = {t.key: t for t in H.trials(H.Protocol())}
-    subset = H.trials(H.Protocol(only_cells=(210, 3)))
+    full = {t.key: t for t in H.trials(H.Experiment())}
+    subset = H.trials(H.Experiment(only_cells=(210, 3)))
     assert [t.key for t in subset] == [f"{c}:{k}" for c in (210, 3) for k in range(10)]
     assert all(full[t.key] == t for t in subset)
 
@@ -78,7 +78,7 @@ def test_a_subset_of_cells_draws_the_same_trials_as_the_full_run():
 ])
 def test_a_bad_protocol_is_refused_with_a_reason(kwargs, needle):
     with pytest.raises(ValueError, match=needle):
-        H.Protocol(**kwargs)
+        H.Experiment(**kwargs)
 
 
 # ------------------------------------------------------------------------------------------- success rule
@@ -94,7 +94,7 @@ def _record(cell: int, k: int, success: bool, reached: bool = False, fell: bool 
 
 
 def test_summary_rates_score_and_regions():
-    results = H.ResultsFile(path=None, protocol=H.Protocol(cells=2, trials_per_cell=10))
+    results = H.ResultsFile(path=None, protocol=H.Experiment(cells=2, trials_per_cell=10))
     for k in range(10):
         results.records[f"0:{k}"] = _record(0, k, success=True)               # cell 0: 100 %
         results.records[f"1:{k}"] = _record(1, k, success=k < 5, fell=k >= 8)  # cell 1: 50 %, 20 % fell
@@ -149,20 +149,20 @@ def test_more_trials_or_cells_on_the_same_file_keep_the_trials_there_and_add_the
     H.run(grown, H.run_local(SMALL, grown.missing(), jobs=1))
     final = H.ResultsFile.load(path)
     assert len(final.records) == 8 and final.records[kept["key"]] == kept
-    with pytest.raises(H.ProtocolMismatch, match="trials_per_cell"):   # fewer trials would drop some: refused
+    with pytest.raises(H.ExperimentMismatch, match="trials_per_cell"):   # fewer trials would drop some: refused
         H.ResultsFile.open(path, one_cell)
 
 
 def test_a_results_file_of_other_options_is_not_continued(tmp_path):
     H.ResultsFile.open(tmp_path / "r.jsonl", SMALL)
-    with pytest.raises(H.ProtocolMismatch, match="duration_s"):
-        H.ResultsFile.open(tmp_path / "r.jsonl", H.Protocol(cells=2, trials_per_cell=2, duration_s=1.0))
+    with pytest.raises(H.ExperimentMismatch, match="duration_s"):
+        H.ResultsFile.open(tmp_path / "r.jsonl", H.Experiment(cells=2, trials_per_cell=2, duration_s=1.0))
     (tmp_path / "other.jsonl").write_text("not json\n")
     with pytest.raises(ValueError, match="not a heatmap results file"):
         H.ResultsFile.open(tmp_path / "other.jsonl", SMALL)
 
 
-def _synthetic_file(path: Path, protocol: H.Protocol, lines: list[str]) -> None:
+def _synthetic_file(path: Path, protocol: H.Experiment, lines: list[str]) -> None:
     """A results file of this protocol with these trial lines (no simulation)."""
     H.ResultsFile.open(path, protocol)
     with open(path, "a") as f:
@@ -346,5 +346,5 @@ def test_a_results_file_of_a_plant_whose_values_changed_is_not_continued(tmp_pat
     assert header["plant_values"]["fabric.size_m"] == SMALL.plant_model().values["fabric.size_m"]
     header["plant_values"]["fabric.size_m"] = 0.51           # as if sim/plant.toml had been refitted since
     path.write_text(json.dumps(header) + "\n")
-    with pytest.raises(H.ProtocolMismatch, match="fabric.size_m differ"):
+    with pytest.raises(H.ExperimentMismatch, match="fabric.size_m differ"):
         H.ResultsFile.open(path, SMALL)

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from mantaray.paths import REPO
 from mantaray.sim import parameters as P
-from mantaray.sim.heatmap import Protocol, controller_gains, trial_spec, trials
+from mantaray.sim.heatmap import Experiment, controller_gains, trial_spec, trials
 from mantaray.sim.plant import Plant, parse_setting
 from mantaray.sim.rig import Rig
 from mantaray.protocol import messages as m
@@ -78,7 +78,7 @@ def test_an_unknown_plant_is_refused_and_every_named_plant_is_valid():
 
 def test_a_protocol_refuses_an_out_of_range_plant_value():
     with pytest.raises(P.ParameterError, match="outside"):
-        Protocol(plant_set=(("fabric.size_m", 0.3),))
+        Experiment(plant_set=(("fabric.size_m", 0.3),))
 
 
 def test_the_readme_table_is_generated_from_the_declared_table():
@@ -96,7 +96,7 @@ def test_the_radian_reading_scales_the_papers_gains_and_nothing_else():
     assert gains["y"].kd == pytest.approx(paper["kd"] * 180 / math.pi)
     assert gains["x"].integral_limit == paper["integral_limit"]
     assert controller_gains("euclidean", None, 1.0) == {}     # degrees: the firmware's own defaults
-    protocol = Protocol(cells=2, trials_per_cell=1, plant_set=(("reading.pid_unit", "rad"),), controller="euclidean")
+    protocol = Experiment(cells=2, trials_per_cell=1, plant_set=(("reading.pid_unit", "rad"),), controller="euclidean")
     spec = trial_spec(protocol, trials(protocol)[0])
     assert spec.gains["radial"].ki == pytest.approx(m.PID_DEFAULTS[m.Axis.RADIAL]["ki"] * 180 / math.pi)
 

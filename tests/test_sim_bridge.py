@@ -30,7 +30,7 @@ def central_trials(n: int = 8) -> list[H.Trial]:
     """n trials of the paper's protocol whose targets lie in central cells (F1's |x|, |y| < 0.10 m), drawn from a
     seed: one trial in each of n central cells, its start anywhere on the fabric."""
     cells = np.random.default_rng(CENTRAL_SEED).choice(F.strata_cells(F.PAPER_CELLS)["centre"], n, replace=False)
-    return H.trials(H.Protocol(trials_per_cell=1, only_cells=tuple(int(c) for c in cells)))
+    return H.trials(H.Experiment(trials_per_cell=1, only_cells=tuple(int(c) for c in cells)))
 
 
 @pytest.fixture(scope="module")
