@@ -179,6 +179,15 @@ def cpp_message(schema: dict, msg: dict) -> list[str]:
     return lines
 
 
+def cpp_size_switch(schema: dict, direction: str, meaning: str) -> list[str]:
+    """The C++ function {direction}_size(id): the payload size of each message travelling that way."""
+    lines = [f"// Payload size [bytes] of a message id travelling {meaning}.",
+             f"inline int8_t {direction}_size(uint8_t id) {{", "  switch (id) {"]
+    lines += [f"    case {camel(msg['name'])}::kId: return {camel(msg['name'])}::kSize;"
+              for msg in schema["messages"] if msg["direction"] == direction]
+    return lines + ["    default: return -1;", "  }", "}", ""]
+
+
 def render_cpp(schema: dict) -> str:
     proto = schema["protocol"]
     out = [f"// {HEADER}", "#pragma once", "",
@@ -221,26 +230,8 @@ def render_cpp(schema: dict) -> str:
     for msg in schema["messages"]:
         out += cpp_message(schema, msg)
         out.append("")
-    out.append("// Payload size [bytes] of a message id travelling host -> MCU, or -1 if the MCU handles no such id.")
-    out.append("inline int8_t host_to_mcu_size(uint8_t id) {")
-    out.append("  switch (id) {")
-    for msg in schema["messages"]:
-        if msg["direction"] == "host_to_mcu":
-            out.append(f"    case {camel(msg['name'])}::kId: return {camel(msg['name'])}::kSize;")
-    out.append("    default: return -1;")
-    out.append("  }")
-    out.append("}")
-    out.append("")
-    out.append("// Payload size [bytes] of a message id travelling MCU -> host, or -1 if the MCU sends no such id.")
-    out.append("inline int8_t mcu_to_host_size(uint8_t id) {")
-    out.append("  switch (id) {")
-    for msg in schema["messages"]:
-        if msg["direction"] == "mcu_to_host":
-            out.append(f"    case {camel(msg['name'])}::kId: return {camel(msg['name'])}::kSize;")
-    out.append("    default: return -1;")
-    out.append("  }")
-    out.append("}")
-    out.append("")
+    out += cpp_size_switch(schema, "host_to_mcu", "host -> MCU, or -1 if the MCU handles no such id")
+    out += cpp_size_switch(schema, "mcu_to_host", "MCU -> host, or -1 if the MCU sends no such id")
     host_ids = ", ".join(f"{camel(msg['name'])}::kId" for msg in schema["messages"] if msg["direction"] == "host_to_mcu")
     out.append("// Every message id travelling host -> MCU, in schema order (for the fuzzer and the tests: no hand-kept list).")
     out.append(f"constexpr uint8_t kHostToMcuIds[] = {{{host_ids}}};")
