@@ -144,6 +144,8 @@ class TrialResult:
     object_name: str
     success: bool                   # within tolerance at the end, not fallen off
     final_error_m: float            # [m] true distance to the target at the end
+    final_xy_m: np.ndarray          # [m] object position at the end: the frame it was judged on (also the reach frame
+                                    #     when the trial stopped there, which is not a row of true_xy_m)
     time_to_reach_s: float | None   # [s] first frame the true distance was within tolerance
     fell_off: bool
     sim_time_s: float               # [s] trial time simulated (shorter when the object fell off)
@@ -355,7 +357,7 @@ class Bridge:
         sim_time = (data.time - t0_sim)
         return TrialResult(
             spec=spec, object_name=self.rig.object.name, success=is_success(fell, final_error, spec.tolerance_m),
-            final_error_m=final_error,
+            final_error_m=final_error, final_xy_m=final_xy,
             time_to_reach_s=reach_s, fell_off=fell, sim_time_s=sim_time,
             wall_time_s=time.perf_counter() - wall0, physics_wall_s=physics_s, link_wall_s=link_s,
             t_s=np.asarray(rows_t), true_xy_m=np.asarray(rows_true).reshape(-1, 2),

@@ -379,10 +379,9 @@ def summarize(results: ResultsFile) -> Summary:
 # ------------------------------------------------------------------------------------------- running
 def trial_record(trial: Trial, result) -> dict:
     """The results-file line of a finished trial (result: a bridge.TrialResult)."""
-    final = result.true_xy_m[-1] if len(result.true_xy_m) else np.full(2, np.nan)
     return {"key": trial.key, "cell": trial.cell, "k": trial.k, "seed": trial.seed,
             "start_m": [round(v, 5) for v in trial.start_m], "target_m": [round(v, 5) for v in trial.target_m],
-            "final_m": [round(float(v), 5) for v in final], "final_error_m": round(result.final_error_m, 5),
+            "final_m": [round(float(v), 5) for v in result.final_xy_m], "final_error_m": round(result.final_error_m, 5),
             "success": bool(result.success), "reached": result.time_to_reach_s is not None,
             "time_to_reach_s": result.time_to_reach_s, "fell_off": bool(result.fell_off),
             "sim_time_s": round(result.sim_time_s, 3), "wall_time_s": round(result.wall_time_s, 3)}

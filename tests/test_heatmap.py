@@ -255,6 +255,17 @@ def test_ray_runs_the_same_trials_as_local_processes():
         assert local[key]["final_m"] == on_ray[key]["final_m"] and local[key]["success"] == on_ray[key]["success"]
 
 
+
+@pytest.mark.parametrize("offset_m", [0.01, 0.05])   # within eps at the start; a short way off
+def test_a_trial_stopped_at_reach_records_where_it_was_judged_in_strict_json(offset_m):
+    protocol = H.Experiment(cells=2, trials_per_cell=1, duration_s=3.0, stop_when_reached=True)
+    start = (0.02, -0.03)
+    trial = H.Trial(cell=0, k=0, start_m=start, target_m=(start[0] + offset_m, start[1]), seed=5)
+    record = json.loads(json.dumps(H.trial_record(trial, H.TrialRunner(protocol).result(trial)), allow_nan=False))
+    assert record["reached"] and record["success"]
+    error_m = np.hypot(*(np.subtract(record["final_m"], record["target_m"])))
+    assert error_m == pytest.approx(record["final_error_m"], abs=2e-5) and error_m < protocol.tolerance_m
+
 def _runner_kind_and_double(runner, x):
     return type(runner).__name__, 2 * x
 
