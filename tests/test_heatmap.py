@@ -316,9 +316,9 @@ def test_reduced_heatmap_end_to_end_with_figures_and_difference_map(tmp_path):
 
 def test_ctrl_c_on_a_parallel_run_says_how_to_continue_without_a_traceback(tmp_path):
     out = tmp_path / "run"
-    # 40 trials: far more than can finish between the first result and the signal, even on a loaded machine
-    proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--cells", "2", "--trials", "10",
-                             "--duration", "3", "--jobs", "2", "--out", str(out)], cwd=REPO, stderr=subprocess.PIPE,
+    # 160 trials of 10 s (minutes of work): far more than can finish between the first result and the signal
+    proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--cells", "4", "--trials", "10",
+                             "--duration", "10", "--jobs", "2", "--out", str(out)], cwd=REPO, stderr=subprocess.PIPE,
                             stdout=subprocess.DEVNULL, text=True, start_new_session=True)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and len((out / "results.jsonl").read_text().splitlines()
@@ -328,6 +328,7 @@ def test_ctrl_c_on_a_parallel_run_says_how_to_continue_without_a_traceback(tmp_p
     _, stderr = proc.communicate(timeout=60)
     assert proc.returncode == 130 and "the same command continues the run" in stderr
     assert "Traceback" not in stderr, stderr
+    assert 1 <= len((out / "results.jsonl").read_text().splitlines()) - 1 < 160   # stopped mid-run, trials kept
 
 
 @pytest.mark.parametrize("args, needle", [
