@@ -126,7 +126,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     session = RigSession(args.port, Setup(configure, gains, target=targets_along(args, 0.0)), report=report)
     try:
         session.open()
-        log.write("identify", {k: int(v) for k, v in vars(session.identity).items()})
+        log.write("identify", {k: v if isinstance(v, float) else int(v) for k, v in vars(session.identity).items()})
         signal.signal(signal.SIGINT, on_sigint)
         session.start()
         t0 = wall0 = None
@@ -211,6 +211,8 @@ def _connect(args: argparse.Namespace, parser: argparse.ArgumentParser):
     link, identity = connect(args.port)
     print(f"{args.port}: protocol {identity.protocol_version}, firmware {identity.firmware_major}."
           f"{identity.firmware_minor}.{identity.firmware_patch}, clock {m.Clock(identity.clock).name.lower()}")
+    for text in link.rig_differences:
+        print(f"warning: {text}", file=sys.stderr)
     return link
 
 

@@ -2,10 +2,12 @@
 from __future__ import annotations
 
 import collections
+import math
 import time
 from typing import Callable
 
 from mantaray.protocol import messages as m
+from mantaray.protocol import rig
 from mantaray.protocol.codec import Message
 from mantaray.protocol.framing import Frame, FrameDecoder, FrameError, encode_frame
 
@@ -17,7 +19,24 @@ class LinkError(RuntimeError):
 
 
 class IncompatibleFirmware(LinkError):
-    """identify showed a protocol version or schema hash other than this host's."""
+    """identify showed a protocol version or schema hash other than this host's, or another rig's actuators."""
+
+
+# The rig constants that the host's commands depend on (their bounds, the tilt limit): a board built with others
+# is refused at identify. The other reported constants only warn (Link.rig_differences).
+BINDING_CONSTANTS = ("actuator_count", "actuator_range")
+
+
+def rig_differences(reply: m.IdentifyReply) -> dict[str, str]:
+    """identify_reply field -> what differs, for each rig constant the firmware reports that this host's
+    protocol/rig.toml states otherwise (floats compared at the wire's f32 precision)."""
+    out = {}
+    for name, expected in rig.REPORTED.items():
+        got = getattr(reply, name)
+        if not math.isclose(got, expected, rel_tol=1e-6):
+            unit = f" {rig.REPORTED_UNITS[name]}" if rig.REPORTED_UNITS[name] else ""
+            out[name] = f"{name} is {got:g}{unit} on the board, {expected:g}{unit} in this host's protocol/rig.toml"
+    return out
 
 
 class CommandRefused(LinkError):
@@ -58,6 +77,7 @@ class Link:
         self.last_rx_seq: int | None = None
         self.lost_frames = 0  # firmware frames missing from the firmware's sequence
         self.stale_frames = 0  # firmware frames that came twice or after a newer one (a duplicating or reordering link)
+        self.rig_differences: list[str] = []   # rig constants the firmware reported otherwise (identify)
         self.resets = 0  # boot messages seen
         self._pending: collections.deque[Message] = collections.deque()
 
@@ -156,6 +176,13 @@ class Link:
                 f"firmware speaks protocol {reply.protocol_version} (schema 0x{reply.schema_hash:08X}); this host "
                 f"speaks {m.PROTOCOL_VERSION} (schema 0x{m.SCHEMA_HASH:08X}): flash the firmware built from "
                 f"this checkout, or use the host that matches the firmware")
+        differences = rig_differences(reply)
+        binding = [text for name, text in differences.items() if name in BINDING_CONSTANTS]
+        if binding:
+            raise IncompatibleFirmware(
+                f"the firmware was built for another rig ({'; '.join(binding)}): describe your rig in "
+                f"protocol/rig.toml, run python3 protocol/generate.py, and flash the firmware built from it")
+        self.rig_differences = list(differences.values())
         return reply
 
     def close(self) -> None:

@@ -155,9 +155,13 @@ class RigSession:
         return self
 
     def _connect(self, timeout_s: float) -> None:
+        first = self.identity is None
         self.link, self.identity = connect(self.port, reset_wait_s=self.reset_wait_s, timeout_s=timeout_s,
                                            ack_timeout_s=self.ack_timeout_s, open_transport=self._open_transport)
         self._resets_seen = self.link.resets
+        if first:
+            for text in self.link.rig_differences:
+                self.report(f"warning: {text}")
 
     def _apply(self) -> None:
         if self.estopped:            # latched across resets and replugs: nothing is powered until stop() clears it

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import ctypes
+import functools
 import time
 from typing import Protocol
 
@@ -42,27 +43,47 @@ class SerialTransport:
 class InProcessTransport:
     """The native firmware core loaded as a library: the same firmware as the virtual MCU, with no pty.
 
-    One per process (the core's HAL state is global, as a board's hardware is).
+    Each is one virtual MCU of its own (the core holds no global state), so any number run side by side in one
+    process; close() frees it.
     """
 
     def __init__(self, simulated_clock: bool = True) -> None:
-        self._lib = ctypes.CDLL(str(native_artifact("libmantaray_capi.so")))
-        self._lib.mr_vmcu_write.argtypes = [ctypes.c_char_p, ctypes.c_size_t]
-        self._lib.mr_vmcu_read.argtypes = [ctypes.c_char_p, ctypes.c_size_t]
-        self._lib.mr_vmcu_read.restype = ctypes.c_size_t
-        self._lib.mr_vmcu_boot(1 if simulated_clock else 0)
+        self._lib = _capi()
+        self.simulated_clock = simulated_clock
+        self._handle = self._lib.mr_vmcu_new(1 if simulated_clock else 0)
         self._buf = ctypes.create_string_buffer(4096)
 
+    def power_cycle(self) -> None:
+        """The board restarts as if its power went off and on (idle, defaults, a boot message), on the same clock."""
+        self._lib.mr_vmcu_free(self._handle)
+        self._handle = self._lib.mr_vmcu_new(1 if self.simulated_clock else 0)
+
     def write(self, data: bytes) -> None:
-        self._lib.mr_vmcu_write(data, len(data))
+        self._lib.mr_vmcu_write(self._handle, data, len(data))
 
     def read(self, timeout_s: float) -> bytes:
-        n = self._lib.mr_vmcu_read(self._buf, len(self._buf))
+        n = self._lib.mr_vmcu_read(self._handle, self._buf, len(self._buf))
         if n == 0 and timeout_s > 0:
             time.sleep(min(timeout_s, 0.001))  # a wall-clock core may owe periodic telemetry later
-            self._lib.mr_vmcu_write(b"", 0)
-            n = self._lib.mr_vmcu_read(self._buf, len(self._buf))
+            self._lib.mr_vmcu_write(self._handle, b"", 0)
+            n = self._lib.mr_vmcu_read(self._handle, self._buf, len(self._buf))
         return self._buf.raw[:n]
 
     def close(self) -> None:
-        pass
+        """The host's end closes; the board stays (as a board does when its port closes: a reconnect finds it)."""
+
+    def __del__(self) -> None:
+        if getattr(self, "_handle", None) is not None:
+            self._lib.mr_vmcu_free(self._handle)
+
+
+@functools.cache
+def _capi() -> ctypes.CDLL:
+    """The C library of the virtual MCU, its signatures declared (loaded once per process)."""
+    lib = ctypes.CDLL(str(native_artifact("libmantaray_capi.so")))
+    lib.mr_vmcu_new.argtypes, lib.mr_vmcu_new.restype = [ctypes.c_int], ctypes.c_void_p
+    lib.mr_vmcu_free.argtypes, lib.mr_vmcu_free.restype = [ctypes.c_void_p], None
+    handle_bytes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_size_t]
+    lib.mr_vmcu_write.argtypes, lib.mr_vmcu_write.restype = handle_bytes, None
+    lib.mr_vmcu_read.argtypes, lib.mr_vmcu_read.restype = handle_bytes, ctypes.c_size_t
+    return lib

@@ -1,4 +1,5 @@
-"""Generate the C++ and Python protocol code from schema.toml (and the C++ test vectors from vectors.json).
+"""Generate the C++ and Python protocol code from schema.toml, the rig's constants from rig.toml (generate_rig.py)
+and the C++ test vectors from vectors.json.
 
 Usage:  python protocol/generate.py           write the generated files
         python protocol/generate.py --check   exit 1 if any generated file is stale (CI runs this)
@@ -13,6 +14,14 @@ import tomllib
 import zlib
 from pathlib import Path
 
+if __package__ in (None, ""):              # run as a script (CI, setup.sh), also from a copy of the tree
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    import generate_rig                                         # noqa: E402
+    from codegen import TYPES, camel, f32_literal               # noqa: E402
+else:
+    from . import generate_rig
+    from .codegen import TYPES, camel, f32_literal
+
 ROOT = Path(__file__).resolve().parent.parent
 SCHEMA = ROOT / "protocol" / "schema.toml"
 VECTORS = ROOT / "protocol" / "vectors.json"
@@ -23,14 +32,6 @@ SPEC_BEGIN = "<!-- BEGIN GENERATED REFERENCE: protocol/generate.py writes this p
 SPEC_END = "<!-- END GENERATED REFERENCE -->"
 CPP_VECTORS_OUT = ROOT / "firmware" / "tests" / "test_core" / "vectors_gen.h"
 
-# wire type -> (size [bytes], C++ type, struct format char)
-TYPES = {
-    "u8": (1, "uint8_t", "B"),
-    "u16": (2, "uint16_t", "H"),
-    "u32": (4, "uint32_t", "I"),
-    "i16": (2, "int16_t", "h"),
-    "f32": (4, "float", "f"),
-}
 HEADER = "Generated from protocol/schema.toml by protocol/generate.py; do not edit."
 
 
@@ -57,18 +58,6 @@ def schema_hash(schema: dict) -> int:
 
 def payload_size(msg: dict) -> int:
     return sum(TYPES[f["type"]][0] * f.get("count", 1) for f in msg["fields"])
-
-
-def camel(name: str) -> str:
-    return "".join(p.capitalize() for p in name.split("_"))
-
-
-def f32_literal(value: float) -> str:
-    if math.isnan(value):
-        return "(0.0f / 0.0f)"
-    if math.isinf(value):
-        return "(1.0f / 0.0f)" if value > 0 else "(-1.0f / 0.0f)"
-    return f"{float(value)!r}f"
 
 
 def enum_default(schema: dict, field: dict) -> int:
@@ -471,7 +460,7 @@ def render_cpp_vectors(schema: dict, vectors: list[dict]) -> str:
 def outputs() -> dict[Path, str]:
     schema = load_schema()
     files = {CPP_OUT: render_cpp(schema), PY_OUT: render_py(schema),
-             SPEC: splice_spec(SPEC.read_text(), render_md(schema))}
+             SPEC: splice_spec(SPEC.read_text(), render_md(schema)), **generate_rig.outputs(schema)}
     if VECTORS.exists():
         try:
             files[CPP_VECTORS_OUT] = render_cpp_vectors(schema, json.loads(VECTORS.read_text())["vectors"])
@@ -493,6 +482,9 @@ def main(argv: list[str] | None = None) -> int:
     stale = []
     try:
         files = outputs()
+    except generate_rig.RigDescriptionError as exc:
+        print(exc, file=sys.stderr)
+        return 1
     except StaleVectors as exc:
         if not args.check:
             schema = load_schema()

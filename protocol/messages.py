@@ -9,7 +9,7 @@ from typing import ClassVar
 from .codec import FieldSpec, Message
 
 PROTOCOL_VERSION = 1
-SCHEMA_HASH = 0x78100C22
+SCHEMA_HASH = 0x297D3AAB
 MAX_PACKET = 44  # [bytes] id + seq + payload + CRC
 MAX_WIRE = 46  # [bytes] COBS packet + delimiter
 NO_FIELD = 255
@@ -314,7 +314,7 @@ class IdentifyReply(Message):
     NAME: ClassVar[str] = 'identify_reply'
     DIRECTION: ClassVar[str] = 'mcu_to_host'
     REPLY: ClassVar[str | None] = None
-    SIZE: ClassVar[int] = 11  # [bytes] payload
+    SIZE: ClassVar[int] = 26  # [bytes] payload
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('protocol_version', 'H', 1, None, None, None, None, ''),
         FieldSpec('firmware_major', 'B', 1, None, None, None, None, ''),
@@ -323,6 +323,11 @@ class IdentifyReply(Message):
         FieldSpec('schema_hash', 'I', 1, None, None, None, None, ''),
         FieldSpec('max_wire', 'B', 1, None, None, None, None, 'bytes'),
         FieldSpec('clock', 'B', 1, None, Clock, None, None, ''),
+        FieldSpec('actuator_count', 'B', 1, None, None, None, None, ''),
+        FieldSpec('actuator_range', 'f', 1, None, None, None, None, 'm'),
+        FieldSpec('encoder_counts', 'H', 1, None, None, None, None, ''),
+        FieldSpec('pulley_circumference', 'f', 1, None, None, None, None, 'm/rev'),
+        FieldSpec('actuator_period', 'I', 1, None, None, None, None, 'us'),
     )
 
     protocol_version: int = 0  # [protocol] version of the firmware's schema.
@@ -332,6 +337,11 @@ class IdentifyReply(Message):
     schema_hash: int = 0  # CRC-32 of the canonical schema; the host refuses a mismatch.
     max_wire: int = 0  # [bytes] Largest frame the firmware accepts, delimiter included.
     clock: Clock = Clock.WALL  # Wall or simulated clock. (enum clock)
+    actuator_count: int = 0  # Actuators the firmware drives (protocol/rig.toml, as every field below).
+    actuator_range: float = 0.0  # [m] Travel of each actuator about z0 the firmware was built for.
+    encoder_counts: int = 0  # Counts per encoder revolution the firmware was built for.
+    pulley_circumference: float = 0.0  # [m/rev] Belt travel per motor revolution the firmware was built for.
+    actuator_period: int = 0  # [us] Period of the firmware's actuator position loops.
 
 
 @dataclass(frozen=True)

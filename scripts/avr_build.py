@@ -47,7 +47,7 @@ UNSUPPORTED_OPTIONS = ("extends", "build_src_filter", "build_src_flags", "lib_de
                        "board_build.f_cpu")
 MEASURE_FLAGS = ["-gdwarf-4"]  # debug info only (no code change): lets the line table attribute code to files
 CORE_NAMESPACE = "mr::"  # the portable core's data symbols ...
-BOARD_NAMESPACE = "mr::hal::"  # ... except the HAL, which the board implements
+BOARD_NAMESPACE = "mr::board::"  # ... except the board layer's (its HAL, pins and actuator bank)
 
 
 @dataclass(frozen=True)

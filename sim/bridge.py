@@ -190,6 +190,9 @@ class Bridge:
         if lockstep:
             link.ack_timeout_s = max(link.ack_timeout_s, LOCKSTEP_ACK_TIMEOUT_S)
         identity = link.identify()
+        if not math.isclose(identity.actuator_range, rig.actuators.range_m, rel_tol=1e-6):
+            raise LinkError(f"the firmware was built for actuators of +-{identity.actuator_range:g} m, the simulated "
+                            f"rig's travel +-{rig.actuators.range_m:g} m: the commands would not mean the same")
         simulated = identity.clock == m.Clock.SIMULATED
         if lockstep and not simulated:
             raise LinkError("lock-step needs a firmware on the simulated clock (mantaray-vmcu --clock sim); "

@@ -398,8 +398,8 @@ def unplaceable_record(trial: Trial, why: str) -> dict:
 class TrialRunner:
     """Runs trials in this process: the firmware core in-process (no pty) and the MuJoCo model of the trial's rig.
 
-    The core is one per process, so the runner keeps one link; it loads a model when a trial's rig differs from
-    the last one's (the two controllers of one plant share it).
+    The runner keeps one link (the firmware runs on across trials, as a board does); it loads a model when a
+    trial's rig differs from the last one's (the two controllers of one plant share it).
     """
 
     def __init__(self, protocol: Experiment | None = None) -> None:

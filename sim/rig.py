@@ -1,13 +1,16 @@
 """The one description of the simulated rig: frame, actuators, fabric, contact, solver, camera, fall rule and object.
 
 Every physical quantity of the plant that the paper does not give is declared, with its range and source, in
-sim/plant.toml, and the defaults here are read from there (the polyester plant). What is left here is the paper's
-(frame, travel, motor), the numerics (mesh resolution, solver) and the renderer's camera.
+sim/plant.toml, and the defaults here are read from there (the polyester plant). The rig's own constants (frame,
+travel, motor) come from protocol/rig.toml (mantaray.protocol.rig); what is left here is the numerics (mesh
+resolution, solver) and the renderer's camera.
 """
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+
+from mantaray.protocol import rig as _rig
 
 from .objects import OBJECTS, ObjectSpec
 from .parameters import default as _d
@@ -16,8 +19,8 @@ from .parameters import default as _d
 @dataclass(frozen=True)
 class Frame:
     """The module: actuators at its corners (±size_x/2, ±size_y/2), fabric frame origin at its centre."""
-    size_x_m: float = 0.5        # [m] the paper's m (frame and actuator spacing along x)
-    size_y_m: float = 0.5        # [m] the paper's n
+    size_x_m: float = _rig.MODULE_SIZE_X_M   # [m] the paper's m (frame and actuator spacing along x)
+    size_y_m: float = _rig.MODULE_SIZE_Y_M   # [m] the paper's n
     z0_m: float = 1.5            # [m] reference height: corners at a_i = 0 (paper)
 
 
@@ -29,9 +32,11 @@ class Actuators:
     setpoint rate-limited to the actuator's top speed (`slewmax`): a position servo that reaches a
     new command no faster than the motor can drive the belt.
     """
-    range_m: float = 0.25                 # [m] travel each way from z0 (paper)
-    motor_speed_rpm: float = 120.0        # [rev/min] RS Pro 834-7590, 12 V, no-load (paper)
-    pulley_circumference_m: float = _d("actuators.pulley_circumference_m")   # [m/rev] belt per motor revolution
+    range_m: float = _rig.ACTUATOR_RANGE_M           # [m] travel each way from z0 (protocol/rig.toml)
+    motor_speed_rpm: float = _rig.MOTOR_SPEED_RPM    # [rev/min] at full drive (protocol/rig.toml)
+    # [m/rev] belt per motor revolution: the plant's, which sets the simulated carriage's top speed (a fitted value;
+    # the board's own is protocol/rig.toml's, which the bench-mode firmware never applies: it drives no motor)
+    pulley_circumference_m: float = _d("actuators.pulley_circumference_m")
     kp_n_per_m: float = _d("actuators.kp_n_per_m")               # [N/m] servo stiffness; the real loop is on the Uno
     damping_ratio: float = _d("actuators.damping_ratio")         # [-] servo damping as a fraction of critical
     carriage_mass_kg: float = _d("actuators.carriage_mass_kg")   # [kg] gravity-compensated

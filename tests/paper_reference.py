@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 Z0 = 1.5  # [m] reference height of the paper; it cancels out of a_i
-ACTUATOR_RANGE = 0.25  # [m] each actuator's travel about z0
+ACTUATOR_RANGE = 0.25  # [m] each actuator's travel about z0 (the paper; test_rig_description checks rig.toml's)
 ACTUATOR_SIGNS = np.array([(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)])  # (sign x_i, sign y_i)
 
 

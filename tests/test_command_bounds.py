@@ -14,9 +14,10 @@ from hypothesis import strategies as st
 from mantaray.host.link import CommandRefused, Link
 from mantaray.host.transport import InProcessTransport
 from mantaray.protocol import messages as m
+from mantaray.protocol import rig
 from mantaray.protocol.codec import FieldRefused
 
-RANGE = 0.25  # [m] actuator travel (rig_config.h kActuatorRange)
+RANGE = rig.ACTUATOR_RANGE_M  # [m] actuator travel (protocol/rig.toml)
 SLACK = 1e-9  # [m] decoding raw * 1e-5 in float64
 E = m.ErrorCode
 

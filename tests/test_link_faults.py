@@ -156,7 +156,7 @@ def test_an_emergency_stop_stays_latched_across_a_reset_until_the_user_clears_it
     events = []
     session, transport = _running_in_process_session(events)
     session.emergency_stop()
-    transport._lib.mr_vmcu_boot(0)                         # the board restarts: idle, powered, defaults
+    transport.power_cycle()                         # the board restarts: idle, powered, defaults
     session.position(m.ObjectPosition(frame=2, capture_time=84000, x=0.0, y=0.0))   # the session sees the reset
     t = session.position(m.ObjectPosition(frame=3, capture_time=168000, x=0.0, y=0.0))
     assert m.State(t.state) == m.State.ESTOP and any("latched again" in e for e in events)
@@ -189,7 +189,7 @@ def test_a_board_that_resets_on_its_own_gets_its_setup_back():
     """A reset without unplugging (watchdog, brown-out): the boot message mid-session triggers the restore."""
     events = []
     session, transport = _running_in_process_session(events)
-    transport._lib.mr_vmcu_boot(0)                          # the board restarts: idle, no target, boot message
+    transport.power_cycle()                          # the board restarts: idle, no target, boot message
     t = session.position(m.ObjectPosition(frame=2, capture_time=84000, x=0.0, y=0.0))
     assert t is not None and m.State(t.state) == m.State.IDLE  # what the reset left; the session notices ...
     t = session.position(m.ObjectPosition(frame=3, capture_time=168000, x=0.0, y=0.0))

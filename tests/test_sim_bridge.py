@@ -168,7 +168,7 @@ def test_a_firmware_reset_mid_trial_is_reported():
             nonlocal writes
             writes += 1
             if writes == 40:
-                transport._lib.mr_vmcu_boot(1)   # power cycle: the firmware boots afresh, idle, clock 0
+                transport.power_cycle()   # power cycle: the firmware boots afresh, idle, clock 0
             transport.write(data)
 
         def read(self, timeout_s: float) -> bytes:

@@ -1,24 +1,11 @@
-// HAL for the native virtual MCU: monotonic or simulated clock, queued serial output, ideal actuators.
+// The native board's clock and actuator power; the rest of NativeHal is inline in native_hal.h.
 #include "native_hal.h"
 
 #include <time.h>  // clock_gettime
 
-#include <deque>  // output queue
-
-#include "hal.h"              // the interface implemented here
-#include "ideal_actuators.h"  // IdealActuators, SimulatedClock
-
 namespace mr {
 
 namespace {
-
-proto::Clock g_clock = proto::Clock::kWall;
-uint64_t g_wall_origin_ns = 0;
-SimulatedClock g_sim_clock;
-std::deque<uint8_t> g_tx;
-IdealActuators g_actuators;
-uint16_t g_injected_faults = 0;
-bool g_power = true;
 
 uint64_t monotonic_ns() {
   timespec ts;
@@ -28,63 +15,31 @@ uint64_t monotonic_ns() {
 
 }  // namespace
 
-namespace native {
+NativeHal::NativeHal(proto::Clock kind) : clock_(kind), wall_origin_ns_(monotonic_ns()) {}
 
-void reset(proto::Clock kind) {
-  g_clock = kind;
-  g_wall_origin_ns = monotonic_ns();
-  g_sim_clock = SimulatedClock();
-  g_tx.clear();
-  g_actuators = IdealActuators();
-  g_injected_faults = 0;
-  g_power = true;
-}
-
-size_t take_tx(uint8_t* out, size_t cap) {
+size_t NativeHal::take_tx(uint8_t* out, size_t cap) {
   size_t n = 0;
-  while (n < cap && !g_tx.empty()) {
-    out[n++] = g_tx.front();
-    g_tx.pop_front();
+  while (n < cap && !tx_.empty()) {
+    out[n++] = tx_.front();
+    tx_.pop_front();
   }
   return n;
 }
 
-size_t tx_pending() { return g_tx.size(); }
-
-void inject_actuator_faults(uint16_t faults) { g_injected_faults |= faults; }
-
-}  // namespace native
-
-namespace hal {
-
-uint32_t now_us() {
-  if (g_clock == proto::Clock::kSimulated) return g_sim_clock.now_us();
-  return static_cast<uint32_t>((monotonic_ns() - g_wall_origin_ns) / 1000u);
+uint32_t NativeHal::now_us() const {
+  if (clock_ == proto::Clock::kSimulated) return sim_clock_.now_us();
+  return static_cast<uint32_t>((monotonic_ns() - wall_origin_ns_) / 1000u);
 }
 
-void serial_write(const uint8_t* data, uint8_t len) { g_tx.insert(g_tx.end(), data, data + len); }
-
-void actuators_command(const float (&command)[kActuatorCount]) { g_actuators.command(command); }
-
-void actuators_measured(float (&measured)[kActuatorCount]) { g_actuators.measured(measured); }
-
-void actuators_power(bool on) {
-  if (on && !g_power) g_injected_faults = 0;  // as a board's bank clears its latched faults
-  g_power = on;
-  g_actuators.power(on);
+void NativeHal::actuators_power(bool on) {
+  if (on && !power_) injected_faults_ = 0;  // as a board's bank clears its latched faults
+  power_ = on;
+  actuators_.power(on);
 }
 
-void actuators_zero(uint8_t mask) { g_actuators.zero(mask); }
-
-uint16_t actuator_faults() { return g_injected_faults; }
-uint32_t actuator_overruns() { return 0; }  // ideal actuators have no loop to run late
-
-proto::Clock clock_kind() { return g_clock; }
-
-proto::ErrorCode sim_clock_set(uint32_t t_us) {
-  if (g_clock != proto::Clock::kSimulated) return proto::ErrorCode::kUnsupported;
-  return g_sim_clock.set(t_us);
+proto::ErrorCode NativeHal::sim_clock_set(uint32_t t_us) {
+  if (clock_ != proto::Clock::kSimulated) return proto::ErrorCode::kUnsupported;
+  return sim_clock_.set(t_us);
 }
 
-}  // namespace hal
 }  // namespace mr

@@ -14,7 +14,7 @@
 #include <unistd.h>
 
 #include "firmware.h"    // Firmware
-#include "native_hal.h"  // native::reset, take_tx
+#include "native_hal.h"  // NativeHal
 
 namespace {
 
@@ -129,15 +129,15 @@ int main(int argc, char** argv) {
   signal(SIGTERM, on_signal);
   signal(SIGPIPE, SIG_IGN);
 
-  mr::native::reset(clock);
-  mr::Firmware firmware;
+  mr::NativeHal hal(clock);
+  mr::Firmware firmware(hal);
   firmware.boot(mr::proto::ResetCause::kPowerOn);
 
   int status = 0;
   uint8_t buf[256];
   while (!g_stop) {
     size_t n;
-    while ((n = mr::native::take_tx(buf, sizeof buf)) > 0) {
+    while ((n = hal.take_tx(buf, sizeof buf)) > 0) {
       if (!write_all(fd, buf, n)) {
         fprintf(stderr, "error: write to the serial device failed: %s\n", strerror(errno));
         status = 1;

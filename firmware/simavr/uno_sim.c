@@ -2,20 +2,20 @@
 //
 // Usage: mantaray-simavr FIRMWARE.elf [--bench] [--realtime] [--paint-from ADDR] [--stats FILE] [--run-for S]
 // Prints "pty PATH" on stdout once the serial port exists; the host talks to the firmware there.
-//   --bench       hold the bench pin (D2) low: external actuators and a simulated clock (board_config.h);
-//                 without it D2 is held high, as the board's pull-up leaves it on the rig
+//   --bench       hold the bench pin low: external actuators and a simulated clock (protocol/rig.toml);
+//                 without it the pin is held high, as the board's pull-up leaves it on the rig
 //   --realtime    never let simulated time run ahead of the wall clock (simavr is faster than the Uno):
 //                 a wall-clock firmware then keeps the host's time, as a board does
 //   --paint-from  fill RAM from ADDR (the ELF's _end) up to RAMEND with 0xC5 before the firmware starts,
 //                 so the untouched bytes above the data show the stack's high-water mark
 //   --stats FILE  on exit (SIGTERM, SIGINT, or --run-for elapsed), write the probe statistics as JSON
 //   --run-for S   stop after S seconds of simulated time
-// The probes are the firmware's timing pins (board_config.h): D13 high while a received byte is handled
-// (the byte that completes an object_position frame runs the controller), D10 high while the four actuator
-// loops run, D11 toggled once per main-loop pass.
-// On the rig side (no --bench) the harness also plays the hardware of board_config.h: a TCA9548A at 0x70
-// with an AS5600 (0x36, ANGLE register 0x0E) on channels 0..3, and four geared motors whose shafts turn
-// at 2 rev/s times the PWM duty of pins 3, 5, 6, 9 in the direction of pins 4, 7, 8, 12 (HIGH: +).
+// The probes are the firmware's timing pins (protocol/rig.toml, rig_gen.h): the controller probe high while a
+// received byte is handled (the byte that completes an object_position frame runs the controller), the actuator
+// probe high while the four actuator loops run, the loop probe toggled once per main-loop pass.
+// On the rig side (no --bench) the harness also plays the board's hardware (rig_gen.h): a TCA9548A multiplexer
+// with an AS5600 encoder on each actuator's channel, and four geared motors whose shafts turn at the motor speed
+// times the PWM duty of the PWM pins, in the direction of the direction pins (HIGH: +).
 #include <errno.h>
 #include <math.h>
 #include <signal.h>
@@ -33,6 +33,8 @@
 #include "sim_elf.h"
 #include "uart_pty.h"
 
+#include "rig_gen.h"  // MUX_ADDRESS, kPwmPin, kDirPin, kBenchPin, ... (protocol/rig.toml)
+
 #define PAINT 0xC5            // stack paint byte
 #define RAMEND_328P 0x08FF    // last RAM address of the ATmega328P
 
@@ -45,14 +47,8 @@ typedef struct {
 } probe_t;
 
 // ---------------------------------------------------------------- the rig's hardware, modelled
-#define MUX_ADDRESS 0x70
-#define ENCODER_ADDRESS 0x36
-#define ANGLE_REGISTER 0x0E
-#define MOTOR_REV_PER_S 2.0   // [rev/s] 120 rev/min at full drive
+// Its addresses, pins and motor speed are the board's: rig_gen.h is written from protocol/rig.toml.
 #define MOTOR_STEP_US 500     // [us] motor model update period
-// ATmega328P data-space addresses of the registers the model reads.
-enum { PORTB_ = 0x25, PORTD_ = 0x2B, TCCR0A_ = 0x44, OCR0A_ = 0x47, OCR0B_ = 0x48, TCCR1A_ = 0x80,
-       OCR1AL_ = 0x88, TCCR2A_ = 0xB0, OCR2B_ = 0xB4 };
 
 typedef struct {
   avr_irq_t* irq;          // [0] from the master (TWI_IRQ_OUTPUT), [1] to it (TWI_IRQ_INPUT)
@@ -78,7 +74,7 @@ static int encoder_channel(void) {  // the one channel 0..3 connected, or -1
 
 static uint16_t encoder_angle(int channel) {
   double turns = g_rig.angle_rev[channel] - floor(g_rig.angle_rev[channel]);
-  return (uint16_t)(turns * 4096.0) & 0x0FFF;
+  return (uint16_t)(turns * ENCODER_COUNTS) & (ENCODER_COUNTS - 1);
 }
 
 static void answer(uint8_t msg, uint8_t addr, uint8_t data) {
@@ -122,21 +118,16 @@ static void on_twi(struct avr_irq_t* irq, uint32_t value, void* param) {
 }
 
 // Duty 0..1 of a PWM pin: its compare register while the timer drives the pin, else the pin's level.
-static double duty(avr_t* avr, int tccr, uint8_t com_bit, int ocr, int port, uint8_t port_bit) {
-  if (avr->data[tccr] & com_bit) return avr->data[ocr] / 255.0;
-  return (avr->data[port] & port_bit) ? 1.0 : 0.0;
+static double duty(avr_t* avr, const pwm_pin_t* p) {
+  if (avr->data[p->tccr] & p->com_bit) return avr->data[p->ocr] / (double)PWM_MAX;
+  return (avr->data[p->pin.data] & (1u << p->pin.bit)) ? 1.0 : 0.0;
 }
 
 static avr_cycle_count_t step_motors(avr_t* avr, avr_cycle_count_t when, void* param) {
   (void)param;
-  const double d[4] = {duty(avr, TCCR2A_, 1u << 5, OCR2B_, PORTD_, 1u << 3),   // pin 3: OC2B
-                       duty(avr, TCCR0A_, 1u << 5, OCR0B_, PORTD_, 1u << 5),   // pin 5: OC0B
-                       duty(avr, TCCR0A_, 1u << 7, OCR0A_, PORTD_, 1u << 6),   // pin 6: OC0A
-                       duty(avr, TCCR1A_, 1u << 7, OCR1AL_, PORTB_, 1u << 1)};  // pin 9: OC1A
-  const int dir[4] = {avr->data[PORTD_] & (1u << 4), avr->data[PORTD_] & (1u << 7),   // pins 4, 7
-                      avr->data[PORTB_] & (1u << 0), avr->data[PORTB_] & (1u << 4)};  // pins 8, 12
-  for (int i = 0; i < 4; ++i) {
-    g_rig.angle_rev[i] += (dir[i] ? 1.0 : -1.0) * d[i] * MOTOR_REV_PER_S * MOTOR_STEP_US * 1e-6;
+  for (int i = 0; i < ACTUATOR_COUNT; ++i) {
+    const int high = avr->data[kDirPin[i].data] & (1u << kDirPin[i].bit);
+    g_rig.angle_rev[i] += (high ? 1.0 : -1.0) * duty(avr, &kPwmPin[i]) * MOTOR_REV_PER_S * MOTOR_STEP_US * 1e-6;
   }
   return when + avr_usec_to_cycles(avr, MOTOR_STEP_US);
 }
@@ -192,8 +183,8 @@ static void on_toggle(struct avr_irq_t* irq, uint32_t value, void* param) {
   p->since = g_avr->cycle;
 }
 
-static void watch(char port, int bit, avr_irq_notify_t hook, probe_t* probe) {
-  avr_irq_register_notify(avr_io_getirq(g_avr, AVR_IOCTL_IOPORT_GETIRQ(port), bit), hook, probe);
+static void watch(pin_t pin, avr_irq_notify_t hook, probe_t* probe) {
+  avr_irq_register_notify(avr_io_getirq(g_avr, AVR_IOCTL_IOPORT_GETIRQ(pin.port), pin.bit), hook, probe);
 }
 
 static void write_probe(FILE* f, const probe_t* p, const char* tail) {
@@ -254,12 +245,13 @@ int main(int argc, char** argv) {
 
   // The bench pin, held by a jumper (low) or left to the pull-up (high): an external level that the
   // firmware's own pin settings do not override.
-  avr_ioport_external_t bench_pin = {.name = 'D', .mask = 1u << 2, .value = bench ? 0u : 1u << 2};
-  avr_ioctl(g_avr, AVR_IOCTL_IOPORT_SET_EXTERNAL('D'), &bench_pin);
+  const uint8_t bench_mask = 1u << kBenchPin.bit;
+  avr_ioport_external_t bench_pin = {.name = kBenchPin.port, .mask = bench_mask, .value = bench ? 0u : bench_mask};
+  avr_ioctl(g_avr, AVR_IOCTL_IOPORT_SET_EXTERNAL(kBenchPin.port), &bench_pin);
   if (!bench) rig_attach(g_avr);
-  watch('B', 5, on_pulse, &g_frame);      // D13
-  watch('B', 2, on_pulse, &g_actuators);  // D10
-  watch('B', 3, on_toggle, &g_pass);      // D11
+  watch(kProbeControllerPin, on_pulse, &g_frame);
+  watch(kProbeActuatorPin, on_pulse, &g_actuators);
+  watch(kProbeLoopPin, on_toggle, &g_pass);
 
   uart_pty_t pty;
   uart_pty_init(g_avr, &pty);

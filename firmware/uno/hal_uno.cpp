@@ -3,25 +3,70 @@
 
 #include "actuators.h"     // ActuatorBank
 #include "board.h"         // this board's entry points (setup and loop)
-#include "board_config.h"  // kActuator, kLoopPeriodUs, kBenchPin
+#include "board_config.h"  // kActuator, kBenchPin (board_gen.h), kActuatorPeriodUs (rig_gen.h)
 #include "hal.h"           // the interface implemented here
 #include "ideal_actuators.h"  // IdealActuators, SimulatedClock: bench mode
 #include "uno_io.h"        // UnoActuatorIo
 
 namespace mr {
+namespace board {
 
 namespace {
 
 board::UnoActuatorIo g_io;
 board::Probe g_probe_actuators;   // high while the four loops run
-ActuatorBank g_bank(g_io, board::kActuator, board::kLoopPeriodUs);
+ActuatorBank g_bank(g_io, board::kActuator, kActuatorPeriodUs);
 bool g_bench = false;        // bench mode: external actuators (setpoints reported back), simulated clock
 IdealActuators g_external;   // bench mode's actuators
 SimulatedClock g_sim_clock;  // bench mode's clock
 
-}  // namespace
+// The one HAL of this board: micros() or the bench mode's simulated clock, Serial, the actuator bank.
+class UnoHal final : public Hal {
+ public:
+  // micros() has a 4 us resolution at 16 MHz and wraps like the HAL's clock (2^32 us).
+  uint32_t now_us() const override { return g_bench ? g_sim_clock.now_us() : micros(); }
 
-namespace board {
+  // A frame goes out only if the whole of it fits in the serial TX buffer (SERIAL_TX_BUFFER_SIZE bytes);
+  // otherwise it is dropped, never waited for: a blocking write would stall the control loop.
+  void serial_write(const uint8_t* data, uint8_t len) override {
+    if (Serial.availableForWrite() < len) return;
+    Serial.write(data, len);
+  }
+
+  void actuators_command(const float (&command)[kActuatorCount]) override {
+    if (g_bench) return g_external.command(command);
+    g_bank.set_setpoints(command);
+  }
+
+  void actuators_measured(float (&measured)[kActuatorCount]) const override {
+    if (g_bench) return g_external.measured(measured);
+    g_bank.measured(measured);
+  }
+
+  void actuators_power(bool on) override {
+    if (g_bench) return g_external.power(on);
+    g_bank.power(on);
+  }
+
+  void actuators_zero(uint8_t mask) override {
+    if (g_bench) return g_external.zero(mask);
+    g_bank.zero(mask);
+  }
+
+  uint16_t actuator_faults() const override { return g_bench ? 0 : g_bank.faults(); }
+  uint32_t actuator_overruns() const override { return g_bank.overruns(); }
+
+  proto::Clock clock_kind() const override { return g_bench ? proto::Clock::kSimulated : proto::Clock::kWall; }
+
+  proto::ErrorCode sim_clock_set(uint32_t t_us) override {
+    if (!g_bench) return proto::ErrorCode::kUnsupported;
+    return g_sim_clock.set(t_us);
+  }
+};
+
+UnoHal g_hal;
+
+}  // namespace
 
 bool begin() {
   pinMode(kBenchPin, INPUT_PULLUP);
@@ -42,49 +87,7 @@ void actuators_tick() {
   g_probe_actuators.low();
 }
 
+Hal& hal() { return g_hal; }
+
 }  // namespace board
-
-namespace hal {
-
-// micros() has a 4 us resolution at 16 MHz and wraps like the HAL's clock (2^32 us).
-uint32_t now_us() { return g_bench ? g_sim_clock.now_us() : micros(); }
-
-// A frame goes out only if the whole of it fits in the serial TX buffer (SERIAL_TX_BUFFER_SIZE bytes);
-// otherwise it is dropped, never waited for: a blocking write would stall the control loop.
-void serial_write(const uint8_t* data, uint8_t len) {
-  if (Serial.availableForWrite() < len) return;
-  Serial.write(data, len);
-}
-
-void actuators_command(const float (&command)[kActuatorCount]) {
-  if (g_bench) return g_external.command(command);
-  g_bank.set_setpoints(command);
-}
-
-void actuators_measured(float (&measured)[kActuatorCount]) {
-  if (g_bench) return g_external.measured(measured);
-  g_bank.measured(measured);
-}
-
-void actuators_power(bool on) {
-  if (g_bench) return g_external.power(on);
-  g_bank.power(on);
-}
-
-void actuators_zero(uint8_t mask) {
-  if (g_bench) return g_external.zero(mask);
-  g_bank.zero(mask);
-}
-
-uint16_t actuator_faults() { return g_bench ? 0 : g_bank.faults(); }
-uint32_t actuator_overruns() { return g_bank.overruns(); }
-
-proto::Clock clock_kind() { return g_bench ? proto::Clock::kSimulated : proto::Clock::kWall; }
-
-proto::ErrorCode sim_clock_set(uint32_t t_us) {
-  if (!g_bench) return proto::ErrorCode::kUnsupported;
-  return g_sim_clock.set(t_us);
-}
-
-}  // namespace hal
 }  // namespace mr

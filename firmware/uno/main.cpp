@@ -11,7 +11,7 @@
 #include <avr/io.h>         // MCUSR, WDTCSR
 #include <avr/wdt.h>        // wdt_reset, wdt_disable
 
-#include "board.h"         // board::begin, board::actuators_tick
+#include "board.h"         // board::hal, board::begin, board::actuators_tick
 #include "board_config.h"  // probe pins
 #include "firmware.h"      // mr::Firmware
 #include "protocol_gen.h"  // mr::proto::ResetCause
@@ -19,7 +19,7 @@
 
 namespace {
 
-mr::Firmware g_firmware;
+mr::Firmware g_firmware(mr::board::hal());
 
 // MCUSR as the reset left it, saved before anything else runs (a watchdog reset leaves the watchdog
 // running with its shortest timeout, so it is stopped here too, before the C runtime's start-up).

@@ -8,6 +8,7 @@ from typing import Iterable
 
 from mantaray.host.link import CommandRefused, Link
 from mantaray.protocol import messages as m
+from mantaray.protocol import rig
 from mantaray.protocol.codec import Message
 from mantaray.protocol.framing import FrameDecoder, cobs_encode, crc16, encode_frame
 
@@ -22,7 +23,7 @@ POSITION_FIELD = {spec.name: i for i, spec in enumerate(m.ObjectPosition.FIELDS)
 
 TILT_TOL = 0.006  # [deg] tilt telemetry is an integer of 0.01 deg
 COMMAND_TOL = 1e-5  # [m] command telemetry is an integer of 1e-5 m
-ACTUATOR_RANGE = 0.25  # [m] jog bound and actuator travel (the schema's tilt_limit doc)
+ACTUATOR_RANGE = rig.ACTUATOR_RANGE_M  # [m] jog bound and actuator travel (protocol/rig.toml)
 
 STATES = ("idle", "running", "reached", "fault", "estop")
 

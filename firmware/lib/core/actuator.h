@@ -6,9 +6,9 @@
 
 #include <stdint.h>  // uint16_t, int32_t
 
-namespace mr {
+#include "rig_gen.h"  // kEncoderCounts (protocol/rig.toml)
 
-constexpr uint16_t kEncoderCounts = 4096;  // counts per revolution of the 12-bit magnetic encoder (AS5600)
+namespace mr {
 
 // A 12-bit angle that wraps every revolution, as a count that does not. Correct while the shaft turns
 // less than half a revolution between readings (at the 250 Hz loop rate: 7.5 rev/s; the motor tops out

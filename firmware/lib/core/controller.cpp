@@ -42,7 +42,7 @@ float TiltController::step(const ControllerConfig& config, float target_x, float
   }
   plane_commands(normal, config.module_x, config.module_y, out.command);
   for (float& a : out.command) {
-    a = clamp_symmetric(a + config.noise_amplitude * noise_.uniform_pm1(), kActuatorRange);
+    a = clamp_symmetric(a + config.noise_amplitude * noise_.uniform_pm1(), kActuatorRangeM);
   }
   prev_x_ = x;
   prev_y_ = y;

@@ -23,7 +23,7 @@ struct ControllerConfig {
 struct ControllerOutput {
   float tilt_zx;                   // [deg] Euclidean: theta resolved along x
   float tilt_zy;                   // [deg] Euclidean: theta resolved along y
-  float command[kActuatorCount];   // [m] a_i, + lowers the corner, within +-kActuatorRange
+  float command[kActuatorCount];   // [m] a_i, + lowers the corner, within +-kActuatorRangeM
 };
 
 class TiltController {

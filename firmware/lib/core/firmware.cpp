@@ -1,7 +1,6 @@
 // Frame dispatch, replies, duplicate suppression and telemetry.
 #include "firmware.h"
 
-#include "hal.h"         // now_us, serial_write, actuators_*, sim_clock_set
 #include "rig_config.h"  // firmware version
 
 namespace mr {
@@ -34,7 +33,7 @@ void Firmware::boot(proto::ResetCause cause) {
   uint8_t payload[proto::Boot::kSize];
   proto::encode(msg, payload);
   send(proto::Boot::kId, payload, sizeof payload);
-  last_telemetry_us_ = clock_us_ = hal::now_us();
+  last_telemetry_us_ = clock_us_ = hal_.now_us();
   clock_ms_ = clock_us_ / 1000u;
   clock_rest_us_ = static_cast<uint16_t>(clock_us_ % 1000u);
 }
@@ -52,10 +51,10 @@ void Firmware::rx_byte(uint8_t byte) {
 }
 
 void Firmware::poll() {
-  const uint32_t now = hal::now_us();
+  const uint32_t now = hal_.now_us();
   millis(now);
   supervisor_.tick(now);
-  const uint16_t actuator_faults = hal::actuator_faults();
+  const uint16_t actuator_faults = hal_.actuator_faults();
   if (actuator_faults & ~supervisor_.faults()) supervisor_.shutdown(actuator_faults);
   apply_outputs();
   const uint32_t period_us = static_cast<uint32_t>(supervisor_.config().telemetry_period) * 1000u;
@@ -63,8 +62,8 @@ void Firmware::poll() {
 }
 
 void Firmware::apply_outputs() {
-  hal::actuators_power(supervisor_.actuator_power());
-  hal::actuators_command(supervisor_.output().command);
+  hal_.actuators_power(supervisor_.actuator_power());
+  hal_.actuators_command(supervisor_.output().command);
 }
 
 void Firmware::dispatch() {
@@ -80,7 +79,7 @@ void Firmware::dispatch() {
     return send_identify_reply();
   }
   if (id == proto::ObjectPosition::kId) {
-    const uint32_t now = hal::now_us();
+    const uint32_t now = hal_.now_us();
     uint8_t field = proto::kNoField;
     const ErrorCode code = supervisor_.position(decoded<proto::ObjectPosition>(decoder_.payload()), now, field);
     apply_outputs();
@@ -112,7 +111,7 @@ ErrorCode Firmware::handle_command(uint8_t& field) {
     case proto::SetTarget::kId:
       return supervisor_.set_target(decoded<proto::SetTarget>(payload), field);
     case proto::Start::kId:
-      return supervisor_.start(hal::now_us());
+      return supervisor_.start(hal_.now_us());
     case proto::Stop::kId:
       supervisor_.stop();
       return ErrorCode::kOk;
@@ -124,11 +123,11 @@ ErrorCode Firmware::handle_command(uint8_t& field) {
     case proto::Zero::kId: {
       const proto::Zero msg = decoded<proto::Zero>(payload);
       const ErrorCode code = supervisor_.zero(msg, field);
-      if (code == ErrorCode::kOk) hal::actuators_zero(msg.actuators);
+      if (code == ErrorCode::kOk) hal_.actuators_zero(msg.actuators);
       return code;
     }
     case proto::SimClock::kId: {
-      const ErrorCode code = hal::sim_clock_set(decoded<proto::SimClock>(payload).now);
+      const ErrorCode code = hal_.sim_clock_set(decoded<proto::SimClock>(payload).now);
       if (code == ErrorCode::kOk) poll();  // what is due at the new time happens before the ack
       if (code == ErrorCode::kOutOfRange) field = 0;  // the one field, now, went backwards
       return code;
@@ -141,7 +140,7 @@ ErrorCode Firmware::handle_command(uint8_t& field) {
 void Firmware::send(uint8_t id, const uint8_t* payload, uint8_t len) {
   uint8_t wire[proto::kMaxWire];
   const uint8_t n = frame_encode(id, tx_seq_++, payload, len, wire);
-  hal::serial_write(wire, n);
+  hal_.serial_write(wire, n);
 }
 
 void Firmware::send_reply(uint8_t ref_id, uint8_t ref_seq, ErrorCode code, uint8_t field) {
@@ -158,9 +157,12 @@ void Firmware::send_reply(uint8_t ref_id, uint8_t ref_seq, ErrorCode code, uint8
 }
 
 void Firmware::send_identify_reply() {
-  const proto::IdentifyReply reply{proto::kProtocolVersion, kFirmwareMajor,  kFirmwareMinor,
-                                   kFirmwarePatch,          proto::kSchemaHash, proto::kMaxWire,
-                                   static_cast<uint8_t>(hal::clock_kind())};
+  // The rig constants it was built with (protocol/rig.toml), for the host to compare with its own.
+  const proto::IdentifyReply reply{proto::kProtocolVersion, kFirmwareMajor,         kFirmwareMinor,
+                                   kFirmwarePatch,          proto::kSchemaHash,     proto::kMaxWire,
+                                   static_cast<uint8_t>(hal_.clock_kind()),
+                                   kActuatorCount,          kActuatorRangeM,        kEncoderCounts,
+                                   kPulleyCircumferenceM,   kActuatorPeriodUs};
   uint8_t payload[proto::IdentifyReply::kSize];
   proto::encode(reply, payload);
   send(proto::IdentifyReply::kId, payload, sizeof payload);
@@ -170,7 +172,7 @@ void Firmware::send_telemetry(uint32_t now_us) {
   using T = proto::Telemetry;
   const ControllerOutput& out = supervisor_.output();
   float measured[kActuatorCount];
-  hal::actuators_measured(measured);
+  hal_.actuators_measured(measured);
   T t;
   t.time = millis(now_us);
   t.state = static_cast<uint8_t>(supervisor_.state());
@@ -185,7 +187,7 @@ void Firmware::send_telemetry(uint32_t now_us) {
   }
   t.crc_errors = decoder_.crc_errors();
   t.frame_errors = decoder_.frame_errors();
-  const uint32_t overruns = hal::actuator_overruns();
+  const uint32_t overruns = hal_.actuator_overruns();
   t.loop_overruns = overruns > 0xFFFFu ? 0xFFFF : static_cast<uint16_t>(overruns);
   uint8_t payload[T::kSize];
   proto::encode(t, payload);

@@ -8,6 +8,7 @@
 #include <stdint.h>  // uint8_t..uint32_t
 
 #include "frame.h"         // FrameDecoder
+#include "hal.h"           // Hal
 #include "protocol_gen.h"  // proto messages
 #include "supervisor.h"    // Supervisor
 
@@ -15,6 +16,9 @@ namespace mr {
 
 class Firmware {
  public:
+  // The board it runs on: every clock reading, byte out and actuator command goes through it.
+  explicit Firmware(Hal& hal) : hal_(hal) {}
+
   // Announces the start to the host (boot message) and levels the surface.
   void boot(proto::ResetCause cause);
   void rx_byte(uint8_t byte);
@@ -34,6 +38,7 @@ class Firmware {
   // (49.7 days), not with the microseconds (71.6 min); needs a call at least every 71 min (poll makes one).
   uint32_t millis(uint32_t now_us);
 
+  Hal& hal_;
   FrameDecoder decoder_;
   Supervisor supervisor_;
   uint8_t tx_seq_ = 0;

@@ -1,5 +1,6 @@
-// Hardware abstraction: the few board functions the core calls. One implementation per build
-// (firmware/native for the virtual MCU, the Uno board code for the real rig); chosen at link time.
+// Hardware abstraction: the few board functions the core calls, as an interface each board implements
+// (firmware/native for the virtual MCU, the Uno board code for the real rig). The core holds no global state:
+// each Firmware talks to the Hal it was given, so the native build runs many side by side; the Uno has one.
 #pragma once
 
 #include <stdint.h>  // uint8_t, uint32_t
@@ -8,31 +9,35 @@
 #include "rig_config.h"    // kActuatorCount
 
 namespace mr {
-namespace hal {
 
-// Monotonic firmware clock [us]; wraps after 2^32 us (71.6 min); the core only takes differences.
-uint32_t now_us();
+class Hal {
+ public:
+  // Monotonic firmware clock [us]; wraps after 2^32 us (71.6 min); the core only takes differences.
+  virtual uint32_t now_us() const = 0;
 
-// Queues bytes for the serial link; a frame is written whole or not at all (never blocks).
-void serial_write(const uint8_t* data, uint8_t len);
+  // Queues bytes for the serial link; a frame is written whole or not at all (never blocks).
+  virtual void serial_write(const uint8_t* data, uint8_t len) = 0;
 
-// Setpoints of the actuator position loops [m], + lowers the corner, already within the range.
-void actuators_command(const float (&command)[kActuatorCount]);
-// Measured actuator positions [m], same convention.
-void actuators_measured(float (&measured)[kActuatorCount]);
-// false cuts every actuator output at once (emergency stop, faults); true restores them.
-void actuators_power(bool on);
-// The actuators in the mask (bit i: actuator i) now stand at 0 m (homing).
-void actuators_zero(uint8_t mask);
-// proto::faults bits the actuators latched (stall, encoder); cleared when power comes back on.
-uint16_t actuator_faults();
-// Actuator-loop runs that started a whole period or more late since boot (0 for ideal actuators).
-uint32_t actuator_overruns();
+  // Setpoints of the actuator position loops [m], + lowers the corner, already within the range.
+  virtual void actuators_command(const float (&command)[kActuatorCount]) = 0;
+  // Measured actuator positions [m], same convention.
+  virtual void actuators_measured(float (&measured)[kActuatorCount]) const = 0;
+  // false cuts every actuator output at once (emergency stop, faults); true restores them.
+  virtual void actuators_power(bool on) = 0;
+  // The actuators in the mask (bit i: actuator i) now stand at 0 m (homing).
+  virtual void actuators_zero(uint8_t mask) = 0;
+  // proto::faults bits the actuators latched (stall, encoder); cleared when power comes back on.
+  virtual uint16_t actuator_faults() const = 0;
+  // Actuator-loop runs that started a whole period or more late since boot (0 for ideal actuators).
+  virtual uint32_t actuator_overruns() const = 0;
 
-// Which clock now_us() reads.
-proto::Clock clock_kind();
-// Simulated clock only: set now_us() to t [us]. kUnsupported on a wall clock; kOutOfRange if t < now.
-proto::ErrorCode sim_clock_set(uint32_t t_us);
+  // Which clock now_us() reads.
+  virtual proto::Clock clock_kind() const = 0;
+  // Simulated clock only: set now_us() to t [us]. kUnsupported on a wall clock; kOutOfRange if t < now.
+  virtual proto::ErrorCode sim_clock_set(uint32_t t_us) = 0;
 
-}  // namespace hal
+ protected:
+  ~Hal() = default;  // never deleted through the interface (the Uno has no heap)
+};
+
 }  // namespace mr

@@ -9,7 +9,7 @@ namespace mr {
 namespace proto {
 
 constexpr uint16_t kProtocolVersion = 1;
-constexpr uint32_t kSchemaHash = 0x78100C22u;
+constexpr uint32_t kSchemaHash = 0x297D3AABu;
 constexpr uint8_t kMaxPacket = 44;  // [bytes] id + seq + payload + CRC
 constexpr uint8_t kMaxWire = 46;  // [bytes] COBS packet + delimiter
 constexpr uint8_t kNoField = 255;  // nack.field when no single field is at fault
@@ -349,7 +349,7 @@ inline ErrorCode validate(const ObjectPosition& m, uint8_t& field) {
 // Answer to identify.
 struct IdentifyReply {
   static constexpr uint8_t kId = 0x81;
-  static constexpr uint8_t kSize = 11;  // [bytes] payload
+  static constexpr uint8_t kSize = 26;  // [bytes] payload
   uint16_t protocol_version;  // [protocol] version of the firmware's schema.
   uint8_t firmware_major;  // Firmware version, major.
   uint8_t firmware_minor;  // Firmware version, minor.
@@ -357,6 +357,11 @@ struct IdentifyReply {
   uint32_t schema_hash;  // CRC-32 of the canonical schema; the host refuses a mismatch.
   uint8_t max_wire;  // [bytes] Largest frame the firmware accepts, delimiter included.
   uint8_t clock;  // Wall or simulated clock. (enum clock)
+  uint8_t actuator_count;  // Actuators the firmware drives (protocol/rig.toml, as every field below).
+  float actuator_range;  // [m] Travel of each actuator about z0 the firmware was built for.
+  uint16_t encoder_counts;  // Counts per encoder revolution the firmware was built for.
+  float pulley_circumference;  // [m/rev] Belt travel per motor revolution the firmware was built for.
+  uint32_t actuator_period;  // [us] Period of the firmware's actuator position loops.
 };
 inline void encode(const IdentifyReply& m, uint8_t* out) {
   put_u16(out + 0, m.protocol_version);
@@ -366,6 +371,11 @@ inline void encode(const IdentifyReply& m, uint8_t* out) {
   put_u32(out + 5, m.schema_hash);
   put_u8(out + 9, m.max_wire);
   put_u8(out + 10, m.clock);
+  put_u8(out + 11, m.actuator_count);
+  put_f32(out + 12, m.actuator_range);
+  put_u16(out + 16, m.encoder_counts);
+  put_f32(out + 18, m.pulley_circumference);
+  put_u32(out + 22, m.actuator_period);
 }
 inline void decode(const uint8_t* in, IdentifyReply& m) {
   m.protocol_version = get_u16(in + 0);
@@ -375,6 +385,11 @@ inline void decode(const uint8_t* in, IdentifyReply& m) {
   m.schema_hash = get_u32(in + 5);
   m.max_wire = get_u8(in + 9);
   m.clock = get_u8(in + 10);
+  m.actuator_count = get_u8(in + 11);
+  m.actuator_range = get_f32(in + 12);
+  m.encoder_counts = get_u16(in + 16);
+  m.pulley_circumference = get_f32(in + 18);
+  m.actuator_period = get_u32(in + 22);
 }
 
 // The command with this id and seq was applied (or was a retransmission of one that was).

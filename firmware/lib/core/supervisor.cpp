@@ -47,7 +47,7 @@ ErrorCode Supervisor::configure(const proto::Configure& msg, uint8_t& field) {
   if (state_ != State::kIdle) return ErrorCode::kBadState;
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
-  if (msg.tilt_limit > max_tilt_deg(msg.module_x, msg.module_y, kActuatorRange) + kTiltLimitSlackDeg) {
+  if (msg.tilt_limit > max_tilt_deg(msg.module_x, msg.module_y, kActuatorRangeM) + kTiltLimitSlackDeg) {
     field = 3;
     return ErrorCode::kOutOfRange;
   }
@@ -124,7 +124,7 @@ ErrorCode Supervisor::jog(const proto::Jog& msg, uint8_t& field) {
   if (state_ != State::kIdle) return ErrorCode::kBadState;
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
-  if (msg.position > kActuatorRange || msg.position < -kActuatorRange) {
+  if (msg.position > kActuatorRangeM || msg.position < -kActuatorRangeM) {
     field = 1;
     return ErrorCode::kOutOfRange;
   }

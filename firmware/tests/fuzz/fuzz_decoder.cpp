@@ -6,7 +6,7 @@
 //   2. messages: the same input is read as a list of messages (class Messages) that the harness encodes
 //      and frames with a valid CRC, so the fuzzer reaches the dispatcher and the supervisor, with floats
 //      near their bounds, without having to forge CRCs or hit narrow float ranges by chance.
-// After every byte: each command within +-kActuatorRange and not NaN, the configuration still valid,
+// After every byte: each command within +-kActuatorRangeM and not NaN, the configuration still valid,
 // every output frame a well-formed frame of at most kMaxWire bytes whose id and length match the schema,
 // every accepted frame answered (ack/nack naming it, identify_reply, telemetry), a nack changing nothing,
 // and telemetry's error counters equal to those of a standalone decoder fed the same bytes.
@@ -21,8 +21,7 @@
 
 #include "firmware.h"    // Firmware
 #include "frame.h"       // FrameDecoder, frame_encode
-#include "hal.h"         // hal::now_us, hal::sim_clock_set
-#include "native_hal.h"  // native::reset, take_tx, tx_pending
+#include "native_hal.h"  // NativeHal
 #include "plane.h"       // max_tilt_deg
 
 namespace {
@@ -63,8 +62,7 @@ HARNESS bool same_config(const proto::Configure& a, const proto::Configure& b) {
 
 class Harness {
  public:
-  HARNESS Harness() {
-    mr::native::reset(proto::Clock::kSimulated);
+  HARNESS Harness() : hal_(proto::Clock::kSimulated), fw_(hal_) {
     fw_.boot(proto::ResetCause::kPowerOn);
     OutFrame frames[4];
     const int n = drain(frames, 4);
@@ -72,6 +70,8 @@ class Harness {
     FUZZ_CHECK(frames[0].id == proto::Boot::kId);
     FUZZ_CHECK(frames[0].payload[0] == static_cast<uint8_t>(proto::ResetCause::kPowerOn));
   }
+
+  HARNESS mr::NativeHal& hal() { return hal_; }
 
   // One received byte, as the board's main loop handles it: rx_byte, then a poll.
   HARNESS void byte(uint8_t b, uint32_t advance_us) {
@@ -89,7 +89,7 @@ class Harness {
     }
     check_outputs();
     if (r == FrameDecoder::Result::kFrame) check_config();
-    if (advance_us != 0) mr::hal::sim_clock_set(mr::hal::now_us() + advance_us);
+    if (advance_us != 0) hal_.sim_clock_set(hal_.now_us() + advance_us);
     fw_.poll();
     OutFrame periodic[4];
     const int m = drain(periodic, 4);
@@ -174,11 +174,11 @@ class Harness {
     const mr::Supervisor& s = fw_.supervisor();
     for (float a : s.output().command) {
       FUZZ_CHECK(a == a);
-      FUZZ_CHECK(a >= -mr::kActuatorRange && a <= mr::kActuatorRange);
+      FUZZ_CHECK(a >= -mr::kActuatorRangeM && a <= mr::kActuatorRangeM);
     }
     FUZZ_CHECK(static_cast<uint8_t>(s.state()) <= static_cast<uint8_t>(proto::State::kEstop));
     FUZZ_CHECK(s.actuator_power() == (s.state() != proto::State::kEstop));
-    FUZZ_CHECK(mr::native::tx_pending() == 0);
+    FUZZ_CHECK(hal_.tx_pending() == 0);
   }
 
   // After every frame: the configuration is one the validation would accept.
@@ -186,7 +186,7 @@ class Harness {
     const proto::Configure& c = fw_.supervisor().config();
     uint8_t field = 0;
     FUZZ_CHECK(proto::validate(c, field) == proto::ErrorCode::kOk);
-    FUZZ_CHECK(c.tilt_limit <= mr::max_tilt_deg(c.module_x, c.module_y, mr::kActuatorRange) + 1e-3f);
+    FUZZ_CHECK(c.tilt_limit <= mr::max_tilt_deg(c.module_x, c.module_y, mr::kActuatorRangeM) + 1e-3f);
     FUZZ_CHECK(c.telemetry_period == 0 || c.telemetry_period >= 5);
   }
 
@@ -195,7 +195,7 @@ class Harness {
     int n = 0;
     uint8_t buf[64];
     size_t got;
-    while ((got = mr::native::take_tx(buf, sizeof buf)) > 0) {
+    while ((got = hal_.take_tx(buf, sizeof buf)) > 0) {
       for (size_t i = 0; i < got; ++i) {
         ++pending_;
         const FrameDecoder::Result r = out_.push(buf[i]);
@@ -225,7 +225,7 @@ class Harness {
   HARNESS void check_telemetry(const OutFrame& f) const {
     proto::Telemetry t;
     proto::decode(f.payload, t);
-    FUZZ_CHECK(t.time == mr::hal::now_us() / 1000u);
+    FUZZ_CHECK(t.time == hal_.now_us() / 1000u);
     FUZZ_CHECK(t.state <= static_cast<uint8_t>(proto::State::kEstop));
     FUZZ_CHECK((t.faults & ~(proto::faults::kPositionTimeout | proto::faults::kEstop)) == 0);
     for (int16_t a : t.command) FUZZ_CHECK(a >= -25000 && a <= 25000);
@@ -237,6 +237,7 @@ class Harness {
     FUZZ_CHECK(t.frame_errors == standalone_.frame_errors());
   }
 
+  mr::NativeHal hal_;       // the board (declared first: the firmware is built on it)
   mr::Firmware fw_;
   FrameDecoder standalone_;  // fed every byte the firmware gets
   FrameDecoder out_;         // decodes what the firmware sends
@@ -253,7 +254,7 @@ class Harness {
 // next byte is the id and the one after it the payload length (0 .. 40), then raw payload bytes.
 class Messages {
  public:
-  HARNESS Messages(const uint8_t* data, size_t size) : data_(data), size_(size) {}
+  HARNESS Messages(const uint8_t* data, size_t size, mr::Hal& clock) : data_(data), size_(size), clock_(clock) {}
   HARNESS bool done() const { return i_ >= size_; }
 
   HARNESS void next_message(uint8_t& id, uint8_t& seq, uint8_t* payload, uint8_t& len, uint32_t& advance_us) {
@@ -294,7 +295,7 @@ class Messages {
       case proto::SimClock::kId: {
         // A step of -0.5 .. +0.5 s from the firmware's time: backwards now and then.
         const int32_t step = static_cast<int16_t>(u16()) * 16;
-        return proto::encode(proto::SimClock{mr::hal::now_us() + static_cast<uint32_t>(step)}, payload);
+        return proto::encode(proto::SimClock{clock_.now_us() + static_cast<uint32_t>(step)}, payload);
       }
       case proto::ObjectPosition::kId: {
         const uint8_t f = u8();
@@ -343,6 +344,7 @@ class Messages {
 
   const uint8_t* data_;
   size_t size_;
+  mr::Hal& clock_;  // the board whose time sim_clock steps from
   size_t i_ = 0;
   uint16_t frame_ = 0;
   uint32_t capture_ = 0;
@@ -361,7 +363,7 @@ extern "C" HARNESS int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) 
   }
 
   // Pass 2: the same bytes as messages (see Messages): valid CRCs, fields mostly near their bounds.
-  Messages msgs(data, size);
+  Messages msgs(data, size, h.hal());
   while (!msgs.done()) {
     uint8_t id = 0, seq = 0, len = 0;
     uint32_t advance_us = 0;

@@ -55,7 +55,7 @@ struct Rig {
     publish();
   }
 
-  float position_m(int i) const { return angle_rev[i] * mr::board::kPulleyCircumferenceM; }
+  float position_m(int i) const { return angle_rev[i] * mr::kPulleyCircumferenceM; }
   bool all_pwm_zero() const {
     for (int i = 0; i < 4; ++i) {
       if (fake::pins.pwm[mr::board::kPwmPin[i]] != 0) return false;
@@ -71,7 +71,7 @@ const float kReadingTolM = (mr::board::kEncoderSource == mr::board::EncoderSourc
 struct Stack {
   Rig rig;
   mr::board::UnoActuatorIo io;
-  ActuatorBank bank{io, kActuator, mr::board::kLoopPeriodUs};
+  ActuatorBank bank{io, kActuator, mr::kActuatorPeriodUs};
 
   explicit Stack(uint16_t offset = 1000) : rig(offset) {
     io.begin();
@@ -180,7 +180,7 @@ TEST_CASE("a silent encoder is an encoder fault after three missed readings, and
   fake::bus.silent[mr::board::kMuxChannel[1]] = true;
   int periods = 0;
   while (s.bank.faults() == 0 && periods < 10) {
-    s.run(1e-6f * mr::board::kLoopPeriodUs);  // one loop run per period
+    s.run(1e-6f * mr::kActuatorPeriodUs);  // one loop run per period
     ++periods;
   }
   CHECK(periods == ActuatorBank::kReadFailuresForFault);

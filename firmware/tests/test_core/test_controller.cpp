@@ -27,7 +27,7 @@ mr::ControllerConfig paper(Controller kind, float noise = 0.0f) {
 
 bool commands_ok(const mr::ControllerOutput& out) {
   for (float a : out.command) {
-    if (!(a >= -mr::kActuatorRange && a <= mr::kActuatorRange)) return false;  // also false for NaN
+    if (!(a >= -mr::kActuatorRangeM && a <= mr::kActuatorRangeM)) return false;  // also false for NaN
   }
   return true;
 }
@@ -195,7 +195,7 @@ TEST_CASE("controller: noise is drawn as alpha * U(-1, 1) from the seeded xorshi
   for (float a : out.command) CHECK(a == Approx(alpha * r.uniform_pm1()));
 }
 
-TEST_CASE("controller: every command within +-kActuatorRange for NaN, inf and huge inputs") {
+TEST_CASE("controller: every command within +-kActuatorRangeM for NaN, inf and huge inputs") {
   const float values[] = {0.0f, 0.1f, -0.25f, 1e3f, -1e30f, kMax, -kMax, kInf, -kInf, kNaN};
   const float dts[] = {0.0f, 1e-3f, 0.1f, 1e30f, kInf, kNaN, -1.0f};
   int steps = 0;
@@ -240,15 +240,15 @@ TEST_CASE("controller: with the geometric tilt limit and no noise, commands neve
     mr::ControllerConfig cfg = paper(Controller::kManhattan);
     cfg.module_x = mn[0];
     cfg.module_y = mn[1];
-    cfg.tilt_limit = mr::max_tilt_deg(mn[0], mn[1], mr::kActuatorRange);
+    cfg.tilt_limit = mr::max_tilt_deg(mn[0], mn[1], mr::kActuatorRangeM);
     mr::TiltController c;
     c.reset(1);
     mr::ControllerOutput out{};
     c.step(cfg, 0.5f, 0.5f, -0.5f, -0.5f, 0.0f, out);  // e = (1, 1) m: 30.9 deg > every limit here
     CHECK(out.tilt_zx == Approx(cfg.tilt_limit));
     CHECK(out.tilt_zy == Approx(cfg.tilt_limit));
-    CHECK(out.command[3] == Approx(mr::kActuatorRange).epsilon(1e-4));
-    CHECK(out.command[0] == Approx(-mr::kActuatorRange).epsilon(1e-4));
+    CHECK(out.command[3] == Approx(mr::kActuatorRangeM).epsilon(1e-4));
+    CHECK(out.command[0] == Approx(-mr::kActuatorRangeM).epsilon(1e-4));
   }
 }
 

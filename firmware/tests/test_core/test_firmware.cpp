@@ -9,8 +9,7 @@
 
 #include "firmware.h"    // Firmware
 #include "frame.h"       // FrameDecoder, frame_encode
-#include "hal.h"         // hal::now_us
-#include "native_hal.h"  // native::reset, take_tx, tx_pending
+#include "native_hal.h"  // NativeHal
 
 namespace {
 
@@ -29,8 +28,7 @@ struct Frame {
 // The host's end of the link: encodes commands into the firmware, decodes what it sends back.
 class Host {
  public:
-  explicit Host(proto::Clock clock = proto::Clock::kSimulated) {
-    mr::native::reset(clock);
+  explicit Host(proto::Clock clock = proto::Clock::kSimulated) : hal(clock), fw(hal) {
     fw.boot(proto::ResetCause::kPowerOn);
   }
 
@@ -61,7 +59,7 @@ class Host {
     std::vector<Frame> frames;
     uint8_t buf[256];
     size_t n;
-    while ((n = mr::native::take_tx(buf, sizeof buf)) > 0) {
+    while ((n = hal.take_tx(buf, sizeof buf)) > 0) {
       for (size_t i = 0; i < n; ++i) {
         ++pending_len_;
         const mr::FrameDecoder::Result r = rx_.push(buf[i]);
@@ -129,6 +127,7 @@ class Host {
     return frames;
   }
 
+  mr::NativeHal hal;  // this host's board (declared first: the firmware is built on it)
   mr::Firmware fw;
 
  private:
@@ -150,11 +149,11 @@ proto::ObjectPosition pos(uint16_t frame, uint32_t capture_us, float x, float y,
 }  // namespace
 
 TEST_CASE("firmware: boot announces itself once, seq 0, with the reset cause") {
-  mr::native::reset(proto::Clock::kSimulated);
-  mr::Firmware fw;
+  mr::NativeHal hal(proto::Clock::kSimulated);
+  mr::Firmware fw(hal);
   fw.boot(proto::ResetCause::kWatchdog);
   uint8_t buf[64];
-  const size_t n = mr::native::take_tx(buf, sizeof buf);
+  const size_t n = hal.take_tx(buf, sizeof buf);
   mr::FrameDecoder d;
   int frames = 0;
   for (size_t i = 0; i < n; ++i) {
@@ -166,7 +165,7 @@ TEST_CASE("firmware: boot announces itself once, seq 0, with the reset cause") {
     CHECK(d.payload()[0] == static_cast<uint8_t>(proto::ResetCause::kWatchdog));
   }
   CHECK(frames == 1);
-  CHECK(mr::native::tx_pending() == 0);
+  CHECK(hal.tx_pending() == 0);
 }
 
 TEST_CASE("firmware: identify reply carries versions, schema hash, max_wire and the clock kind") {
@@ -410,7 +409,7 @@ TEST_CASE("firmware: sim_clock sets the firmware time, refuses going backwards, 
   Host h;
   h.take();
   h.clock_to(83333, 1);
-  CHECK(mr::hal::now_us() == 83333);
+  CHECK(h.hal.now_us() == 83333);
   h.send_msg(proto::SimClock{83333}, 2);  // the same time is not backwards
   h.expect_ack(proto::SimClock::kId, 2);
   h.send_msg(proto::SimClock{83332}, 3);
@@ -419,13 +418,13 @@ TEST_CASE("firmware: sim_clock sets the firmware time, refuses going backwards, 
   proto::decode(f.payload.data(), n);
   CHECK(n.ref_seq == 3);
   CHECK(n.code == static_cast<uint8_t>(ErrorCode::kOutOfRange));
-  CHECK(mr::hal::now_us() == 83333);
+  CHECK(h.hal.now_us() == 83333);
 
   Host wall(proto::Clock::kWall);
   wall.take();
   wall.send_msg(proto::SimClock{1000000000u}, 1);
   wall.expect_nack(proto::SimClock::kId, 1, ErrorCode::kUnsupported, proto::kNoField);
-  CHECK(mr::hal::now_us() < 1000000000u);
+  CHECK(wall.hal.now_us() < 1000000000u);
 }
 
 TEST_CASE("firmware: the deadman faults a running firmware when positions stop, and levels it") {
@@ -541,7 +540,7 @@ TEST_CASE("firmware: an actuator fault from the board goes through the one shutd
     h.send_msg(pos(1, 1000, 0.0f, 0.0f), 3);
     const proto::Telemetry driving = h.expect_telemetry();
     CHECK(driving.command[1] > 0);  // the controller lowers the +x corners
-    mr::native::inject_actuator_faults(fault);
+    h.hal.inject_actuator_faults(fault);
     h.fw.poll();
     h.send_msg(pos(2, 84000, 0.05f, 0.0f), 4);
     proto::Telemetry t = h.expect_telemetry();

@@ -5,7 +5,7 @@
 #include <math.h>  // tanf, sinf, cosf, atanf, fabsf, sqrtf
 
 #include "plane.h"       // manhattan_normal, euclidean_normal, plane_commands, max_tilt_deg
-#include "rig_config.h"  // kActuatorRange, kActuatorCount
+#include "rig_config.h"  // kActuatorRangeM, kActuatorCount
 
 namespace {
 
@@ -118,7 +118,7 @@ TEST_CASE("plane: max_tilt_deg is atan(range / ((m + n) / 2))") {
 TEST_CASE("plane: at the tilt limit on both axes every command is within range, and one reaches it") {
   const float sizes[][2] = {{0.5f, 0.5f}, {1.0f, 0.5f}, {0.3f, 2.0f}, {0.1f, 0.1f}, {10.0f, 10.0f}, {0.5f, 0.75f}};
   for (const auto& s : sizes) {
-    const float lim = mr::max_tilt_deg(s[0], s[1], mr::kActuatorRange);
+    const float lim = mr::max_tilt_deg(s[0], s[1], mr::kActuatorRangeM);
     CAPTURE(s[0]);
     CAPTURE(s[1]);
     float largest = 0.0f;
@@ -127,22 +127,22 @@ TEST_CASE("plane: at the tilt limit on both axes every command is within range, 
         Commands a;
         manhattan(sx * lim, sy * lim, s[0], s[1], a);
         for (float v : a) {
-          CHECK(fabsf(v) <= mr::kActuatorRange * (1.0f + 1e-5f));
+          CHECK(fabsf(v) <= mr::kActuatorRangeM * (1.0f + 1e-5f));
           largest = fabsf(v) > largest ? fabsf(v) : largest;
         }
       }
     }
-    CHECK(largest == Approx(mr::kActuatorRange).epsilon(1e-4));
+    CHECK(largest == Approx(mr::kActuatorRangeM).epsilon(1e-4));
   }
 }
 
 TEST_CASE("plane: Euclidean at the tilt limit stays in range in every direction") {
-  const float lim = mr::max_tilt_deg(0.5f, 0.5f, mr::kActuatorRange);
+  const float lim = mr::max_tilt_deg(0.5f, 0.5f, mr::kActuatorRangeM);
   for (int k = 0; k < 360; k += 5) {
     const float ang = deg(static_cast<float>(k));
     Commands a;
     euclidean(lim, cosf(ang), sinf(ang), 0.5f, 0.5f, a);
-    for (float v : a) CHECK(fabsf(v) <= mr::kActuatorRange);
+    for (float v : a) CHECK(fabsf(v) <= mr::kActuatorRangeM);
   }
 }
 
@@ -182,13 +182,13 @@ TEST_CASE("plane: Euclidean tilts towards the error direction; only the directio
 
 TEST_CASE("plane: Euclidean with a subnormal error still gives a finite, in-range plane") {
   // Found by hypothesis: sin(theta) / d overflows to inf for d = 4.2e-45, and 0 * inf is NaN.
-  const float limit = mr::max_tilt_deg(1.0f, 1.0f, mr::kActuatorRange);
+  const float limit = mr::max_tilt_deg(1.0f, 1.0f, mr::kActuatorRangeM);
   for (float e : {4.2038954e-45f, 1.0e-40f, 1.1754944e-38f}) {
     Commands a;
     euclidean(limit, 0.0f, e, 1.0f, 1.0f, a);
     for (float ai : a) {
       CHECK(ai == ai);
-      CHECK(fabsf(ai) <= mr::kActuatorRange * (1.0f + 1e-5f));
+      CHECK(fabsf(ai) <= mr::kActuatorRangeM * (1.0f + 1e-5f));
     }
     euclidean(limit, e, -e, 1.0f, 1.0f, a);
     for (float ai : a) CHECK(ai == ai);

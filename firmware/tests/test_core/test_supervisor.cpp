@@ -234,7 +234,7 @@ TEST_CASE("supervisor: configure accepts the bounds and applies the whole messag
   proto::Configure c = defaults();
   c.module_x = 1.0f;
   c.module_y = 1.0f;
-  c.tilt_limit = mr::max_tilt_deg(1.0f, 1.0f, mr::kActuatorRange);  // 14.04 deg
+  c.tilt_limit = mr::max_tilt_deg(1.0f, 1.0f, mr::kActuatorRangeM);  // 14.04 deg
   CHECK(configure(s, c) == ErrorCode::kOk);
   c.tilt_limit = 14.1f;
   uint8_t field = 0;

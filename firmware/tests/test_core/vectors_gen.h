@@ -211,8 +211,8 @@ inline bool fields_ok_14_0(const uint8_t* p) {
 const Expected expected_14[] = {{Yield::kFrame, 0x10, 13, payload_14_0, 15, fields_ok_14_0}};
 
 // identify_reply
-const uint8_t wire_15[] = {0x02, 0x81, 0x02, 0x01, 0x01, 0x02, 0x01, 0x09, 0x28, 0x8F, 0x3C, 0x16, 0x2E, 0x01, 0xE6, 0x9F, 0x00};
-const uint8_t payload_15_0[] = {0x01, 0x00, 0x00, 0x01, 0x00, 0x28, 0x8F, 0x3C, 0x16, 0x2E, 0x01};
+const uint8_t wire_15[] = {0x02, 0x81, 0x02, 0x01, 0x01, 0x02, 0x01, 0x08, 0x28, 0x8F, 0x3C, 0x16, 0x2E, 0x01, 0x04, 0x01, 0x03, 0x80, 0x3E, 0x08, 0x10, 0x0A, 0xD7, 0x23, 0x3D, 0xA0, 0x0F, 0x01, 0x03, 0x9E, 0xB8, 0x00};
+const uint8_t payload_15_0[] = {0x01, 0x00, 0x00, 0x01, 0x00, 0x28, 0x8F, 0x3C, 0x16, 0x2E, 0x01, 0x04, 0x00, 0x00, 0x80, 0x3E, 0x00, 0x10, 0x0A, 0xD7, 0x23, 0x3D, 0xA0, 0x0F, 0x00, 0x00};
 inline bool fields_ok_15_0(const uint8_t* p) {
   mr::proto::IdentifyReply m;
   mr::proto::decode(p, m);
@@ -222,9 +222,14 @@ inline bool fields_ok_15_0(const uint8_t* p) {
          m.firmware_patch == 0u &&
          m.schema_hash == 373067560u &&
          m.max_wire == 46u &&
-         m.clock == 1u;
+         m.clock == 1u &&
+         m.actuator_count == 4u &&
+         m.actuator_range == 0.25f &&
+         m.encoder_counts == 4096u &&
+         m.pulley_circumference == 0.03999999910593033f &&
+         m.actuator_period == 4000u;
 }
-const Expected expected_15[] = {{Yield::kFrame, 0x81, 0, payload_15_0, 11, fields_ok_15_0}};
+const Expected expected_15[] = {{Yield::kFrame, 0x81, 0, payload_15_0, 26, fields_ok_15_0}};
 
 // ack of set_target seq 6
 const uint8_t wire_16[] = {0x07, 0x82, 0x01, 0x04, 0x06, 0xA2, 0x2F, 0x00};
@@ -383,7 +388,7 @@ const Vector kAll[] = {
     {"sim_clock 83333 us", wire_12, 10, expected_12, 1},
     {"object_position visible", wire_13, 21, expected_13, 1},
     {"object_position not visible", wire_14, 21, expected_14, 1},
-    {"identify_reply", wire_15, 17, expected_15, 1},
+    {"identify_reply", wire_15, 32, expected_15, 1},
     {"ack of set_target seq 6", wire_16, 8, expected_16, 1},
     {"nack out_of_range field 3", wire_17, 10, expected_17, 1},
     {"telemetry running", wire_18, 43, expected_18, 1},
