@@ -77,6 +77,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from mantaray.plots import path_phase_figure
 
     from .link import LinkError
+    from .loop import ClosedLoop, Tolerance
     from .session import RigSession, Setup, check_port, controller_axes
     from .tracker import Calibration, FrameSource, Tracker
 
@@ -121,16 +122,17 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         signal.signal(signal.SIGINT, signal.default_int_handler)
 
     previous = signal.getsignal(signal.SIGINT)
-    xy_rows, tilt_rows, target_rows, t_rows, command_rows, outcome = [], [], [], [], [], "timeout"
+    outcome = "timeout"
     half_m = _half_module_m()
     session = RigSession(args.port, Setup(configure, gains, target=targets_along(args, 0.0)), report=report)
+    loop = ClosedLoop(session.position)
+    judge = Tolerance(args.tolerance, args.hold)     # on what the camera sees: the rig knows nothing better
     try:
         session.open()
         log.write("identify", {k: v if isinstance(v, float) else int(v) for k, v in vars(session.identity).items()})
         signal.signal(signal.SIGINT, on_sigint)
         session.start()
         t0 = wall0 = None
-        frame, within_since = 0, None
         while not interrupted:
             grabbed = source.read()
             if grabbed is None:
@@ -148,31 +150,20 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             if args.path is not None:
                 session.set_target(*target)
             obs = tracker.observe(image, capture_s)
-            frame = (frame + 1) & 0xFFFF
-            x, y = obs.xy_m if obs.visible else (0.0, 0.0)
-            if obs.visible and (abs(x) > 2 * half_m[0] or abs(y) > 2 * half_m[1]):   # what the firmware refuses
-                report(f"the object was seen at {x:+.3f},{y:+.3f} m, off the fabric by more than half a module")
+            if obs.visible and (abs(obs.xy_m[0]) > 2 * half_m[0] or abs(obs.xy_m[1]) > 2 * half_m[1]):
+                report(f"the object was seen at {obs.xy_m[0]:+.3f},{obs.xy_m[1]:+.3f} m, off the fabric by more "
+                       f"than half a module")    # what the firmware refuses
                 outcome = "fell off"
                 break
-            msg = m.ObjectPosition(frame=frame, capture_time=int(run_s * 1e6) & 0xFFFFFFFF, x=x, y=y,
-                                   flags=0 if obs.visible else m.PositionFlags.NOT_VISIBLE)
-            log.write("position", {"frame": frame, "capture_s": round(run_s, 6), "status": obs.status,
+            telemetry = loop.step(run_s, obs.xy_m if obs.visible else None, target)
+            log.write("position", {"frame": loop.frame, "capture_s": round(run_s, 6), "status": obs.status,
                                    "xy_m": obs.xy_m, "corners_seen": list(obs.corners_seen)})
-            telemetry = session.position(msg)
             if telemetry is not None:
                 log.write("telemetry", {k: (list(v) if isinstance(v, tuple) else int(v) if isinstance(v, int)
                                             else v) for k, v in vars(telemetry).items()})
-            tilt_rows.append((telemetry.tilt_zx, telemetry.tilt_zy) if telemetry is not None else (math.nan,) * 2)
-            command_rows.append(telemetry.command if telemetry is not None else (math.nan,) * 4)
-            xy_rows.append(obs.xy_m if obs.visible else (math.nan, math.nan))
-            target_rows.append(target)
-            t_rows.append(run_s)
-            if args.path is None and obs.visible:
-                near = math.hypot(x - target[0], y - target[1]) < args.tolerance
-                within_since = (within_since if within_since is not None else run_s) if near else None
-                if within_since is not None and run_s - within_since >= args.hold:
-                    outcome = "reached"
-                    break
+            if args.path is None and obs.visible and judge.update(run_s, obs.xy_m, target):
+                outcome = "reached"
+                break
         if interrupted:
             outcome = "interrupted"
     except KeyboardInterrupt:                        # while connecting, or a second Ctrl-C
@@ -189,12 +180,14 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             source.close()
             log.write("end", {"outcome": outcome})
             log.close()
-    targets = target_rows if args.path is not None and target_rows else [args.target]   # a path, or one target
-    figure = path_phase_figure(xy_rows, tilt_rows, xy_rows[0] if xy_rows and math.isfinite(xy_rows[0][0]) else None,
+    rows = loop.arrays()
+    xy = rows["measured_xy_m"]
+    targets = rows["target_m"] if args.path is not None and len(xy) else [args.target]   # a path, or one target
+    figure = path_phase_figure(xy, rows["tilt_deg"], xy[0] if len(xy) and math.isfinite(xy[0][0]) else None,
                                targets, args.tolerance, f"rig: {outcome}", (configure.module_x, configure.module_y),
-                               configure.tilt_limit, out / f"rig-{stamp}.png", t_s=t_rows or None,
-                               command_m=command_rows or None)
-    print(f"{outcome}: {len(xy_rows)} frames; log {log.path}; figure {figure}")
+                               configure.tilt_limit, out / f"rig-{stamp}.png", t_s=rows["t_s"] if len(xy) else None,
+                               command_m=rows["command_m"] if len(xy) else None)
+    print(f"{outcome}: {len(xy)} frames; log {log.path}; figure {figure}")
     return {"reached": 0, "interrupted": 130}.get(outcome, 1)
 
 

@@ -117,10 +117,19 @@ def _close_quietly(link: Link) -> None:
 
 @dataclass
 class Setup:
-    """What the session re-applies after every (re)connection."""
+    """A firmware's set-up for a run: what the session re-applies after every (re)connection, and what the
+    simulation sends before each trial."""
     configure: m.Configure = field(default_factory=m.Configure)
-    gains: dict[m.Axis, dict] = field(default_factory=dict)      # axis -> configure_pid fields
+    gains: dict[m.Axis, dict] = field(default_factory=dict)      # axis -> configure_pid fields (the rest: as booted)
     target: tuple[float, float] | None = None                     # [m]
+
+    def commands(self) -> list[m.Message]:
+        """In the order the firmware takes them (in idle): configure, each PID's gains, the target."""
+        out: list[m.Message] = [self.configure]
+        out += [m.ConfigurePid(axis=axis, **gains) for axis, gains in self.gains.items()]
+        if self.target is not None:
+            out.append(m.SetTarget(x=self.target[0], y=self.target[1]))
+        return out
 
 
 class RigSession:
@@ -168,13 +177,9 @@ class RigSession:
             self.link.command(m.EmergencyStop())
             self._setup_pending = True
             return
-        s = self.setup
         self.link.command(m.Stop())
-        self.link.command(s.configure)
-        for axis, gains in s.gains.items():
-            self.link.command(m.ConfigurePid(axis=axis, **gains))
-        if s.target is not None:
-            self.link.command(m.SetTarget(x=s.target[0], y=s.target[1]))
+        for command in self.setup.commands():
+            self.link.command(command)
         if self.running:
             self.link.command(m.Start())
 

@@ -18,19 +18,20 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mantaray.host.link import Link, LinkError
+from mantaray.host.loop import U32, US_PER_S, ClosedLoop, Tolerance
+from mantaray.host.session import Setup
 from mantaray.protocol import messages as m
-from mantaray.protocol.codec import FieldRefused, Message, choices
+from mantaray.protocol import rig as rig_description
+from mantaray.protocol.codec import FieldRefused, choices
 
 from . import model as M
 from .model import SimulationUnstable
 from .parameters import default
 from .rig import VISION_MODES, Rig
 
-US_PER_S = 1_000_000
-U32 = 0xFFFFFFFF
 SPEC_NAMES = {"noise_amplitude": "noise amplitude alpha", "tolerance": "tolerance epsilon", "x": "target x",
               "y": "target y"}   # a refused command field -> what a trial spec calls it
-U16 = 0xFFFF
+MODULE_M = (rig_description.MODULE_SIZE_X_M, rig_description.MODULE_SIZE_Y_M)   # [m] the rig's m, n
 CLOCK_GAP_US = 1_000_000   # [us] the firmware clock moves on this much between trials, so it never goes back
 # [s] In lock-step nothing is real-time (the firmware's clock waits for the bridge), so the link may wait this
 # long for each answer: it costs nothing when the firmware answers in ~0.1 ms, and rides out a loaded machine.
@@ -92,7 +93,7 @@ class TrialSpec:
         for axis in self.gains:
             if axis.upper() not in m.Axis.__members__:
                 raise ValueError(f"gains are for axes {', '.join(choices(m.Axis))}, got {axis!r}")
-        for command in self.commands():   # the schema's bounds, before any firmware sees them
+        for command in self.setup().commands():   # the schema's bounds, before any firmware sees them
             try:
                 command.check()
             except FieldRefused as refused:
@@ -100,17 +101,18 @@ class TrialSpec:
                 raise ValueError(f"{SPEC_NAMES.get(refused.field, refused.field)}{axis}: {refused.reason} "
                                  f"({refused.message_name}.{refused.field}, protocol/schema.toml)") from None
 
-    def commands(self, module_m: tuple[float, float] = (0.5, 0.5), telemetry_period_ms: int = 0) -> list[Message]:
-        """The firmware's set-up for this trial, in order: configure, every PID's gains, the target."""
-        out: list[Message] = [m.Configure(
+    def setup(self, module_m: tuple[float, float] = MODULE_M, telemetry_period_ms: int = 0) -> Setup:
+        """The firmware's set-up for this trial: configure, every PID's gains (the paper's where not given), the
+        target; sent as the rig's session sends its own (Setup.commands)."""
+        configure = m.Configure(
             controller=m.Controller[self.controller.upper()], module_x=module_m[0], module_y=module_m[1],
             tolerance=self.tolerance_m, noise_amplitude=self.alpha_m, noise_seed=self.seed or 1,
-            telemetry_period=telemetry_period_ms)]
+            telemetry_period=telemetry_period_ms)
+        gains = {}
         for axis in m.Axis:
             g = self.gains.get(axis.name.lower())
-            out.append(m.ConfigurePid(axis=axis, **(vars(g) if g else m.PID_DEFAULTS[axis])))
-        out.append(m.SetTarget(x=self.target_m[0], y=self.target_m[1]))
-        return out
+            gains[axis] = dict(vars(g) if g else m.PID_DEFAULTS[axis])
+        return Setup(configure, gains, self.target_m)
 
 
 def is_success(fell_off: bool, final_error_m: float, tolerance_m: float) -> bool:
@@ -235,8 +237,9 @@ class Bridge:
 
     def _configure(self, spec: TrialSpec) -> None:
         self.link.command(m.Stop())
-        for command in spec.commands((self.rig.frame.size_x_m, self.rig.frame.size_y_m),
-                                     telemetry_period_ms=0 if self.lockstep else 100):
+        setup = spec.setup((self.rig.frame.size_x_m, self.rig.frame.size_y_m),
+                           telemetry_period_ms=0 if self.lockstep else 100)
+        for command in setup.commands():
             self.link.command(command)
 
     # ----------------------------------------------------------------------------------------- trial
@@ -245,126 +248,130 @@ class Bridge:
 
         progress, if given, is called with the trial time [s] after every camera frame.
         """
-        wall0 = time.perf_counter()
-        physics_s = link_s = 0.0
         self._watch, self._answered = LinkWatch(), set()
         resets0, lost0 = self.link.resets, self.link.lost_frames
         rng = np.random.default_rng(spec.seed)
-        model, data, fall = self.model, self.data, self.rig.fall
-        tracking = self.tracking
+        trial = self._start(spec)
+        loop = ClosedLoop(lambda msg: self._send(msg, trial), time_base_us=trial.base_us, frame=self.frame,
+                          on_telemetry=lambda reply: M.set_commands(self.model, self.data, reply.command))
+        judge = Tolerance(spec.tolerance_m)             # on the true position: where the object really is
+        tracking, true_xy_rows, fell = self.tracking, [], False
         period_s = 1.0 / tracking.rate_hz
+        for k in range(int(math.floor(spec.duration_s * tracking.rate_hz + 1e-9)) + 1):
+            capture_s = k * period_s
+            if self._advance(trial, capture_s):
+                fell = True
+                break
+            true_xy = M.object_xy(self.model, self.data)
+            if judge.update(capture_s, true_xy, spec.target_m) and spec.stop_when_reached:
+                break
+            dropped = rng.random() < tracking.drop_rate
+            measured = self._measure(capture_s, true_xy, rng)
+            deliver_s = capture_s + tracking.latency_s
+            if tracking.latency_s and self._advance(trial, deliver_s):
+                fell = True
+                break
+            if dropped:
+                self._watch.dropped_frames += 1
+                loop.dropped(capture_s, spec.target_m)
+            else:
+                trial.deliver_us = trial.base_us + round(deliver_s * US_PER_S)
+                loop.step(capture_s, measured, spec.target_m)
+            true_xy_rows.append(true_xy)
+            if progress is not None:
+                progress(capture_s)
+        self.frame = loop.frame
+        self._stop(trial, resets0, lost0)
+        return self._result(spec, trial, loop.arrays(), np.asarray(true_xy_rows).reshape(-1, 2), judge, fell)
 
+    def _start(self, spec: TrialSpec) -> _Trial:
+        """Set the firmware up, drop the object, start the controller at trial time 0."""
         t = time.perf_counter()
         self._configure(spec)
-        M.drop_object(model, data, *spec.start_m)
-        link_s += time.perf_counter() - t
-        t0_sim = data.time                                # physics time at trial time 0
+        M.drop_object(self.model, self.data, *spec.start_m)
         base_us = (self.clock_us + CLOCK_GAP_US) & U32    # firmware time at trial time 0
-        t = time.perf_counter()
         if self.lockstep:
             self._set_clock(base_us)
         self.link.command(m.Start())
-        link_s += time.perf_counter() - t
-        wall_start = time.perf_counter()                  # real time: trial time 0 on the wall
+        trial = _Trial(wall0_s=t, t0_sim_s=self.data.time, base_us=base_us, wall_start_s=time.perf_counter())
+        trial.link_s = trial.wall_start_s - t
         if self.recorder is not None:
-            self.recorder.mark_target(spec.target_m, spec.tolerance_m, self.rig.frame.z0_m, t0_sim)
+            self.recorder.mark_target(spec.target_m, spec.tolerance_m, self.rig.frame.z0_m, trial.t0_sim_s)
+        return trial
 
-        n_frames = int(math.floor(spec.duration_s * tracking.rate_hz + 1e-9)) + 1
-        rows_t, rows_true, rows_meas, rows_tilt, rows_cmd, rows_state = [], [], [], [], [], []
-        fell, reach_s = False, None
-        target = np.asarray(spec.target_m)
+    def _advance(self, trial: _Trial, to_trial_s: float) -> bool:
+        """Step physics to trial time to_trial_s; True if the object fell off on the way."""
+        if not self.lockstep:   # hold the physics back to the wall clock
+            ahead = to_trial_s - (time.perf_counter() - trial.wall_start_s)
+            if ahead > 0:
+                time.sleep(ahead)
+        t = time.perf_counter()
+        try:
+            M.step_until(self.model, self.data, trial.t0_sim_s + to_trial_s,
+                         None if self.recorder is None else self.recorder.capture)
+        except SimulationUnstable:
+            raise SimulationUnstable(f"the physics diverged before trial time {to_trial_s:.3f} s") from None
+        trial.physics_s += time.perf_counter() - t
+        if self.viewer is not None:
+            self.viewer.sync()
+        return M.fell_off(self.model, self.data, self.rig.fall)
 
-        def advance(to_trial_s: float) -> bool:
-            """Step physics to trial time to_trial_s; True if the object fell off on the way."""
-            nonlocal physics_s
-            if not self.lockstep:   # hold the physics back to the wall clock
-                ahead = to_trial_s - (time.perf_counter() - wall_start)
-                if ahead > 0:
-                    time.sleep(ahead)
-            t = time.perf_counter()
-            try:
-                M.step_until(model, data, t0_sim + to_trial_s,
-                             None if self.recorder is None else self.recorder.capture)
-            except SimulationUnstable:
-                raise SimulationUnstable(f"the physics diverged before trial time {to_trial_s:.3f} s") from None
-            physics_s += time.perf_counter() - t
-            if self.viewer is not None:
-                self.viewer.sync()
-            return M.fell_off(model, data, fall)
+    def _measure(self, capture_s: float, true_xy: np.ndarray, rng: np.random.Generator) -> np.ndarray | None:
+        """What the camera reports of the object: the tracker on a rendered frame, or the truth with noise."""
+        if self.vision is not None:
+            seen = self.vision.measure(self.data, capture_s)
+            self._watch.unseen_frames += seen is None
+            return seen
+        noise_m = self.tracking.noise_m
+        return true_xy + (rng.normal(0.0, noise_m, 2) if noise_m else 0.0)
 
-        for k in range(n_frames):
-            capture_s = k * period_s
-            if advance(capture_s):
-                fell = True
-                break
-            true_xy = M.object_xy(model, data)
-            distance = float(np.hypot(*(true_xy - target)))
-            if reach_s is None and distance < spec.tolerance_m:
-                reach_s = capture_s
-                if spec.stop_when_reached:
-                    break
-            dropped = rng.random() < tracking.drop_rate
-            if self.vision is not None:
-                seen = self.vision.measure(data, capture_s)
-                measured = seen if seen is not None else np.full(2, math.nan)
-                self._watch.unseen_frames += seen is None
-            else:
-                measured = true_xy + (rng.normal(0.0, tracking.noise_m, 2) if tracking.noise_m else 0.0)
-            deliver_s = capture_s + tracking.latency_s
-            if tracking.latency_s and advance(deliver_s):
-                fell = True
-                break
-            frame = self.frame = (self.frame + 1) & U16
-            tilt, cmd, state = (math.nan, math.nan), (math.nan,) * 4, -1
-            if dropped:
-                self._watch.dropped_frames += 1
-                measured = np.full(2, math.nan)
-            else:
-                t = time.perf_counter()
-                if self.lockstep:
-                    self._set_clock(base_us + round(deliver_s * US_PER_S))
-                visible = bool(np.all(np.isfinite(measured)))
-                msg = m.ObjectPosition(frame=frame, capture_time=(base_us + round(capture_s * US_PER_S)) & U32,
-                                       x=float(measured[0]) if visible else 0.0,
-                                       y=float(measured[1]) if visible else 0.0,
-                                       flags=0 if visible else m.PositionFlags.NOT_VISIBLE)
-                try:
-                    reply = self.link.position(msg)
-                except LinkError:
-                    self._watch.missed_replies += 1
-                    self._watch.report(f"no telemetry answered camera frame {frame}")
-                else:
-                    self._answered.add(frame)
-                    tilt, cmd, state = (reply.tilt_zx, reply.tilt_zy), reply.command, int(reply.state)
-                    M.set_commands(model, data, cmd)
-                link_s += time.perf_counter() - t
-            rows_t.append(capture_s)
-            rows_true.append(true_xy)
-            rows_meas.append(measured)
-            rows_tilt.append(tilt)
-            rows_cmd.append(cmd)
-            rows_state.append(state)
-            if progress is not None:
-                progress(capture_s)
+    def _send(self, msg: m.ObjectPosition, trial: _Trial) -> m.Telemetry | None:
+        """One position frame, on the firmware's clock at its delivery in lock-step; None when none answered."""
+        t = time.perf_counter()
+        try:
+            if self.lockstep:
+                self._set_clock(trial.deliver_us)
+            reply = self.link.position(msg)
+        except LinkError:
+            self._watch.missed_replies += 1
+            self._watch.report(f"no telemetry answered camera frame {msg.frame}")
+            reply = None
+        else:
+            self._answered.add(msg.frame)
+        trial.link_s += time.perf_counter() - t
+        return reply
 
+    def _stop(self, trial: _Trial, resets0: int, lost0: int) -> None:
+        """Level the surface and stop the controller; count what the link lost during the trial."""
         t = time.perf_counter()
         self.link.command(m.Stop())
-        link_s += time.perf_counter() - t
+        trial.link_s += time.perf_counter() - t
         self._watch.firmware_resets = max(self._watch.firmware_resets, self.link.resets - resets0)
         self._watch.lost_firmware_frames = self.link.lost_frames - lost0
         if self._watch.lost_firmware_frames:
             self._watch.report(f"{self._watch.lost_firmware_frames} firmware frames missing from its sequence")
 
-        final_xy = M.object_xy(model, data)
-        final_error = float(np.hypot(*(final_xy - target)))
-        sim_time = (data.time - t0_sim)
+    def _result(self, spec: TrialSpec, trial: _Trial, rows: dict, true_xy_m: np.ndarray, judge: Tolerance,
+                fell: bool) -> TrialResult:
+        """The trial judged where the object is at the end (the paper's Results), with its trajectory."""
+        final_xy = M.object_xy(self.model, self.data)
+        final_error = float(np.hypot(*(final_xy - np.asarray(spec.target_m))))
         return TrialResult(
             spec=spec, object_name=self.rig.object.name, success=is_success(fell, final_error, spec.tolerance_m),
-            final_error_m=final_error, final_xy_m=final_xy,
-            time_to_reach_s=reach_s, fell_off=fell, sim_time_s=sim_time,
-            wall_time_s=time.perf_counter() - wall0, physics_wall_s=physics_s, link_wall_s=link_s,
-            t_s=np.asarray(rows_t), true_xy_m=np.asarray(rows_true).reshape(-1, 2),
-            measured_xy_m=np.asarray(rows_meas, dtype=float).reshape(-1, 2),
-            tilt_deg=np.asarray(rows_tilt, dtype=float).reshape(-1, 2),
-            command_m=np.asarray(rows_cmd, dtype=float).reshape(-1, 4),
-            state=np.asarray(rows_state, dtype=int), watch=self._watch)
+            final_error_m=final_error, final_xy_m=final_xy, time_to_reach_s=judge.first_s, fell_off=fell,
+            sim_time_s=self.data.time - trial.t0_sim_s, wall_time_s=time.perf_counter() - trial.wall0_s,
+            physics_wall_s=trial.physics_s, link_wall_s=trial.link_s, t_s=rows["t_s"], true_xy_m=true_xy_m,
+            measured_xy_m=rows["measured_xy_m"], tilt_deg=rows["tilt_deg"], command_m=rows["command_m"],
+            state=rows["state"], watch=self._watch)
+
+
+@dataclass
+class _Trial:
+    """One running trial's clocks and time accounts."""
+    wall0_s: float                  # [s] perf_counter when the trial began (set-up included)
+    t0_sim_s: float                 # [s] physics time at trial time 0
+    base_us: int                    # [us] the firmware's clock at trial time 0
+    wall_start_s: float             # [s] perf_counter at trial time 0 (real time paces the physics to it)
+    deliver_us: int = 0             # [us] the firmware's clock when the present frame arrives
+    physics_s: float = 0.0          # [s] wall time spent stepping MuJoCo
+    link_s: float = 0.0             # [s] wall time spent in the protocol exchange

@@ -439,7 +439,7 @@ def test_a_trial_spec_is_refused_exactly_when_the_firmware_would_refuse_its_comm
     link = Link(InProcessTransport(simulated_clock=True))
     link.identify()
     refused_by_firmware = []
-    for command in _unchecked_spec(**fields).commands():
+    for command in _unchecked_spec(**fields).setup().commands():
         try:
             link.command(command)
         except CommandRefused as refused:

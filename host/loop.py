@@ -1,0 +1,98 @@
+"""The closed loop, one for the rig and the simulation: camera frames in, position frames out, telemetry and the
+trajectory recorded, the target's tolerance judged.
+
+What differs between the two is outside it: where a frame comes from (the tracker on the rig's camera, the plant
+in the simulation) and how a position frame reaches the firmware (`send`: a RigSession on the rig, a Link in
+lock-step in the simulation). Times are trial time [s] from the start; positions [m] in the fabric frame.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from mantaray.protocol import messages as m
+
+U16 = 0xFFFF
+U32 = 0xFFFFFFFF
+US_PER_S = 1_000_000
+
+
+@dataclass
+class Tolerance:
+    """Within epsilon of the target: since when, and whether for long enough (hold_s; 0: the first frame within)."""
+    tolerance_m: float              # [m] epsilon
+    hold_s: float = 0.0             # [s] how long the object must stay within before it counts as reached
+    first_s: float | None = None    # [s] the first frame within (the paper's reach), None until then
+    _since_s: float | None = None   # [s] start of the present stay within
+
+    def update(self, t_s: float, xy_m, target_m) -> bool:
+        """One frame's position: True once the object has stayed within for hold_s."""
+        near = math.hypot(xy_m[0] - target_m[0], xy_m[1] - target_m[1]) < self.tolerance_m
+        if near and self.first_s is None:
+            self.first_s = t_s
+        self._since_s = (self._since_s if self._since_s is not None else t_s) if near else None
+        return self._since_s is not None and t_s - self._since_s >= self.hold_s
+
+
+@dataclass
+class ClosedLoop:
+    """Sends camera frames to the firmware and records one row per frame (a dropped frame records no answer).
+
+    send(msg) delivers one position frame and returns its telemetry, or None when none answered it.
+    capture_time goes out as time_base_us + the frame's trial time, on the firmware's clock.
+    """
+    send: Callable[[m.ObjectPosition], m.Telemetry | None]
+    time_base_us: int = 0           # [us] the firmware's clock at trial time 0
+    frame: int = 0                  # the last frame number sent (u16, runs on across trials)
+    on_telemetry: Callable[[m.Telemetry], None] | None = None   # each answer, as it comes (the plant applies it)
+    t_s: list = field(default_factory=list)           # [s] capture times
+    measured_xy_m: list = field(default_factory=list)  # [m] what the firmware was sent (NaN: not seen, dropped)
+    target_m: list = field(default_factory=list)      # [m] the target at each frame
+    tilt_deg: list = field(default_factory=list)      # [deg] theta_zx, theta_zy from telemetry (NaN: no answer)
+    command_m: list = field(default_factory=list)     # [m] a_0..a_3 from telemetry
+    state: list = field(default_factory=list)         # supervisor state (-1: no answer)
+
+    def step(self, capture_s: float, measured_xy_m, target_m) -> m.Telemetry | None:
+        """One camera frame captured at trial time capture_s: measured_xy_m None (or NaN) is sent as not visible."""
+        visible = measured_xy_m is not None and bool(np.all(np.isfinite(measured_xy_m)))
+        self.frame = (self.frame + 1) & U16
+        msg = m.ObjectPosition(frame=self.frame, capture_time=(self.time_base_us + round(capture_s * US_PER_S)) & U32,
+                               x=float(measured_xy_m[0]) if visible else 0.0,
+                               y=float(measured_xy_m[1]) if visible else 0.0,
+                               flags=0 if visible else m.PositionFlags.NOT_VISIBLE)
+        telemetry = self.send(msg)
+        if telemetry is not None and self.on_telemetry is not None:
+            self.on_telemetry(telemetry)
+        self._record(capture_s, measured_xy_m if visible else None, target_m, telemetry)
+        return telemetry
+
+    def dropped(self, capture_s: float, target_m) -> None:
+        """A frame the camera took (its number is used up) that never reached the firmware: a row with no answer."""
+        self.frame = (self.frame + 1) & U16
+        self._record(capture_s, None, target_m, None)
+
+    def _record(self, capture_s: float, xy_m, target_m, telemetry: m.Telemetry | None) -> None:
+        self.t_s.append(capture_s)
+        self.measured_xy_m.append(tuple(xy_m) if xy_m is not None else (math.nan, math.nan))
+        self.target_m.append(tuple(target_m))
+        if telemetry is None:
+            self.tilt_deg.append((math.nan, math.nan))
+            self.command_m.append((math.nan,) * 4)
+            self.state.append(-1)
+        else:
+            self.tilt_deg.append((telemetry.tilt_zx, telemetry.tilt_zy))
+            self.command_m.append(tuple(telemetry.command))
+            self.state.append(int(telemetry.state))
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The rows as arrays: t_s (n,), measured_xy_m (n, 2), target_m (n, 2), tilt_deg (n, 2), command_m (n, 4),
+        state (n,)."""
+        return {"t_s": np.asarray(self.t_s, dtype=float),
+                "measured_xy_m": np.asarray(self.measured_xy_m, dtype=float).reshape(-1, 2),
+                "target_m": np.asarray(self.target_m, dtype=float).reshape(-1, 2),
+                "tilt_deg": np.asarray(self.tilt_deg, dtype=float).reshape(-1, 2),
+                "command_m": np.asarray(self.command_m, dtype=float).reshape(-1, 4),
+                "state": np.asarray(self.state, dtype=int)}
