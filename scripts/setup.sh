@@ -19,7 +19,7 @@ if ((${#missing[@]})); then
 fi
 
 # The Python package (editable, with test extras).
-if ! python3 -c "import mantaray, pytest, hypothesis, serial, numpy, mujoco, matplotlib, tqdm, imageio, imageio_ffmpeg, ray, cv2, optuna" 2>/dev/null ||
+if ! python3 -c "import mantaray, pytest, hypothesis, serial, numpy, mujoco, matplotlib, tqdm, imageio, imageio_ffmpeg, ray, cv2, optuna, scikit_build_core" 2>/dev/null ||
    ! python3 -m pip show -q mantaray >/dev/null 2>&1; then
   echo "setup: installing the mantaray Python package"
   python3 -m pip install -q --disable-pip-version-check -e ".[test]"
