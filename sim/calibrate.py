@@ -125,7 +125,7 @@ def open_study(path: Path, evidence, keys: list[P.Parameter], fixed: dict):
                      optuna.samplers.TPESampler(seed=seed))
     stored = study.user_attrs.get("config")
     if stored is not None and stored == config:
-        requeue_abandoned(study)
+        requeue_abandoned(study, {p.key for p in keys})
     if stored is None:
         study.set_user_attr("config", config)
     elif stored != config:
@@ -135,8 +135,9 @@ def open_study(path: Path, evidence, keys: list[P.Parameter], fixed: dict):
     return study
 
 
-def requeue_abandoned(study) -> None:
-    """Candidates left running by a search that was killed (not interrupted) fail, and are queued again.
+def requeue_abandoned(study, searched: set[str]) -> None:
+    """Candidates left running by a search that was killed (not interrupted) fail, and are queued again when all
+    their values had been drawn (one killed while drawing them is no candidate yet).
 
     One search runs on a study at a time (its pool uses every core), so a running candidate found on opening
     belongs to a process that is gone."""
@@ -144,7 +145,8 @@ def requeue_abandoned(study) -> None:
 
     for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.RUNNING,)):
         study.tell(t.number, state=optuna.trial.TrialState.FAIL)
-        _queue_again(study, t.params)
+        if set(t.params) == searched:
+            _queue_again(study, t.params)
 
 
 def _queue_again(study, params: dict) -> None:
@@ -173,8 +175,12 @@ def run_study(study, evidence, keys: list[P.Parameter], fixed: dict, candidates:
     while len(completed(study)) < candidates:
         trial = study.ask()
         values = dict(fixed)
-        for p in keys:
-            values[p.key] = suggest(trial, p)
+        try:
+            for p in keys:
+                values[p.key] = suggest(trial, p)
+        except BaseException:                 # interrupted while drawing: no candidate yet, nothing to run again
+            study.tell(trial, state=optuna.trial.TrialState.FAIL)
+            raise
         t0 = time.perf_counter()
         try:
             objectives, details = evidence.evaluate(values, pool)

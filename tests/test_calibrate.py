@@ -58,10 +58,12 @@ def _study_rows(db) -> list[tuple[int, str]]:
 
 
 def _running_with_params(db) -> bool:
-    """A candidate is in flight with its values drawn (a trial row exists a moment before its parameters do)."""
+    """A candidate is in flight with all its values drawn (a trial row exists a moment before its parameters do,
+    and they come one by one)."""
+    searched = len(TINY[TINY.index("--params") + 1].split(","))
     with sqlite3.connect(db) as con:
-        return bool(con.execute("select count(*) from trial_params p join trials t on p.trial_id = t.trial_id "
-                                "where t.state = 'RUNNING'").fetchone()[0])
+        return con.execute("select count(*) from trial_params p join trials t on p.trial_id = t.trial_id "
+                           "where t.state = 'RUNNING'").fetchone()[0] >= searched
 
 
 @pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM])
@@ -217,10 +219,19 @@ def test_a_candidate_left_running_by_a_killed_search_is_queued_again(tmp_path):
     study, evidence, keys = _toy_study(tmp_path / "toy.db")
     orphan = study.ask()
     size = C.suggest(orphan, keys[0])                 # the search was killed here: the trial stays RUNNING
-    C.requeue_abandoned(study)
+    C.requeue_abandoned(study, {p.key for p in keys})
     assert study.trials[orphan.number].state == optuna.trial.TrialState.FAIL
     C.run_study(study, evidence, keys, {}, 1, pool=None)
     assert C.completed(study)[0].user_attrs["values"]["fabric.size_m"] == size
+
+
+def test_a_candidate_killed_while_its_values_were_drawn_fails_and_is_not_queued(tmp_path):
+    """Values drawn in part are no candidate: queued, they would run with the rest drawn afresh, as another one."""
+    study, evidence, keys = _toy_study(tmp_path / "toy.db")
+    orphan = study.ask()                              # killed before its values were drawn
+    C.requeue_abandoned(study, {p.key for p in keys})
+    assert study.trials[orphan.number].state == optuna.trial.TrialState.FAIL
+    assert not study.get_trials(states=(optuna.trial.TrialState.WAITING,))
 
 
 def test_an_interrupted_candidate_is_evaluated_first_when_the_search_continues(tmp_path):
