@@ -78,6 +78,7 @@ class Link:
         self.lost_frames = 0  # firmware frames missing from the firmware's sequence
         self.stale_frames = 0  # firmware frames that came twice or after a newer one (a duplicating or reordering link)
         self.rig_differences: list[str] = []   # rig constants the firmware reported otherwise (identify)
+        self.resyncs = 0     # times a frame came behind the firmware's count and the link identified again
         self.resets = 0  # boot messages seen
         self._pending: collections.deque[Message] = collections.deque()
 
@@ -136,8 +137,12 @@ class Link:
                     return msg
         raise LinkError(f"no answer after {self.retries + 1} tries of {self.ack_timeout_s:.3f} s each")
 
-    def command(self, msg: Message) -> Message:
-        """Sends a command and returns its ack (identify_reply for identify); raises CommandRefused on a nack."""
+    def command(self, msg: Message, *, resynced: bool = False) -> Message:
+        """Sends a command and returns its ack (identify_reply for identify); raises CommandRefused on a nack.
+
+        A command refused as stale_sequence was never applied: this host's counter fell behind the firmware's
+        (PROTOCOL.md section 3). The link identifies, which starts the firmware's count afresh, and sends it again.
+        """
         seq = self._next_seq()
 
         def answers(reply: Message) -> bool:
@@ -147,6 +152,10 @@ class Link:
 
         reply = self._await_reply(encode_frame(msg, seq), answers)
         if isinstance(reply, m.Nack):
+            if reply.code == m.ErrorCode.STALE_SEQUENCE and not resynced:
+                self.resyncs += 1
+                self.command(m.Identify(), resynced=True)
+                return self.command(msg, resynced=True)
             raise CommandRefused(msg, reply)
         return reply
 
@@ -158,6 +167,11 @@ class Link:
         while (remaining := deadline - time.monotonic()) > 0:
             reply = self.receive(remaining)
             if isinstance(reply, m.Nack) and reply.ref_id == msg.ID and reply.ref_seq == seq:
+                if reply.code == m.ErrorCode.STALE_SEQUENCE:     # never applied; the next frame will be
+                    self.resyncs += 1
+                    self.command(m.Identify(), resynced=True)
+                    raise LinkError(f"position frame {msg.frame} came behind the firmware's count: identified "
+                                    f"again, the next frame counts")
                 raise CommandRefused(msg, reply)
             if isinstance(reply, m.Telemetry) and reply.position_frame == msg.frame:
                 return reply

@@ -192,6 +192,7 @@ def render_cpp(schema: dict) -> str:
     for err in schema["errors"]:
         out.append(f"  k{camel(err['name'])} = {err['code']},  // {err['doc']}")
     out.append("};")
+    out.append(f"constexpr uint8_t kLastErrorCode = {max(e['code'] for e in schema['errors'])};  // nack.code is 1..this")
     out.append("")
     for name, enum in schema["enums"].items():
         out.append(f"// {enum['doc']}")

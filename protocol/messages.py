@@ -9,7 +9,7 @@ from typing import ClassVar
 from .codec import FieldSpec, Message
 
 PROTOCOL_VERSION = 1
-SCHEMA_HASH = 0x297D3AAB
+SCHEMA_HASH = 0xC62B6878
 MAX_PACKET = 44  # [bytes] id + seq + payload + CRC
 MAX_WIRE = 46  # [bytes] COBS packet + delimiter
 NO_FIELD = 255
@@ -27,6 +27,7 @@ class ErrorCode(enum.IntEnum):
     NO_TARGET = 6
     UNSUPPORTED = 7
     STALE_POSITION = 8
+    STALE_SEQUENCE = 9
 
 
 ERROR_DOCS = {
@@ -38,6 +39,7 @@ ERROR_DOCS = {
     ErrorCode.NO_TARGET: 'start was sent before any set_target.',
     ErrorCode.UNSUPPORTED: 'The command exists but this build cannot do it (sim_clock on a wall-clock or real board).',
     ErrorCode.STALE_POSITION: 'object_position whose frame counter repeats the last one or whose capture time does not advance.',
+    ErrorCode.STALE_SEQUENCE: 'A frame whose sequence number is 1 to 64 behind the newest one taken, or equals it with other content: a delayed or duplicated copy of an older frame, not applied (PROTOCOL.md section 3).',
 }
 
 

@@ -257,3 +257,98 @@ def test_duplicated_and_reordered_frames_are_not_counted_as_lost():
     while link.receive() is not None:
         pass
     assert link.lost_frames == 2 and link.stale_frames == 4
+
+
+class _Tapped:
+    """An in-process board behind a link that can replay an old frame late, duplicate the next frame, and lose the
+    next answer: the faults of a link that reorders and duplicates."""
+
+    def __init__(self) -> None:
+        from mantaray.host.transport import InProcessTransport
+
+        self.board = InProcessTransport(simulated_clock=False)
+        self.written: list[bytes] = []
+        self.duplicate_next = False
+        self.lose_next_answer = False
+
+    def write(self, data: bytes) -> None:
+        self.written.append(data)
+        self.board.write(data)
+        if self.duplicate_next:
+            self.duplicate_next = False
+            self.board.write(data)
+
+    def read(self, timeout_s: float) -> bytes:
+        data = self.board.read(timeout_s)
+        if self.lose_next_answer and b"\x00" in data:
+            self.lose_next_answer = False
+            data = data[data.index(b"\x00") + 1:]
+        return data
+
+    def close(self) -> None:
+        pass
+
+
+def _tapped_link() -> tuple[Link, _Tapped]:
+    tap = _Tapped()
+    link = Link(tap, ack_timeout_s=0.05)
+    link.identify()
+    link.command(m.Configure(telemetry_period=0))
+    return link, tap
+
+
+def _drain(link: Link) -> list:
+    out = []
+    while (msg := link.receive(0.01)) is not None:
+        out.append(msg)
+    return out
+
+
+def test_a_late_copy_of_an_older_set_target_does_not_undo_the_newer_one():
+    link, tap = _tapped_link()
+    link.command(m.SetTarget(x=0.1, y=0.0))
+    old = tap.written[-1]
+    link.command(m.SetTarget(x=-0.1, y=0.0))
+    tap.board.write(old)                               # the delayed copy arrives after the newer command
+    assert any(isinstance(x, m.Nack) and x.code == m.ErrorCode.STALE_SEQUENCE for x in _drain(link))
+    link.command(m.Start())
+    t = link.position(m.ObjectPosition(frame=1, capture_time=1000, x=0.0, y=0.0))
+    assert t.tilt_zx < 0                               # steering to x = -0.1, the newer target
+
+
+def test_a_late_copy_of_an_older_stop_does_not_stop_a_newer_run():
+    link, tap = _tapped_link()
+    link.command(m.SetTarget(x=0.1, y=0.0))
+    link.command(m.Stop())
+    stop = tap.written[-1]
+    link.command(m.Start())
+    tap.board.write(stop)
+    _drain(link)
+    t = link.position(m.ObjectPosition(frame=1, capture_time=1000, x=0.0, y=0.0))
+    assert m.State(t.state) == m.State.RUNNING
+
+
+def test_a_duplicated_position_whose_answer_was_lost_is_answered_not_refused():
+    """The first copy was applied and its telemetry lost: the second copy's answer is that telemetry again."""
+    link, tap = _tapped_link()
+    link.command(m.SetTarget(x=0.1, y=0.0))
+    link.command(m.Start())
+    link.position(m.ObjectPosition(frame=1, capture_time=1000, x=0.0, y=0.0))
+    tap.duplicate_next, tap.lose_next_answer = True, True
+    t = link.position(m.ObjectPosition(frame=2, capture_time=84000, x=0.01, y=0.0))
+    assert t.position_frame == 2 and m.State(t.state) == m.State.RUNNING
+    assert link.position(m.ObjectPosition(frame=3, capture_time=168000, x=0.02, y=0.0)).position_frame == 3
+
+
+def test_a_host_whose_count_fell_behind_identifies_and_sends_again():
+    link, tap = _tapped_link()
+    link.command(m.SetTarget(x=0.1, y=0.0))
+    link.seq = (link.seq - 10) & 0xFF                  # as if this host's counter were behind the firmware's
+    assert isinstance(link.command(m.SetTarget(x=-0.1, y=0.0)), m.Ack) and link.resyncs == 1
+    link.command(m.Start())
+    assert link.position(m.ObjectPosition(frame=1, capture_time=1000, x=0.0, y=0.0)).tilt_zx < 0   # it was applied
+    link.seq = (link.seq - 10) & 0xFF
+    with pytest.raises(LinkError, match="behind the firmware's count"):
+        link.position(m.ObjectPosition(frame=2, capture_time=84000, x=0.0, y=0.0))
+    assert link.resyncs == 2
+    assert link.position(m.ObjectPosition(frame=3, capture_time=168000, x=0.0, y=0.0)).position_frame == 3

@@ -10,7 +10,7 @@ from mantaray.host.link import CommandRefused, Link
 from mantaray.protocol import messages as m
 from mantaray.protocol import rig
 from mantaray.protocol.codec import Message
-from mantaray.protocol.framing import FrameDecoder, cobs_encode, crc16, encode_frame
+from mantaray.protocol.framing import Frame, FrameDecoder, cobs_encode, crc16, encode_frame
 
 # The known configuration every test starts from: the schema's boot values, but no unsolicited
 # telemetry, so that every frame the firmware sends answers something the test sent.
@@ -151,6 +151,12 @@ class Dut:
         return self.command(m.EmergencyStop())
 
     # ------------------------------------------------------------------------------------ camera
+    def forget_sequence(self) -> None:
+        """identify: the firmware forgets the newest frame it took (and the camera history), so the next frame
+        may carry any seq (PROTOCOL.md section 3)."""
+        self.link.identify()
+        self.reset_camera()
+
     def reset_camera(self) -> None:
         """A new camera history (after identify or start, the firmware has forgotten the old one)."""
         self.frame = 0
@@ -229,7 +235,12 @@ class Dut:
         return encode_frame(msg, seq), seq
 
     def send_raw(self, data: bytes, chunk: int | None = None) -> None:
-        """Bytes straight to the device, all at once or `chunk` bytes per write."""
+        """Bytes straight to the device, all at once or `chunk` bytes per write. A hand-made frame numbered ahead
+        of the link's counter moves the counter there, as the host's own counter would have been: the frames the
+        harness sends next (a probe) are then newer, not stale (PROTOCOL.md section 3)."""
+        for frame in FrameDecoder().feed(data):
+            if isinstance(frame, Frame) and 1 <= ((frame.seq - self.link.seq) & 0xFF) <= 191:
+                self.link.seq = frame.seq
         if chunk is None:
             self.link.send_raw(data)
             return

@@ -74,31 +74,36 @@ void Firmware::dispatch() {
   if (size != decoder_.payload_len()) return send_reply(id, seq, ErrorCode::kBadLength, proto::kNoField);
 
   if (id == proto::Identify::kId) {
-    has_last_ = false;  // a (re)connected host: its sequence numbers start afresh
+    has_newest_ = false;  // a (re)connected host: its sequence numbers start afresh
+    last_command_.valid = last_position_.valid = false;
     supervisor_.forget_positions();
     return send_identify_reply();
   }
-  if (id == proto::ObjectPosition::kId) {
-    const uint32_t now = hal_.now_us();
-    uint8_t field = proto::kNoField;
-    const ErrorCode code = supervisor_.position(decoded<proto::ObjectPosition>(decoder_.payload()), now, field);
-    apply_outputs();
-    if (code != ErrorCode::kOk) return send_reply(id, seq, code, field);
-    return send_telemetry(now);
+  const bool position = id == proto::ObjectPosition::kId;
+  Answered& last = position ? last_position_ : last_command_;
+  // A copy of the last command (camera frames may have come since), or of the newest frame when it was a
+  // position (after a newer command its telemetry would answer for another state): the same answer, applied once.
+  const bool copy = last.valid && seq == last.seq && decoder_.crc() == last.crc && id == last.id &&
+                    (!position || seq == newest_seq_);
+  if (copy) return answer_again(last, id, seq);
+  if (has_newest_ && static_cast<uint8_t>(newest_seq_ - seq) <= kStaleWindow) {  // wraps: 0 the newest, 1.. older
+    return send_reply(id, seq, ErrorCode::kStaleSequence, proto::kNoField);
   }
-  if (has_last_ && id == last_id_ && seq == last_seq_ && decoder_.crc() == last_crc_) {
-    return send_reply(id, seq, last_code_, last_field_);  // a retransmission: answer again, apply once
-  }
+  const uint32_t now = hal_.now_us();
   uint8_t field = proto::kNoField;
-  const ErrorCode code = handle_command(field);
+  const ErrorCode code = position ? supervisor_.position(decoded<proto::ObjectPosition>(decoder_.payload()), now, field)
+                                  : handle_command(field);
   apply_outputs();
-  has_last_ = true;
-  last_id_ = id;
-  last_seq_ = seq;
-  last_crc_ = decoder_.crc();
-  last_code_ = code;
-  last_field_ = field;
+  has_newest_ = true;
+  newest_seq_ = seq;
+  last = Answered{true, id, seq, decoder_.crc(), code, field};
+  if (position && code == ErrorCode::kOk) return send_telemetry(now);
   send_reply(id, seq, code, field);
+}
+
+void Firmware::answer_again(const Answered& last, uint8_t id, uint8_t seq) {
+  if (id == proto::ObjectPosition::kId && last.code == ErrorCode::kOk) return send_telemetry(hal_.now_us());
+  send_reply(id, seq, last.code, last.field);
 }
 
 ErrorCode Firmware::handle_command(uint8_t& field) {

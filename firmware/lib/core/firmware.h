@@ -46,13 +46,22 @@ class Firmware {
   uint32_t clock_us_ = 0;      // [us] firmware clock at the last millis()
   uint32_t clock_ms_ = 0;      // [ms] accumulated
   uint16_t clock_rest_us_ = 0; // [us] below a millisecond, carried
-  // The last command answered, to answer a retransmission again without applying it twice.
-  bool has_last_ = false;
-  uint8_t last_id_ = 0;
-  uint8_t last_seq_ = 0;
-  uint16_t last_crc_ = 0;
-  proto::ErrorCode last_code_ = proto::ErrorCode::kOk;
-  uint8_t last_field_ = proto::kNoField;
+  // What a frame was answered with, to answer a copy of it again without applying it twice.
+  struct Answered {
+    bool valid;
+    uint8_t id, seq;
+    uint16_t crc;
+    proto::ErrorCode code;
+    uint8_t field;
+  };
+  void answer_again(const Answered& last, uint8_t id, uint8_t seq);
+  // Order (PROTOCOL.md section 3): a copy of the last command or of the last position is answered again; any
+  // other frame 0..kStaleWindow sequence numbers behind the newest one taken is a late copy: refused as stale.
+  static constexpr uint8_t kStaleWindow = 64;
+  bool has_newest_ = false;
+  uint8_t newest_seq_ = 0;
+  Answered last_command_ = {false, 0, 0, 0, proto::ErrorCode::kOk, proto::kNoField};
+  Answered last_position_ = {false, 0, 0, 0, proto::ErrorCode::kOk, proto::kNoField};
 };
 
 }  // namespace mr

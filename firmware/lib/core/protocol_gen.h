@@ -9,7 +9,7 @@ namespace mr {
 namespace proto {
 
 constexpr uint16_t kProtocolVersion = 1;
-constexpr uint32_t kSchemaHash = 0x297D3AABu;
+constexpr uint32_t kSchemaHash = 0xC62B6878u;
 constexpr uint8_t kMaxPacket = 44;  // [bytes] id + seq + payload + CRC
 constexpr uint8_t kMaxWire = 46;  // [bytes] COBS packet + delimiter
 constexpr uint8_t kNoField = 255;  // nack.field when no single field is at fault
@@ -24,7 +24,9 @@ enum class ErrorCode : uint8_t {
   kNoTarget = 6,  // start was sent before any set_target.
   kUnsupported = 7,  // The command exists but this build cannot do it (sim_clock on a wall-clock or real board).
   kStalePosition = 8,  // object_position whose frame counter repeats the last one or whose capture time does not advance.
+  kStaleSequence = 9,  // A frame whose sequence number is 1 to 64 behind the newest one taken, or equals it with other content: a delayed or duplicated copy of an older frame, not applied (PROTOCOL.md section 3).
 };
+constexpr uint8_t kLastErrorCode = 9;  // nack.code is 1..this
 
 // Supervisor state.
 enum class State : uint8_t {

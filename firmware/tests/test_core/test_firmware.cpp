@@ -276,7 +276,7 @@ TEST_CASE("firmware: a retransmitted command is answered again but applied once"
   h.expect_nack(proto::Start::kId, 3, ErrorCode::kBadState, proto::kNoField);
 }
 
-TEST_CASE("firmware: same id and seq with a different payload is a new command, not a retransmission") {
+TEST_CASE("firmware: same id and seq with a different payload is a stale copy, not a retransmission") {
   Host h;
   h.take();
   h.send_msg(proto::Jog{0, 0.1f}, 5);
@@ -285,9 +285,27 @@ TEST_CASE("firmware: same id and seq with a different payload is a new command, 
   h.send_msg(proto::Jog{0, 0.1f}, 5);  // retransmission: ack, nothing new
   h.expect_ack(proto::Jog::kId, 5);
   CHECK(h.fw.supervisor().output().command[0] == 0.1f);
-  // Same id and seq but a different payload (hence CRC): a new command, applied.
+  // Same id and seq but a different payload (hence CRC): not the newest frame, so refused and not applied.
   h.send_msg(proto::Jog{0, 0.2f}, 5);
-  h.expect_ack(proto::Jog::kId, 5);
+  h.expect_nack(proto::Jog::kId, 5, ErrorCode::kStaleSequence, proto::kNoField);
+  CHECK(h.fw.supervisor().output().command[0] == 0.1f);
+}
+
+TEST_CASE("firmware: a frame 1..64 behind the newest is stale, 65 behind is new (a wrap-safe window)") {
+  Host h;
+  h.take();
+  for (int behind : {1, 64}) {
+    const uint8_t newest = static_cast<uint8_t>(200 + behind);
+    h.send_msg(proto::Jog{0, 0.1f}, newest);
+    h.expect_ack(proto::Jog::kId, newest);
+    const uint8_t old_seq = static_cast<uint8_t>(newest - behind);
+    h.send_msg(proto::Jog{0, 0.2f}, old_seq);
+    h.expect_nack(proto::Jog::kId, old_seq, ErrorCode::kStaleSequence, proto::kNoField);
+    CHECK(h.fw.supervisor().output().command[0] == 0.1f);
+  }
+  const uint8_t far = static_cast<uint8_t>(200 + 64 - 65);  // 65 behind the newest (264 mod 256 = 8): 191 ahead
+  h.send_msg(proto::Jog{0, 0.2f}, far);
+  h.expect_ack(proto::Jog::kId, far);
   CHECK(h.fw.supervisor().output().command[0] == 0.2f);
 }
 
@@ -363,9 +381,12 @@ TEST_CASE("firmware: bad positions are nacked with the frame's seq; not-visible 
   h.expect_nack(proto::ObjectPosition::kId, 10, ErrorCode::kStalePosition, 1);
   h.send_msg(pos(3, 3000, kNaN, kNaN, proto::position_flags::kNotVisible), 11);
   CHECK(h.expect_telemetry().position_frame == 3);
-  // A repeated object_position (same seq, same bytes) is not a command retransmission: it is stale.
+  // A repeated object_position (same seq, same bytes): a copy of the newest frame, answered again.
   h.send_msg(pos(3, 3000, kNaN, kNaN, proto::position_flags::kNotVisible), 11);
-  h.expect_nack(proto::ObjectPosition::kId, 11, ErrorCode::kStalePosition, 0);
+  CHECK(h.expect_telemetry().position_frame == 3);
+  // The same frame counter with a new seq is a new frame that repeats the camera's count: stale_position.
+  h.send_msg(pos(3, 3000, kNaN, kNaN, proto::position_flags::kNotVisible), 12);
+  h.expect_nack(proto::ObjectPosition::kId, 12, ErrorCode::kStalePosition, 0);
 }
 
 TEST_CASE("firmware: periodic telemetry every telemetry_period, counted from the last one") {
