@@ -21,7 +21,7 @@ from pathlib import Path
 import optuna
 
 from mantaray.sim import calibrate as C
-from mantaray.sim.heatmap import LocalPool
+from mantaray.sim.executors import LocalPool
 from mantaray.sim.parameters import plant_names
 
 

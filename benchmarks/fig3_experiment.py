@@ -18,7 +18,8 @@ from pathlib import Path
 from mantaray.protocol import messages as m
 from mantaray.sim.fig3 import run_fig3
 from mantaray.sim.findings import MODULE_M, fig3_finding
-from mantaray.sim.heatmap import LocalPool, Experiment
+from mantaray.sim.executors import LocalPool
+from mantaray.sim.experiment import Experiment
 from mantaray.sim.parameters import plant_names
 from mantaray.plots import fig3_figure
 

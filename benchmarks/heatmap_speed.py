@@ -24,7 +24,10 @@ from pathlib import Path
 
 import numpy as np
 
-from mantaray.sim import heatmap as H
+from mantaray.sim import executors as X
+from mantaray.sim import experiment as E
+from mantaray.sim import results_file as R
+from mantaray.sim import summary as S
 from mantaray.sim.plant import DEFAULT_PLANT
 
 SAMPLE_IX = (2, 7, 12, 17)   # cells ix, iy of the sample: centres at -0.1875, -0.0625, 0.0625, 0.1875 m
@@ -46,7 +49,7 @@ def batched_stepping(steps: int = 500) -> None:
 
     from mantaray.sim import model as M
 
-    model, data = M.load(H.Experiment().rig())
+    model, data = M.load(E.Experiment().rig())
     M.drop_object(model, data, 0.05, 0.02)
     for _ in range(200):
         mujoco.mj_step(model, data)
@@ -71,7 +74,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--configs", default="15:0.001,11:0.002,11:0.004,15:0.002",
                         help="comma-separated RESOLUTION:TIMESTEP[:SEED] (seed of the trials' draw, default "
-                             f"{H.Experiment.seed}); the first is the reference")
+                             f"{E.Experiment.seed}); the first is the reference")
     parser.add_argument("--controller", default="manhattan")
     parser.add_argument("--object", default="sphere")
     parser.add_argument("--alpha", type=float, default=0.0)
@@ -92,20 +95,20 @@ def main() -> int:
           f"per rate: mean, and against the reference mean |Δ| / max |Δ| / bias "
           f"(tolerance {MEAN_ABS_TOLERANCE} / - / ±{BIAS_TOLERANCE})")
     for resolution, timestep, seed in configs:
-        protocol = H.Experiment(object_name=args.object, controller=args.controller, alpha_m=args.alpha,
+        protocol = E.Experiment(object_name=args.object, controller=args.controller, alpha_m=args.alpha,
                               resolution=resolution, timestep_s=timestep, seed=seed, only_cells=cells,
                               plant=args.plant)
-        drawn = "" if seed == H.Experiment.seed else f"_seed{seed}"
+        drawn = "" if seed == E.Experiment.seed else f"_seed{seed}"
         plant = "" if args.plant == DEFAULT_PLANT else f"_{args.plant}"
-        results = H.ResultsFile.open(
+        results = R.ResultsFile.open(
             Path(args.out) / f"{args.object}_{args.controller}_{resolution}_{timestep:g}{drawn}{plant}.jsonl", protocol)
         todo = results.missing()
         t0 = time.perf_counter()
-        H.run(results, H.run_local(protocol, todo, args.jobs))
+        X.run(results, X.run_local(protocol, todo, args.jobs))
         wall = time.perf_counter() - t0
         records = list(results.records.values())
         new = [r for r in records if r["key"] in {t.key for t in todo}]
-        summary = H.summarize(results)
+        summary = S.summarize(results)
         rates = {label: getattr(summary, name).ravel()[list(cells)] for label, name in RATES}
         fell = np.mean([r["fell_off"] for r in records])
         line = f"{resolution:>4d} {timestep * 1000:g} ms" + (f" seed {seed}" if drawn else "")
@@ -130,7 +133,7 @@ def parse_config(text: str) -> tuple[int, float, int]:
     try:
         if len(fields) not in (2, 3):
             raise ValueError
-        return int(fields[0]), float(fields[1]), int(fields[2]) if len(fields) == 3 else H.Experiment.seed
+        return int(fields[0]), float(fields[1]), int(fields[2]) if len(fields) == 3 else E.Experiment.seed
     except ValueError:
         raise SystemExit(f"heatmap_speed: a config is RESOLUTION:TIMESTEP[:SEED] (like 15:0.001:7), got {text!r}") from None
 

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from mantaray.sim import calibrate as C
-from mantaray.sim.heatmap import LocalPool
+from mantaray.sim.executors import LocalPool
 from mantaray.sim.logfit import LogEvidence, write_log
 from mantaray.sim.parameters import default
 

@@ -50,17 +50,18 @@ ZONES = {   # name: which cells, from the cell centres' |x|, |y| [m] on the pape
 
 def zone_rates(results_path: Path) -> dict:
     """Mean success, reach and fall rates over the zones of the workspace, and the regions under the reach rule."""
-    from mantaray.sim import heatmap as H
+    from mantaray.sim import results_file as R
+    from mantaray.sim import summary as S
 
-    results = H.ResultsFile.load(results_path)
-    s, p = H.summarize(results), results.protocol
+    results = R.ResultsFile.load(results_path)
+    s, p = S.summarize(results), results.protocol
     centres = -0.25 + (np.arange(p.cells) + 0.5) * 0.5 / p.cells
     ax, ay = np.meshgrid(np.abs(centres), np.abs(centres))
     zones = {name: {kind: round(float(np.nanmean(rates[pick(ax, ay)])), 3)
                     for kind, rates in (("success", s.rates), ("reach", s.reach_rates), ("fell", s.fell_rates))}
              for name, pick in ZONES.items()}
     reach = s.reach_rates[np.isfinite(s.reach_rates)]
-    regions = {"success": int((reach >= H.SUCCESS_REGION_AT).sum()), "failure": int((reach <= H.FAILURE_REGION_AT).sum())}
+    regions = {"success": int((reach >= S.SUCCESS_REGION_AT).sum()), "failure": int((reach <= S.FAILURE_REGION_AT).sum())}
     regions["uncertain"] = len(reach) - regions["success"] - regions["failure"]
     return {"zones": zones, "reach_regions_cells": regions}
 
@@ -149,9 +150,9 @@ def main() -> int:
 def findings(euclidean_path: Path, manhattan_path: Path) -> dict:
     """F1-F5 on the full sphere maps, under each success rule."""
     from mantaray.sim import findings as F
-    from mantaray.sim import heatmap as H
+    from mantaray.sim import results_file as R
 
-    runs = {c: H.ResultsFile.load(p) for c, p in (("euclidean", euclidean_path), ("manhattan", manhattan_path))}
+    runs = {c: R.ResultsFile.load(p) for c, p in (("euclidean", euclidean_path), ("manhattan", manhattan_path))}
     out = {}
     stopped = any(r.protocol.stop_when_reached for r in runs.values())   # then "end" is not measured
     for rule in ("reached",) if stopped else F.RULES:

@@ -16,7 +16,8 @@ import time
 
 import numpy as np
 
-from mantaray.sim import heatmap as H
+from mantaray.sim import executors as X
+from mantaray.sim import experiment as E
 from mantaray.sim.objects import OBJECTS
 from mantaray.sim.parameters import ParameterError, plant_names
 from mantaray.sim.plant import parse_setting
@@ -47,11 +48,11 @@ def main() -> int:
     except ParameterError as exc:
         parser.error(str(exc))
     for probe in probes:
-        experiment = H.Experiment(object_name=args.object, controller="manhattan", alpha_m=args.alpha,
+        experiment = E.Experiment(object_name=args.object, controller="manhattan", alpha_m=args.alpha,
                                   cells=args.cells, trials_per_cell=args.trials, seed=args.seed, plant=args.plant,
                                   plant_set=probe, stop_when_reached=True)
         t0 = time.perf_counter()
-        stats = sample_stats(list(H.run_local(experiment, H.trials(experiment), jobs=args.jobs)))
+        stats = sample_stats(list(X.run_local(experiment, E.trials(experiment), jobs=args.jobs)))
         label = ", ".join(f"{k}={v}" for k, v in probe) or f"{args.plant} as it is"
         print(f"{label}: reached {stats['reached']:.2f}, fell {stats['fell']:.2f}, "
               f"median move {stats['median_moved_m'] * 100:.1f} cm ({time.perf_counter() - t0:.0f} s)", flush=True)

@@ -23,7 +23,7 @@ from typing import Protocol as Interface
 
 from . import findings as F
 from . import parameters as P
-from .heatmap import Experiment, trials
+from .experiment import Experiment, trials
 from .plant import DEFAULT_PLANT, Plant
 
 CELLS = Experiment.cells            # the paper's 20 x 20 grid, on which the strata and the totals are defined

@@ -47,7 +47,7 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from mantaray.host.vmcu import VirtualMcu
 
     from .bridge import Bridge, TrialSpec
-    from .heatmap import controller_gains
+    from .experiment import controller_gains
     from .plant import Plant
     from mantaray.plots import path_phase_figure
 
@@ -172,7 +172,8 @@ def _cells(text: str) -> tuple[int, ...]:
 
 def _heatmap_outputs(results, out: Path, title: str) -> dict:
     """Write per-cell rates (CSV), the summary (JSON) and the figure beside the results file; return the summary."""
-    from .heatmap import cell_bounds, summarize
+    from .experiment import cell_bounds
+    from .summary import summarize
     from mantaray.plots import heatmap_figure
 
     s = summarize(results)
@@ -203,7 +204,9 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     a trial succeeds if the object ends within ε of its target at the end of T without falling off. The
     firmware core runs in-process (the same C++ as the virtual MCU). Results go to OUT/results.jsonl, one
     line per trial as it finishes: interrupt the run and the same command continues where it stopped."""
-    from .heatmap import Experiment, ExperimentMismatch, ResultsFile, run, run_local, run_ray
+    from .experiment import Experiment, ExperimentMismatch
+    from .results_file import ResultsFile
+    from .executors import run, run_local, run_ray
 
     try:
         protocol = Experiment(object_name=args.object, controller=args.controller, cells=args.cells,
@@ -268,7 +271,8 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
 
 def cmd_compare(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """The difference map of two heatmap runs (first minus second), like the paper's Euclidean - Manhattan."""
-    from .heatmap import ResultsFile, summarize
+    from .results_file import ResultsFile
+    from .summary import summarize
     from mantaray.plots import heatmap_figure
 
     _output(parser, writable_file, args.out, FIGURE_SUFFIXES)
@@ -329,7 +333,7 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
 
     from . import calibrate as C
     from . import parameters as P
-    from .heatmap import LocalPool, RayPool
+    from .executors import LocalPool, RayPool
     from .logfit import LogEvidence, check_logs
     from .plant import Plant, parse_setting
     from .progress import Progress
@@ -424,7 +428,7 @@ def _fig3_for(best, args: argparse.Namespace, pool, out: Path) -> dict:
 
     from .fig3 import run_fig3
     from .findings import MODULE_M, fig3_finding
-    from .heatmap import Experiment
+    from .experiment import Experiment
     from mantaray.plots import fig3_figure
 
     records = run_fig3(pool, args.plant, best.user_attrs["values"], resolution=args.resolution,

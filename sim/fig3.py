@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import findings as F
-from .heatmap import Experiment, Trial
+from .experiment import Experiment, Trial
 from .model import SimulationUnstable
 from .plant import DEFAULT_PLANT
 

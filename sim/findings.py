@@ -1,6 +1,6 @@
 """The paper's findings F1-F6 as numbers computed from trial records, each with the rule that says whether it holds.
 
-A record is a line of a heatmap results file (sim/heatmap.py trial_record): its cell, target, and whether it
+A record is a line of a heatmap results file (sim/results_file.py trial_record): its cell, target, and whether it
 ended within epsilon at T (success), was within epsilon at some frame (reached) and fell off. The rule that
 counts as success is a reading of the paper (sim/plant.toml reading.success_rule): "end" or "reached".
 
@@ -23,7 +23,7 @@ from typing import Iterable
 
 import numpy as np
 
-from .heatmap import FAILURE_REGION_AT
+from .summary import FAILURE_REGION_AT
 from .rig import Frame
 
 MODULE_M = (Frame().size_x_m, Frame().size_y_m)   # [m] the paper's module; the findings' zones are drawn on it

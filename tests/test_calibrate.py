@@ -21,7 +21,7 @@ from mantaray.sim import calibrate as C
 from mantaray.sim import logfit as L
 from mantaray.sim import parameters as P
 from mantaray.sim.bridge import Bridge, TrialSpec
-from mantaray.sim.heatmap import LocalPool
+from mantaray.sim.executors import LocalPool
 from mantaray.sim.plant import Plant
 
 FAST = {"resolution": 11, "timestep_s": 0.002}

@@ -426,7 +426,7 @@ def test_a_trial_spec_is_refused_exactly_when_the_firmware_would_refuse_its_comm
     """The host checks a trial's settings against the schema before any firmware sees them (TrialSpec), and
     that check agrees with the firmware: what it lets through is accepted, what it refuses the firmware refuses."""
     from mantaray.sim.bridge import TrialSpec
-    from mantaray.sim.heatmap import controller_gains
+    from mantaray.sim.experiment import controller_gains
 
     name = controller.name.lower()
     fields = dict(start_m=(0.0, 0.0), target_m=(0.1, -0.1), controller=name, tolerance_m=tolerance, alpha_m=alpha,

@@ -19,50 +19,53 @@ from mantaray.host.link import Link
 from mantaray.host.transport import InProcessTransport, SerialTransport
 from mantaray.host.vmcu import VirtualMcu
 from mantaray.paths import REPO
-from mantaray.sim import heatmap as H
+from mantaray.sim import executors as X
+from mantaray.sim import experiment as E
+from mantaray.sim import results_file as R
+from mantaray.sim import summary as S
 from mantaray.sim.bridge import Bridge, TrialSpec, is_success
 from mantaray.sim.rig import Rig
 
 MODULE = (0.5, 0.5)
-SMALL = H.Experiment(cells=2, trials_per_cell=2, duration_s=0.5)   # four cells, eight short trials
+SMALL = E.Experiment(cells=2, trials_per_cell=2, duration_s=0.5)   # four cells, eight short trials
 
 
 # ------------------------------------------------------------------------------------------- sampling
 @settings(max_examples=200, deadline=None)
 @given(seed=st.integers(0, 2 ** 32 - 1), cells=st.integers(1, 40), data=st.data())
 def test_targets_lie_in_their_cell_and_starts_on_the_workspace(seed, cells, data):
-    protocol = H.Experiment(cells=cells, seed=seed)
+    protocol = E.Experiment(cells=cells, seed=seed)
     cell = data.draw(st.integers(0, cells ** 2 - 1))
     k = data.draw(st.integers(0, 50))
-    trial = H.make_trial(protocol, MODULE, cell, k)
-    x_lo, x_hi, y_lo, y_hi = H.cell_bounds(protocol, MODULE, cell)
+    trial = E.make_trial(protocol, MODULE, cell, k)
+    x_lo, x_hi, y_lo, y_hi = E.cell_bounds(protocol, MODULE, cell)
     assert x_lo <= trial.target_m[0] <= x_hi and y_lo <= trial.target_m[1] <= y_hi
     assert all(abs(v) <= 0.25 for v in trial.start_m)
-    assert trial == H.make_trial(protocol, MODULE, cell, k)             # from (seed, cell, k) alone
+    assert trial == E.make_trial(protocol, MODULE, cell, k)             # from (seed, cell, k) alone
 
 
 def test_cells_tile_the_workspace_in_x_then_y():
-    protocol = H.Experiment()
-    assert H.cell_bounds(protocol, MODULE, 0) == pytest.approx((-0.25, -0.225, -0.25, -0.225))
-    assert H.cell_bounds(protocol, MODULE, 1) == pytest.approx((-0.225, -0.2, -0.25, -0.225))
-    assert H.cell_bounds(protocol, MODULE, 20) == pytest.approx((-0.25, -0.225, -0.225, -0.2))
-    assert H.cell_bounds(protocol, MODULE, 399) == pytest.approx((0.225, 0.25, 0.225, 0.25))
+    protocol = E.Experiment()
+    assert E.cell_bounds(protocol, MODULE, 0) == pytest.approx((-0.25, -0.225, -0.25, -0.225))
+    assert E.cell_bounds(protocol, MODULE, 1) == pytest.approx((-0.225, -0.2, -0.25, -0.225))
+    assert E.cell_bounds(protocol, MODULE, 20) == pytest.approx((-0.25, -0.225, -0.225, -0.2))
+    assert E.cell_bounds(protocol, MODULE, 399) == pytest.approx((0.225, 0.25, 0.225, 0.25))
 
 
 def test_starts_are_uniform_over_the_workspace_and_the_seed_decides_them():
-    protocol = H.Experiment()                     # the paper's 4,000 trials
-    starts = np.array([t.start_m for t in H.trials(protocol)])
+    protocol = E.Experiment()                     # the paper's 4,000 trials
+    starts = np.array([t.start_m for t in E.trials(protocol)])
     assert len(starts) == 4000
     counts, _, _ = np.histogram2d(starts[:, 0], starts[:, 1], bins=4, range=[[-0.25, 0.25], [-0.25, 0.25]])
     assert counts.min() > 250 - 4 * np.sqrt(250) and counts.max() < 250 + 4 * np.sqrt(250)   # 16 bins of 250
-    again = np.array([t.start_m for t in H.trials(H.Experiment())])
-    other = np.array([t.start_m for t in H.trials(H.Experiment(seed=7))])
+    again = np.array([t.start_m for t in E.trials(E.Experiment())])
+    other = np.array([t.start_m for t in E.trials(E.Experiment(seed=7))])
     assert np.array_equal(starts, again) and not np.array_equal(starts, other)
 
 
 def test_a_subset_of_cells_draws_the_same_trials_as_the_full_run():
-    full = {t.key: t for t in H.trials(H.Experiment())}
-    subset = H.trials(H.Experiment(only_cells=(210, 3)))
+    full = {t.key: t for t in E.trials(E.Experiment())}
+    subset = E.trials(E.Experiment(only_cells=(210, 3)))
     assert [t.key for t in subset] == [f"{c}:{k}" for c in (210, 3) for k in range(10)]
     assert all(full[t.key] == t for t in subset)
 
@@ -78,7 +81,7 @@ def test_a_subset_of_cells_draws_the_same_trials_as_the_full_run():
 ])
 def test_a_bad_protocol_is_refused_with_a_reason(kwargs, needle):
     with pytest.raises(ValueError, match=needle):
-        H.Experiment(**kwargs)
+        E.Experiment(**kwargs)
 
 
 # ------------------------------------------------------------------------------------------- success rule
@@ -94,12 +97,12 @@ def _record(cell: int, k: int, success: bool, reached: bool = False, fell: bool 
 
 
 def test_summary_rates_score_and_regions():
-    results = H.ResultsFile(path=None, protocol=H.Experiment(cells=2, trials_per_cell=10))
+    results = R.ResultsFile(path=None, protocol=E.Experiment(cells=2, trials_per_cell=10))
     for k in range(10):
         results.records[f"0:{k}"] = _record(0, k, success=True)               # cell 0: 100 %
         results.records[f"1:{k}"] = _record(1, k, success=k < 5, fell=k >= 8)  # cell 1: 50 %, 20 % fell
         results.records[f"2:{k}"] = _record(2, k, success=False, reached=k == 0)  # cell 2: 0 %, reached 10 %
-    s = H.summarize(results)                                                   # cell 3 never ran
+    s = S.summarize(results)                                                   # cell 3 never ran
     assert s.rates[0, 0] == 1.0 and s.rates[0, 1] == 0.5 and s.rates[1, 0] == 0.0 and np.isnan(s.rates[1, 1])
     assert s.fell_rates[0, 1] == pytest.approx(0.2) and s.reach_rates[1, 0] == pytest.approx(0.1)
     assert s.score == pytest.approx(1.5) and s.reach_score == pytest.approx(1.6) and s.trials == 30
@@ -110,27 +113,27 @@ def test_summary_rates_score_and_regions():
 
 # ------------------------------------------------------------------------------------------- results file, resumption
 def test_an_interrupted_run_continues_where_it_stopped_and_loses_nothing(tmp_path):
-    reference = H.ResultsFile.open(tmp_path / "whole.jsonl", SMALL)
-    H.run(reference, H.run_local(SMALL, reference.missing(), jobs=1))
+    reference = R.ResultsFile.open(tmp_path / "whole.jsonl", SMALL)
+    X.run(reference, X.run_local(SMALL, reference.missing(), jobs=1))
 
     path = tmp_path / "interrupted.jsonl"
-    first = H.ResultsFile.open(path, SMALL)
+    first = R.ResultsFile.open(path, SMALL)
 
     def interrupted():
-        for i, record in enumerate(H.run_local(SMALL, first.missing(), jobs=1)):
+        for i, record in enumerate(X.run_local(SMALL, first.missing(), jobs=1)):
             if i == 3:
                 raise KeyboardInterrupt
             yield record
 
     with pytest.raises(KeyboardInterrupt):
-        H.run(first, interrupted())
+        X.run(first, interrupted())
     with open(path, "a") as f:
         f.write('{"key": "3:1", "cell": 3, "k"')        # a line the interruption cut off
-    again = H.ResultsFile.open(path, SMALL)
+    again = R.ResultsFile.open(path, SMALL)
     assert len(again.records) == 3 and len(again.missing()) == 5
-    H.run(again, H.run_local(SMALL, again.missing(), jobs=1))
-    final = H.ResultsFile.load(path)
-    assert len(final.records) == 8 and not H.ResultsFile.open(path, SMALL).missing()
+    X.run(again, X.run_local(SMALL, again.missing(), jobs=1))
+    final = R.ResultsFile.load(path)
+    assert len(final.records) == 8 and not R.ResultsFile.open(path, SMALL).missing()
     for key, record in reference.records.items():       # the same trials, the same outcomes, to the digit
         assert {k: v for k, v in final.records[key].items() if k != "wall_time_s"} == \
                {k: v for k, v in record.items() if k != "wall_time_s"}
@@ -140,31 +143,31 @@ def test_an_interrupted_run_continues_where_it_stopped_and_loses_nothing(tmp_pat
 def test_more_trials_or_cells_on_the_same_file_keep_the_trials_there_and_add_the_rest(tmp_path):
     path = tmp_path / "grown.jsonl"
     one_cell = dataclasses.replace(SMALL, trials_per_cell=1, only_cells=(2,))
-    first = H.ResultsFile.open(path, one_cell)
-    H.run(first, H.run_local(one_cell, first.missing(), jobs=1))
+    first = R.ResultsFile.open(path, one_cell)
+    X.run(first, X.run_local(one_cell, first.missing(), jobs=1))
     (kept,) = first.records.values()
-    grown = H.ResultsFile.open(path, SMALL)
+    grown = R.ResultsFile.open(path, SMALL)
     assert grown.records == first.records and len(grown.missing()) == 7
-    assert H.ResultsFile.load(path).protocol == SMALL              # the header names the larger run now
-    H.run(grown, H.run_local(SMALL, grown.missing(), jobs=1))
-    final = H.ResultsFile.load(path)
+    assert R.ResultsFile.load(path).protocol == SMALL              # the header names the larger run now
+    X.run(grown, X.run_local(SMALL, grown.missing(), jobs=1))
+    final = R.ResultsFile.load(path)
     assert len(final.records) == 8 and final.records[kept["key"]] == kept
-    with pytest.raises(H.ExperimentMismatch, match="trials_per_cell"):   # fewer trials would drop some: refused
-        H.ResultsFile.open(path, one_cell)
+    with pytest.raises(E.ExperimentMismatch, match="trials_per_cell"):   # fewer trials would drop some: refused
+        R.ResultsFile.open(path, one_cell)
 
 
 def test_a_results_file_of_other_options_is_not_continued(tmp_path):
-    H.ResultsFile.open(tmp_path / "r.jsonl", SMALL)
-    with pytest.raises(H.ExperimentMismatch, match="duration_s"):
-        H.ResultsFile.open(tmp_path / "r.jsonl", H.Experiment(cells=2, trials_per_cell=2, duration_s=1.0))
+    R.ResultsFile.open(tmp_path / "r.jsonl", SMALL)
+    with pytest.raises(E.ExperimentMismatch, match="duration_s"):
+        R.ResultsFile.open(tmp_path / "r.jsonl", E.Experiment(cells=2, trials_per_cell=2, duration_s=1.0))
     (tmp_path / "other.jsonl").write_text("not json\n")
     with pytest.raises(ValueError, match="not a heatmap results file"):
-        H.ResultsFile.open(tmp_path / "other.jsonl", SMALL)
+        R.ResultsFile.open(tmp_path / "other.jsonl", SMALL)
 
 
-def _synthetic_file(path: Path, protocol: H.Experiment, lines: list[str]) -> None:
+def _synthetic_file(path: Path, protocol: E.Experiment, lines: list[str]) -> None:
     """A results file of this protocol with these trial lines (no simulation)."""
-    H.ResultsFile.open(path, protocol)
+    R.ResultsFile.open(path, protocol)
     with open(path, "a") as f:
         f.write("".join(line + "\n" for line in lines))
 
@@ -184,29 +187,29 @@ def _line(cell: int, k: int, **fields) -> str:
 def test_a_bad_line_in_the_middle_is_named_kept_aside_and_loses_no_later_trial(tmp_path, bad, why):
     path = tmp_path / "results.jsonl"
     _synthetic_file(path, SMALL, [_line(0, 0), bad, _line(2, 1), _line(3, 0)])
-    loaded = H.ResultsFile.load(path)
+    loaded = R.ResultsFile.load(path)
     assert sorted(loaded.records) == ["0:0", "2:1", "3:0"]          # the trials after the bad line still count
     assert [line for line, _ in loaded.rejected] == [3]
     assert why in loaded.rejected[0][1] and "line 3" in loaded.warnings()[0]
-    continued = H.ResultsFile.open(path, SMALL)                    # continuing moves the line aside, never drops it
+    continued = R.ResultsFile.open(path, SMALL)                    # continuing moves the line aside, never drops it
     assert sorted(continued.records) == ["0:0", "2:1", "3:0"] and len(continued.missing()) == 5
     assert (tmp_path / "results.jsonl.rejected").read_text() == bad + "\n"
-    assert len(path.read_text().splitlines()) == 4 and H.ResultsFile.load(path).rejected == []   # header + 3
+    assert len(path.read_text().splitlines()) == 4 and R.ResultsFile.load(path).rejected == []   # header + 3
 
 
 def test_a_header_cut_off_as_the_run_began_starts_the_run_afresh(tmp_path):
     path = tmp_path / "results.jsonl"
-    H.ResultsFile.open(path, SMALL)
+    R.ResultsFile.open(path, SMALL)
     header = path.read_bytes()
     for cut in (0, 5, len(header) // 2, len(header) - 1):           # every way the first write can be cut
         path.write_bytes(header[:cut])
         with pytest.raises(ValueError, match="no complete header line"):
-            H.ResultsFile.load(path)
-        again = H.ResultsFile.open(path, SMALL)
+            R.ResultsFile.load(path)
+        again = R.ResultsFile.open(path, SMALL)
         assert again.records == {} and path.read_bytes() == header
     path.write_bytes(b"something else entirely")                   # not ours: refused, not overwritten
     with pytest.raises(ValueError, match="not a heatmap results file"):
-        H.ResultsFile.open(path, SMALL)
+        R.ResultsFile.open(path, SMALL)
     assert path.read_bytes() == b"something else entirely"
 
 
@@ -247,9 +250,9 @@ def test_in_process_core_gives_the_same_commands_as_the_virtual_mcu_over_the_pty
 
 
 def test_ray_runs_the_same_trials_as_local_processes():
-    todo = H.trials(SMALL)
-    local = {r["key"]: r for r in H.run_local(SMALL, todo, jobs=2)}
-    on_ray = {r["key"]: r for r in H.run_ray(SMALL, todo, jobs=2, address=None)}
+    todo = E.trials(SMALL)
+    local = {r["key"]: r for r in X.run_local(SMALL, todo, jobs=2)}
+    on_ray = {r["key"]: r for r in X.run_ray(SMALL, todo, jobs=2, address=None)}
     assert local.keys() == on_ray.keys() == {t.key for t in todo}
     for key in local:
         assert local[key]["final_m"] == on_ray[key]["final_m"] and local[key]["success"] == on_ray[key]["success"]
@@ -258,10 +261,10 @@ def test_ray_runs_the_same_trials_as_local_processes():
 
 @pytest.mark.parametrize("offset_m", [0.01, 0.05])   # within eps at the start; a short way off
 def test_a_trial_stopped_at_reach_records_where_it_was_judged_in_strict_json(offset_m):
-    protocol = H.Experiment(cells=2, trials_per_cell=1, duration_s=3.0, stop_when_reached=True)
+    protocol = E.Experiment(cells=2, trials_per_cell=1, duration_s=3.0, stop_when_reached=True)
     start = (0.02, -0.03)
-    trial = H.Trial(cell=0, k=0, start_m=start, target_m=(start[0] + offset_m, start[1]), seed=5)
-    record = json.loads(json.dumps(H.trial_record(trial, H.TrialRunner(protocol).result(trial)), allow_nan=False))
+    trial = E.Trial(cell=0, k=0, start_m=start, target_m=(start[0] + offset_m, start[1]), seed=5)
+    record = json.loads(json.dumps(R.trial_record(trial, X.TrialRunner(protocol).result(trial)), allow_nan=False))
     assert record["reached"] and record["success"]
     error_m = np.hypot(*(np.subtract(record["final_m"], record["target_m"])))
     assert error_m == pytest.approx(record["final_error_m"], abs=2e-5) and error_m < protocol.tolerance_m
@@ -275,7 +278,7 @@ def test_any_job_runs_on_the_pools_own_trial_runners_in_order(pool):
     if pool == "ray":        # Ray's workers cannot import this test module: send the function by value
         from ray import cloudpickle
         cloudpickle.register_pickle_by_value(sys.modules[__name__])
-    with (H.LocalPool(2) if pool == "local" else H.RayPool(2, None)) as workers:
+    with (X.LocalPool(2) if pool == "local" else X.RayPool(2, None)) as workers:
         assert workers.map_calls(_runner_kind_and_double, [1, 2, 3, 4]) == [("TrialRunner", 2 * x) for x in (1, 2, 3, 4)]
 
 
@@ -353,10 +356,10 @@ def test_heatmap_refuses_to_mix_two_experiments_in_one_results_file(tmp_path):
 
 def test_a_results_file_of_a_plant_whose_values_changed_is_not_continued(tmp_path):
     path = tmp_path / "results.jsonl"
-    H.ResultsFile.open(path, SMALL)
+    R.ResultsFile.open(path, SMALL)
     header = json.loads(path.read_text().splitlines()[0])
     assert header["plant_values"]["fabric.size_m"] == SMALL.plant_model().values["fabric.size_m"]
     header["plant_values"]["fabric.size_m"] = 0.51           # as if sim/plant.toml had been refitted since
     path.write_text(json.dumps(header) + "\n")
-    with pytest.raises(H.ExperimentMismatch, match="fabric.size_m differ"):
-        H.ResultsFile.open(path, SMALL)
+    with pytest.raises(E.ExperimentMismatch, match="fabric.size_m differ"):
+        R.ResultsFile.open(path, SMALL)

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from mantaray.paths import REPO
 from mantaray.sim import parameters as P
-from mantaray.sim.heatmap import Experiment, controller_gains, trial_spec, trials
+from mantaray.sim.experiment import Experiment, controller_gains, trial_spec, trials
 from mantaray.sim.plant import Plant, parse_setting
 from mantaray.sim.rig import Rig
 from mantaray.protocol import messages as m

@@ -17,7 +17,7 @@ from mantaray.paths import REPO
 from mantaray.protocol import messages as m
 from mantaray.protocol.framing import Frame, FrameDecoder, encode_packet
 from mantaray.sim import findings as F
-from mantaray.sim import heatmap as H
+from mantaray.sim import experiment as E
 from mantaray.sim import model as M
 from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
 from mantaray.sim.model import SimulationUnstable
@@ -26,11 +26,11 @@ from mantaray.sim.rig import Rig
 CENTRAL_SEED = 1        # the draw of the central trials below
 
 
-def central_trials(n: int = 8) -> list[H.Trial]:
+def central_trials(n: int = 8) -> list[E.Trial]:
     """n trials of the paper's protocol whose targets lie in central cells (F1's |x|, |y| < 0.10 m), drawn from a
     seed: one trial in each of n central cells, its start anywhere on the fabric."""
     cells = np.random.default_rng(CENTRAL_SEED).choice(F.strata_cells(F.PAPER_CELLS)["centre"], n, replace=False)
-    return H.trials(H.Experiment(trials_per_cell=1, only_cells=tuple(int(c) for c in cells)))
+    return E.trials(E.Experiment(trials_per_cell=1, only_cells=tuple(int(c) for c in cells)))
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,179 @@
+"""Where an experiment's trials run: this process, worker processes of this machine, or Ray actors."""
+from __future__ import annotations
+
+import json
+import signal
+from typing import Callable, Iterable, Iterator
+
+from .experiment import Experiment, Trial, trial_spec
+from .model import SimulationUnstable
+from .results_file import ResultsFile, trial_record, unplaceable_record
+
+
+class TrialRunner:
+    """Runs trials in this process: the firmware core in-process (no pty) and the MuJoCo model of the trial's rig.
+
+    The runner keeps one link (the firmware runs on across trials, as a board does); it loads a model when a
+    trial's rig differs from the last one's (the two controllers of one plant share it).
+    """
+
+    def __init__(self, protocol: Experiment | None = None) -> None:
+        from mantaray.host.link import Link
+        from mantaray.host.transport import InProcessTransport
+
+        self.protocol = protocol
+        self._link = Link(InProcessTransport(simulated_clock=True))
+        self._rig_key: str | None = None
+        self._bridge_now = None
+        self._unstable: tuple[str, SimulationUnstable] | None = None   # the last rig that would not load
+
+    def _bridge(self, protocol: Experiment):
+        from .bridge import Bridge
+        key = json.dumps([protocol.object_name, protocol.plant, protocol.plant_set, protocol.resolution,
+                          protocol.timestep_s])
+        if self._unstable is not None and self._unstable[0] == key:
+            raise self._unstable[1]        # the same rig diverges the same way: do not load it again
+        if key != self._rig_key:
+            try:
+                self._bridge_now = Bridge(self._link, protocol.rig(), protocol.plant_model().tracking())
+            except SimulationUnstable as exc:
+                self._unstable = (key, exc)
+                raise
+            self._rig_key = key
+        return self._bridge_now
+
+    def result(self, trial: Trial, protocol: Experiment | None = None):
+        """The bridge.TrialResult of one trial of protocol (default: the runner's own)."""
+        protocol = protocol or self.protocol
+        bridge = self._bridge(protocol)
+        try:
+            return bridge.run(trial_spec(protocol, trial))
+        except SimulationUnstable as exc:   # this rig diverges: its other trials are refused without running
+            self._unstable = (self._rig_key, exc)
+            raise
+
+    def run(self, trial: Trial, protocol: Experiment | None = None) -> dict:
+        """The record of one trial of protocol (default: the runner's own)."""
+        try:
+            result = self.result(trial, protocol)
+        except ValueError as exc:        # model.fabric_height: the start is not over the fabric
+            if "not over the fabric" not in str(exc):
+                raise
+            return unplaceable_record(trial, str(exc))
+        return trial_record(trial, result)
+
+    def call(self, fn: Callable, arg):
+        """fn(self, arg): a job that needs this process's runner (a Ray actor's, or a pool worker's)."""
+        return fn(self, arg)
+
+
+_worker: TrialRunner | None = None
+
+
+def _init_worker() -> None:
+    global _worker
+    signal.signal(signal.SIGINT, signal.SIG_IGN)   # Ctrl-C is the parent's to handle: no traceback per worker
+    _worker = TrialRunner()
+
+
+def _run_in_worker(job: tuple[dict, Trial]) -> dict:
+    protocol_json, trial = job
+    return _worker.run(trial, Experiment.from_json(protocol_json))
+
+
+def _call_in_worker(job: tuple[Callable, object]) -> object:
+    fn, arg = job
+    return _worker.call(fn, arg)
+
+
+class LocalPool:
+    """Worker processes of this machine that run (protocol, trial) jobs; `jobs` = 1 runs them in this process."""
+
+    def __init__(self, jobs: int) -> None:
+        self.jobs = jobs
+        self._pool = None
+        self._runner = TrialRunner() if jobs == 1 else None
+
+    def __enter__(self) -> LocalPool:
+        if self.jobs > 1:
+            import multiprocessing
+            self._pool = multiprocessing.get_context("forkserver").Pool(self.jobs, initializer=_init_worker)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._pool is not None:
+            self._pool.terminate() if exc[0] is not None else self._pool.close()
+            self._pool.join()
+
+    def imap(self, jobs: list[tuple[Experiment, Trial]], ordered: bool = False) -> Iterator[dict]:
+        """Records as the jobs finish (in any order), or in the jobs' order."""
+        if self._pool is None:
+            for protocol, trial in jobs:
+                yield self._runner.run(trial, protocol)
+            return
+        mapper = self._pool.imap if ordered else self._pool.imap_unordered
+        yield from mapper(_run_in_worker, [(p.to_json(), t) for p, t in jobs], chunksize=1)
+
+    def map(self, jobs: list[tuple[Experiment, Trial]]) -> list[dict]:
+        """The jobs' records, in the jobs' order."""
+        return list(self.imap(jobs, ordered=True))
+
+    def map_calls(self, fn: Callable, args: list) -> list:
+        """[fn(runner, a) for a in args] on the workers, each with its process's TrialRunner (fn a module-level
+        function), in order."""
+        if self._pool is None:
+            return [self._runner.call(fn, a) for a in args]
+        return self._pool.map(_call_in_worker, [(fn, a) for a in args], chunksize=1)
+
+
+class RayPool:
+    """Ray actors (a cluster at address, or a local Ray instance) that run (protocol, trial) jobs."""
+
+    def __init__(self, jobs: int | None, address: str | None) -> None:
+        import ray
+        from ray.util import ActorPool
+
+        if not ray.is_initialized():
+            ray.init(address=address, include_dashboard=False, logging_level="ERROR", log_to_driver=False)
+        actors_n = jobs or max(1, int(ray.cluster_resources().get("CPU", 1)))
+        actor = ray.remote(num_cpus=1)(TrialRunner)
+        self._pool = ActorPool([actor.remote() for _ in range(actors_n)])
+
+    def __enter__(self) -> RayPool:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
+
+    def imap(self, jobs: list[tuple[Experiment, Trial]], ordered: bool = False) -> Iterator[dict]:
+        """Records as the jobs finish (in any order), or in the jobs' order."""
+        mapper = self._pool.map if ordered else self._pool.map_unordered
+        yield from mapper(lambda actor, job: actor.run.remote(job[1], job[0]), jobs)
+
+    def map(self, jobs: list[tuple[Experiment, Trial]]) -> list[dict]:
+        """The jobs' records, in the jobs' order."""
+        return list(self.imap(jobs, ordered=True))
+
+    def map_calls(self, fn: Callable, args: list) -> list:
+        """[fn(runner, a) for a in args] on the actors (which hold every CPU they asked for), in order."""
+        return list(self._pool.map(lambda actor, a: actor.call.remote(fn, a), args))
+
+
+def run_local(protocol: Experiment, todo: list[Trial], jobs: int) -> Iterator[dict]:
+    """Records of the trials as they finish, on `jobs` processes of this machine (1: this process)."""
+    with LocalPool(jobs) as pool:
+        yield from pool.imap([(protocol, t) for t in todo])
+
+
+def run_ray(protocol: Experiment, todo: list[Trial], jobs: int | None, address: str | None) -> Iterator[dict]:
+    """Records of the trials as they finish, on Ray actors (a cluster at address, or a local Ray instance)."""
+    with RayPool(jobs, address) as pool:
+        yield from pool.imap([(protocol, t) for t in todo])
+
+
+def run(results: ResultsFile, records: Iterable[dict], progress: Callable[[dict], None] | None = None) -> None:
+    """Append every record to the results file as it arrives (the file is the only state a resumption needs)."""
+    for record in records:
+        results.append(record)
+        if progress is not None:
+            progress(record)

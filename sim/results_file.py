@@ -1,0 +1,197 @@
+"""The results file of an experiment: a header line holding the experiment, then one JSON line per finished trial.
+
+Running the same experiment on the same file skips the trials already there, so an interrupted run continues
+where it stopped and loses nothing. A run with more trials per cell, or more cells, on the same file keeps the
+trials already there and adds the rest (a quick N = 3 map first, topped up to the paper's N = 10 later).
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .experiment import Experiment, ExperimentMismatch, Trial, trials
+
+RESULTS_FORMAT = "mantaray-heatmap/1"
+
+
+@dataclass
+class ResultsFile:
+    """The JSON-lines results of one protocol: a header line, then one line per finished trial.
+
+    A line that is not a valid trial record (a disk error, a hand edit) is kept out of the counts and named in
+    `rejected`; continuing the run moves it to <file>.rejected, so nothing is lost, and its trial runs again. A last
+    line cut off by an interruption is dropped quietly: its trial runs again too."""
+    path: Path
+    protocol: Experiment
+    records: dict[str, dict] = field(default_factory=dict)   # trial key -> record
+    rejected: list[tuple[int, str]] = field(default_factory=list)   # (line number from 1, why) of refused lines
+
+    @classmethod
+    def open(cls, path: str | Path, protocol: Experiment) -> ResultsFile:
+        """Open for this protocol: create the file, or read what an earlier run of the same protocol left."""
+        path = Path(path)
+        results = cls(path, protocol)
+        if not path.exists() or _cut_header(path.read_bytes()):   # new, or its header was cut off as it was written
+            path.parent.mkdir(parents=True, exist_ok=True)
+            _replace(path, json.dumps(_header(protocol)).encode() + b"\n")
+            return results
+        stored = _read(path)
+        now = protocol.plant_model().values
+        if stored.plant_values is not None and stored.plant_values != now:
+            changed = sorted(k for k in now if stored.plant_values.get(k) != now[k])
+            raise ExperimentMismatch(f"{path} was run on the plant {protocol.plant!r} when its values were others "
+                                   f"({', '.join(changed)} differ in sim/plant.toml since); use another --out")
+        if stored.protocol != protocol and not _extends(stored.protocol, protocol):
+            changed = sorted(k for k, v in protocol.to_json().items() if stored.protocol.to_json().get(k) != v)
+            raise ExperimentMismatch(f"{path} holds a run with other options ({', '.join(changed)} differ); "
+                                   f"use another --out, the same options to continue it, or more trials or "
+                                   f"cells to add to it")
+        if stored.bad_lines:                    # kept aside, never lost
+            with open(path.with_name(path.name + ".rejected"), "ab") as f:
+                f.write(b"".join(line + b"\n" for line in stored.bad_lines))
+        if stored.protocol != protocol or stored.bad_lines or stored.cut:
+            # the header names the (possibly grown) run; only the good lines stay
+            _replace(path, json.dumps(_header(protocol)).encode() + b"\n"
+                     + b"".join(line + b"\n" for line in stored.good_lines))
+        results.records, results.rejected = stored.records, stored.rejected
+        return results
+
+    @classmethod
+    def load(cls, path: str | Path) -> ResultsFile:
+        """Read a results file whatever its protocol (for figures and comparisons)."""
+        stored = _read(Path(path))
+        return cls(Path(path), stored.protocol, stored.records, stored.rejected)
+
+    def append(self, record: dict) -> None:
+        with open(self.path, "a") as f:
+            f.write(json.dumps(record) + "\n")
+        self.records[record["key"]] = record
+
+    def missing(self) -> list[Trial]:
+        return [t for t in trials(self.protocol) if t.key not in self.records]
+
+    def warnings(self) -> list[str]:
+        """One line per refused line of the file, for the user."""
+        return [f"{self.path} line {line}: {why}; not counted (its trial runs again when the run continues, and "
+                f"the line is kept in {self.path.name}.rejected)" for line, why in self.rejected]
+
+
+def _cut_header(raw: bytes) -> bool:
+    """Whether a file is all or the start of a results header and nothing more (a run interrupted as it began)."""
+    prefix = b'{"format": "' + RESULTS_FORMAT.encode()
+    return b"\n" not in raw and (raw.startswith(prefix) or prefix.startswith(raw))
+
+
+def _replace(path: Path, content: bytes) -> None:
+    """Write the whole file at once: an interruption leaves the old file or the new, never half of one."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_bytes(content)
+    os.replace(tmp, path)
+
+
+def _extends(stored: Experiment, wanted: Experiment) -> bool:
+    """Whether wanted only adds trials to stored (more per cell, or more cells), so every stored trial is one of
+    wanted's: trials are drawn from (seed, cell, k) alone."""
+    same_otherwise = dataclasses.replace(stored, trials_per_cell=wanted.trials_per_cell,
+                                         only_cells=wanted.only_cells) == wanted
+    more_per_cell = wanted.trials_per_cell >= stored.trials_per_cell
+    more_cells = wanted.only_cells is None or (stored.only_cells is not None
+                                               and set(stored.only_cells) <= set(wanted.only_cells))
+    return same_otherwise and more_per_cell and more_cells
+
+
+def _header(protocol: Experiment) -> dict:
+    """A results file's first line: the protocol, and the values its plant had (a named plant may be refitted)."""
+    return {"format": RESULTS_FORMAT, "protocol": protocol.to_json(), "plant_values": protocol.plant_model().values}
+
+
+RECORD_TYPES = {"key": str, "cell": int, "k": int, "success": bool, "reached": bool, "fell_off": bool,
+                "target_m": list}   # what aggregation reads from a trial record, by type
+TYPE_NAMES = {str: "a string", int: "a whole number", bool: "true or false", list: "a list"}
+
+
+def record_problem(record, protocol: Experiment) -> str | None:
+    """Why a parsed line is not a trial record of this protocol, or None when it is one."""
+    if not isinstance(record, dict):
+        return f"not a trial record (a JSON {type(record).__name__})"
+    for name, kind in RECORD_TYPES.items():
+        if name not in record:
+            return f"no {name!r} field"
+        value = record[name]
+        if type(value) is not kind:   # exact: a bool is not a count, 7 is not a success
+            return f"{name} must be {TYPE_NAMES[kind]}, got {value!r}"
+    if record["cell"] not in set(protocol.cell_ids()) or not 0 <= record["k"] < protocol.trials_per_cell:
+        return f"trial {record['cell']}:{record['k']} is not one of this run's"
+    if record["key"] != f"{record['cell']}:{record['k']}":
+        return f"key {record['key']!r} does not match cell {record['cell']}, trial {record['k']}"
+    return None
+
+
+@dataclass
+class _Contents:
+    """What a results file holds, line by line."""
+    protocol: Experiment
+    plant_values: dict | None
+    records: dict[str, dict] = field(default_factory=dict)
+    good_lines: list[bytes] = field(default_factory=list)
+    bad_lines: list[bytes] = field(default_factory=list)
+    rejected: list[tuple[int, str]] = field(default_factory=list)
+    cut: bool = False            # the last line was cut off (an interruption mid-write)
+
+
+def _read(path: Path) -> _Contents:
+    raw = path.read_bytes()
+    if _cut_header(raw):
+        raise ValueError(f"{path} holds no complete header line (a run interrupted as it began); rerun the same "
+                         f"heatmap command to start it afresh")
+    lines = raw.split(b"\n")
+    try:
+        header = json.loads(lines[0])
+    except json.JSONDecodeError:
+        raise ValueError(f"{path} is not a heatmap results file (its first line is not JSON)") from None
+    if not isinstance(header, dict) or header.get("format") != RESULTS_FORMAT:
+        raise ValueError(f"{path} is not a heatmap results file ({RESULTS_FORMAT})")
+    try:
+        protocol = Experiment.from_json(header["protocol"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"{path}: its header's protocol is not valid ({exc})") from None
+    out = _Contents(protocol, header.get("plant_values"), cut=lines[-1] != b"")
+    for number, line in enumerate(lines[1:-1], start=2):   # the last element follows the final newline
+        if not line.strip():
+            continue
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError:
+            problem = "not JSON"
+        else:
+            problem = record_problem(record, protocol)
+            if problem is None and record["key"] in out.records:
+                problem = f"repeats trial {record['key']}"
+        if problem is None:
+            out.records[record["key"]] = record
+            out.good_lines.append(line)
+        else:
+            out.rejected.append((number, problem))
+            out.bad_lines.append(line)
+    return out
+
+
+def trial_record(trial: Trial, result) -> dict:
+    """The results-file line of a finished trial (result: a bridge.TrialResult)."""
+    return {"key": trial.key, "cell": trial.cell, "k": trial.k, "seed": trial.seed,
+            "start_m": [round(v, 5) for v in trial.start_m], "target_m": [round(v, 5) for v in trial.target_m],
+            "final_m": [round(float(v), 5) for v in result.final_xy_m], "final_error_m": round(result.final_error_m, 5),
+            "success": bool(result.success), "reached": result.time_to_reach_s is not None,
+            "time_to_reach_s": result.time_to_reach_s, "fell_off": bool(result.fell_off),
+            "sim_time_s": round(result.sim_time_s, 3), "wall_time_s": round(result.wall_time_s, 3)}
+
+
+def unplaceable_record(trial: Trial, why: str) -> dict:
+    """A trial whose start is not over the fabric (only at the very corners): it counts as fallen off."""
+    return {"key": trial.key, "cell": trial.cell, "k": trial.k, "seed": trial.seed,
+            "start_m": list(trial.start_m), "target_m": list(trial.target_m), "final_m": [None, None],
+            "final_error_m": None, "success": False, "reached": False, "time_to_reach_s": None,
+            "fell_off": True, "sim_time_s": 0.0, "wall_time_s": 0.0, "unplaceable": why}
