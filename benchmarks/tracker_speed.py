@@ -102,6 +102,7 @@ def main() -> int:
 
     import mujoco
 
+    from mantaray.sim import mjcf as J
     from mantaray.sim import model as M
     from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
     from mantaray.sim.rig import Rig
@@ -116,7 +117,7 @@ def main() -> int:
         while data.time < 1.0:
             mujoco.mj_step(model, data)
         plate = data.geom("object_marker")
-        top = plate.xpos + plate.xmat.reshape(3, 3)[:, 2] * M.MARKER_PLATE_M
+        top = plate.xpos + plate.xmat.reshape(3, 3)[:, 2] * J.MARKER_PLATE_M
         vision.tracker.marker_height_m = float(top[2] - rig.frame.z0_m)
         errors.append(np.hypot(*(vision.measure(data, data.time) - top[:2])))
     print(f"  MuJoCo frames, the cube's marker, its true height: {rms_mm(errors):.2f} (20 frames)")

@@ -6,7 +6,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from . import model as M
+from . import mjcf as J
 
 FPS_RANGE = (1.0, 240.0)   # [1/s] video frame rates a recorder takes
 
@@ -38,7 +38,7 @@ class Recorder:
         if self.next_s is None:
             self.next_s = data.time
         if data.time + 1e-9 >= self.next_s:
-            self.renderer.update_scene(data, camera=M.OVERHEAD)
+            self.renderer.update_scene(data, camera=J.OVERHEAD)
             frame = self._with_target(data) if self._target is not None else self.renderer.render()
             self.frames.append(frame)
             self.next_s += 1.0 / self.fps

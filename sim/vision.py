@@ -8,6 +8,7 @@ import numpy as np
 
 from mantaray.host.tracker import BlobColour, Tracker
 
+from . import mjcf as J
 from . import model as M
 from .rig import VISION_MODES, Rig
 
@@ -47,15 +48,15 @@ class CameraVision:
         self.renderer = mujoco.Renderer(model, FRAME_PX[1], FRAME_PX[0])
         M.place_object(model, data, 0.0, 0.0, rule=rig.fall)
         if mode == "aruco":
-            height = data.site(M.MARKER).xpos[2] + 2 * M.MARKER_PLATE_M - rig.frame.z0_m   # the plate's top
+            height = data.site(J.MARKER).xpos[2] + 2 * J.MARKER_PLATE_M - rig.frame.z0_m   # the plate's top
         else:
-            height = data.body(M.OBJECT).xpos[2] - rig.frame.z0_m                          # the silhouette's centre
+            height = data.body(J.OBJECT).xpos[2] - rig.frame.z0_m                          # the silhouette's centre
         self.tracker = Tracker(marker_height_m=float(height), camera_height_m=rig.camera.height_above_z0_m,
                                blob=blob_colour(rig.object.rgba) if mode == "blob" else None)
 
     def measure(self, data: mujoco.MjData, capture_time_s: float) -> np.ndarray | None:
         """The tracker's (x, y) [m] of the object in the frame rendered now, or None if it saw none."""
-        self.renderer.update_scene(data, camera=M.OVERHEAD)
+        self.renderer.update_scene(data, camera=J.OVERHEAD)
         image = self.renderer.render()[:, :, ::-1]   # RGB -> OpenCV's BGR
         observation = self.tracker.observe(np.ascontiguousarray(image), capture_time_s)
         return np.asarray(observation.xy_m) if observation.visible else None

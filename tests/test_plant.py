@@ -102,14 +102,15 @@ def test_the_radian_reading_scales_the_papers_gains_and_nothing_else():
 
 
 def test_the_corner_clamp_holds_its_edge_vertices_at_the_carriage():
+    from mantaray.sim import mjcf as J
     from mantaray.sim import model as M
 
     plant = Plant().set({"fabric.corner_clamp_m": 0.08})
     rig = plant.rig(resolution=11, timestep_s=0.002)
     model, data = M.load(rig)
     for i in range(4):
-        held = M.clamped_vertices(11, rig.fabric.spacing_m, 0.08, i)
+        held = J.clamped_vertices(11, rig.fabric.spacing_m, 0.08, i)
         assert len(held) == 2 * int(0.08 // rig.fabric.spacing_m)
         for vertex, dx, dy in held:
-            offset = data.body(f"{M.FABRIC}_{vertex}").xpos - data.body(f"carriage{i}").xpos
+            offset = data.body(f"{J.FABRIC}_{vertex}").xpos - data.body(f"carriage{i}").xpos
             assert np.allclose(offset[:2], (dx, dy), atol=2e-3) and abs(offset[2]) < 2e-3

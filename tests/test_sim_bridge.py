@@ -18,6 +18,7 @@ from mantaray.protocol import messages as m
 from mantaray.protocol.framing import Frame, FrameDecoder, encode_packet
 from mantaray.sim import findings as F
 from mantaray.sim import experiment as E
+from mantaray.sim import mjcf as J
 from mantaray.sim import model as M
 from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
 from mantaray.sim.model import SimulationUnstable
@@ -84,7 +85,7 @@ def test_commands_from_telemetry_reach_the_simulated_actuators(sphere_bridge):
     assert result.tilt_deg[-1, 0] > 0 and commanded[1] > 0     # target at +x: the +x corners lowered
     M.set_commands(model, data, commanded)
     M.step_until(model, data, data.time + 3.0)               # time for the belts at their speed to get there
-    lifts = np.array([data.joint(f"lift{i}").qpos[0] for i in range(M.N_ACTUATORS)])
+    lifts = np.array([data.joint(f"lift{i}").qpos[0] for i in range(J.N_ACTUATORS)])
     assert np.allclose(lifts, commanded, atol=1e-3), (lifts, commanded)   # [m] within a servo's steady error
 
 

@@ -5,6 +5,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from mantaray.sim import mjcf as J
 from mantaray.sim import model as M
 from mantaray.sim.objects import OBJECTS
 from mantaray.sim.rig import Rig
@@ -23,26 +24,26 @@ def _warnings(data: mujoco.MjData) -> dict[str, int]:
 
 def test_alternating_mesh_is_mirror_symmetric():
     n = RIG.fabric.resolution
-    tris = M.alternating_elements(n)
+    tris = J.alternating_elements(n)
     assert tris.shape == (2 * (n - 1) ** 2, 3)
     xy = np.array([divmod(v, n) for v in range(n * n)], dtype=float)
     edges = {tuple(sorted((t[i], t[(i + 1) % 3]))) for t in tris for i in range(3)}
     for mirror in (lambda p: (n - 1 - p[0], p[1]), lambda p: (p[0], n - 1 - p[1])):
         mapped = {tuple(sorted(int(q[0] * n + q[1]) for q in (mirror(xy[a]), mirror(xy[b])))) for a, b in edges}
         assert mapped == edges
-    for i in range(M.N_ACTUATORS):   # every corner cell's diagonal ends on the corner vertex
-        assert sum(M.corner_vertex(n, i) in t for t in tris) == 2
+    for i in range(J.N_ACTUATORS):   # every corner cell's diagonal ends on the corner vertex
+        assert sum(J.corner_vertex(n, i) in t for t in tris) == 2
 
 
 @pytest.mark.parametrize("name", OBJECTS)
 def test_written_scene_compiles_as_plain_xml(tmp_path, name):
-    scene = M.write_model(RIG.with_object(name), tmp_path)
+    scene = J.write_model(RIG.with_object(name), tmp_path)
     model = mujoco.MjModel.from_xml_path(str(scene))
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
-    assert model.nu == M.N_ACTUATORS and model.nflex == 1
+    assert model.nu == J.N_ACTUATORS and model.nflex == 1
     assert np.allclose(data.cam("overhead").xmat.reshape(3, 3)[:, 2], [0, 0, 1])   # looks straight down (-z)
-    for i, (sx, sy) in enumerate(M.CORNERS):
+    for i, (sx, sy) in enumerate(J.CORNERS):
         assert np.allclose(data.body(f"carriage{i}").xpos,
                            [sx * RIG.frame.size_x_m / 2, sy * RIG.frame.size_y_m / 2, RIG.frame.z0_m])
 
@@ -66,15 +67,15 @@ def test_object_comes_to_rest_on_the_fabric(name, sphere_scene):
     assert v < REST_SPEED_M_PER_S and w < REST_SPIN_RAD_PER_S
     x, y = M.object_xy(model, data)
     assert np.hypot(x, y) < 0.05
-    assert data.body(M.OBJECT).xpos[2] > M.fabric_height(model, data, x, y)
+    assert data.body(J.OBJECT).xpos[2] > M.fabric_height(model, data, x, y)
 
 
-@pytest.mark.parametrize("corner", range(M.N_ACTUATORS))
+@pytest.mark.parametrize("corner", range(J.N_ACTUATORS))
 def test_lowering_a_corner_rolls_the_sphere_toward_it(corner, sphere_scene):
     model, data = sphere_scene
     M.place_object(model, data, 0.0, 0.0, rule=RIG.fall)
     start_xy, start_s = M.object_xy(model, data), data.time
-    commands = np.zeros(M.N_ACTUATORS)
+    commands = np.zeros(J.N_ACTUATORS)
     commands[corner] = CORNER_DROP_M
     M.set_commands(model, data, commands)
     lift = model.jnt_qposadr[model.joint(f"lift{corner}").id]
@@ -86,9 +87,9 @@ def test_lowering_a_corner_rolls_the_sphere_toward_it(corner, sphere_scene):
         mujoco.mj_step(model, data)
     carriage = data.body(f"carriage{corner}").xpos
     assert carriage[2] == pytest.approx(RIG.frame.z0_m - CORNER_DROP_M, abs=2e-3)   # + command lowers
-    vertex = data.flexvert_xpos[M.corner_vertex(RIG.fabric.resolution, corner)]
+    vertex = data.flexvert_xpos[J.corner_vertex(RIG.fabric.resolution, corner)]
     assert np.linalg.norm(vertex - carriage) < 2e-3                                  # corner stays welded
-    toward = np.array(M.CORNERS[corner], dtype=float) / np.sqrt(2)
+    toward = np.array(J.CORNERS[corner], dtype=float) / np.sqrt(2)
     assert (M.object_xy(model, data) - start_xy) @ toward > 0.01   # sim/README.md: 0.235 m in 4 s
     assert _warnings(data) == {} and not M.fell_off(model, data, RIG.fall)
 

@@ -8,6 +8,7 @@ import pytest
 from mantaray.host import tracker as T
 from mantaray.host.link import Link
 from mantaray.host.transport import InProcessTransport
+from mantaray.sim import mjcf as J
 from mantaray.sim import model as M
 from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
 from mantaray.sim.rig import Rig
@@ -25,7 +26,7 @@ def cube_scene():
 def marker_truth(model, data, rig) -> tuple[np.ndarray, float]:
     """Where the object's marker really is: its plate's top centre, (x, y) [m] and height above z0 [m]."""
     plate = data.geom("object_marker")
-    top = plate.xpos + plate.xmat.reshape(3, 3)[:, 2] * M.MARKER_PLATE_M
+    top = plate.xpos + plate.xmat.reshape(3, 3)[:, 2] * J.MARKER_PLATE_M
     return top[:2].copy(), float(top[2] - rig.frame.z0_m)
 
 
@@ -55,7 +56,7 @@ def test_an_object_out_of_sight_is_reported_not_guessed(cube_scene):
     mujoco.mj_resetDataKeyframe(model, data, model.key(M.REST_KEY).id)   # the object parked beside the frame
     mujoco.mj_forward(model, data)
     assert vision.measure(data, 0.0) is None
-    vision.renderer.update_scene(data, camera=M.OVERHEAD)
+    vision.renderer.update_scene(data, camera=J.OVERHEAD)
     observation = vision.tracker.observe(np.ascontiguousarray(vision.renderer.render()[:, :, ::-1]), 0.0)
     assert observation.status == T.NO_OBJECT and observation.corners_seen == (0, 1, 2, 3)
 
@@ -91,7 +92,7 @@ def test_every_object_is_found_by_its_colour_at_rest(name):
     assert measured is not None, name
     # within half of epsilon: the silhouette's centre is the body's centre of mass only for symmetric shapes
     # (the bunny's are 7 mm apart)
-    assert np.hypot(*(measured - data.body(M.OBJECT).xpos[:2])) < 0.01
+    assert np.hypot(*(measured - data.body(J.OBJECT).xpos[:2])) < 0.01
 
 
 def test_a_colour_too_pale_to_track_as_a_blob_is_refused():

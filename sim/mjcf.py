@@ -1,0 +1,252 @@
+"""MJCF for the rig (the model file, Menagerie-style) and its scene (floor, light, overhead camera, object, markers)."""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from .objects import ASSETS
+from .rig import Rig
+
+MODEL_FILE = "manta_ray.xml"
+FABRIC = "fabric"             # flexcomp name; its vertex bodies are fabric_<id>
+OBJECT = "object"             # the object's body, free joint and geom
+MARKER = "marker"             # site on top of the object: the point the overhead camera tracks
+OVERHEAD = "overhead"         # the scene's camera looking straight down at the fabric
+N_ACTUATORS = 4
+# Corner signs (x, y) of actuators 0..3, PROTOCOL.md §5: 0 (-x,-y), 1 (+x,-y), 2 (-x,+y), 3 (+x,+y).
+CORNERS = ((-1, -1), (1, -1), (-1, 1), (1, 1))
+POST_OFFSET_M = 0.03           # [m] visual frame posts stand this far outboard of each corner (no collisions)
+CARRIAGE_HALF_SIZE_M = (0.02, 0.02, 0.03)  # [m] visual carriage block (no collisions; mass from the rig)
+OFFSCREEN_PX = (1920, 1920)    # [px] offscreen framebuffer: the largest image the renderer can make
+
+
+def _v(*values: float) -> str:
+    """Numbers as an MJCF attribute value."""
+    return " ".join(f"{float(x):.6g}" for x in values)
+
+
+def corner_vertex(resolution: int, actuator: int) -> int:
+    """Flex vertex id at actuator's corner: flexcomp grids number vertices ix * N + iy (ix along x)."""
+    sx, sy = CORNERS[actuator]
+    ix = 0 if sx < 0 else resolution - 1
+    iy = 0 if sy < 0 else resolution - 1
+    return ix * resolution + iy
+
+
+def clamped_vertices(resolution: int, spacing_m: float, clamp_m: float, actuator: int) -> list[tuple[int, float, float]]:
+    """(vertex id, x, y [m] relative to the carriage) of the edge vertices the corner's clamp holds, corner excluded.
+
+    The clamp holds clamp_m of both edges from the corner straight, at the fabric's own spacing, pointing along
+    the frame's edges toward the neighbouring corners.
+    """
+    sx, sy = CORNERS[actuator]
+    held = []
+    for k in range(1, resolution // 2):
+        if k * spacing_m > clamp_m + 1e-9:
+            break
+        ix0 = 0 if sx < 0 else resolution - 1
+        iy0 = 0 if sy < 0 else resolution - 1
+        held.append(((ix0 - sx * k) * resolution + iy0, -sx * k * spacing_m, 0.0))   # along the x edge
+        held.append((ix0 * resolution + iy0 - sy * k, 0.0, -sy * k * spacing_m))     # along the y edge
+    return held
+
+
+def alternating_elements(resolution: int) -> np.ndarray:
+    """Triangles (counter-clockwise seen from +z) of an N x N grid with diagonals alternating cell by cell.
+
+    flexcomp puts every diagonal the same way, which makes corners 1 and 2 behave differently from
+    0 and 3 (SIM-NOTES). With a checkerboard of diagonals and an odd N, the corner cells' diagonals all
+    touch their corner vertex and the mesh is symmetric under both mirror planes.
+    """
+    n = resolution
+    tris = []
+    for ix in range(n - 1):
+        for iy in range(n - 1):
+            v00, v10 = ix * n + iy, (ix + 1) * n + iy
+            v01, v11 = v00 + 1, v10 + 1
+            if (ix + iy) % 2 == 0:
+                tris += [(v00, v10, v11), (v00, v11, v01)]
+            else:
+                tris += [(v00, v10, v01), (v10, v11, v01)]
+    return np.array(tris, dtype=np.int32)
+
+
+def model_xml(rig: Rig) -> str:
+    """The rig alone: options, frame, four actuated carriages, the fabric and its corner welds."""
+    f, a, fab, c, s = rig.frame, rig.actuators, rig.fabric, rig.contact, rig.solver
+    hx, hy, z0 = f.size_x_m / 2, f.size_y_m / 2, f.z0_m
+    post_top = z0 + a.range_m + 0.05
+    posts, carriages, welds, actuators = [], [], [], []
+    for i, (sx, sy) in enumerate(CORNERS):
+        x, y = sx * hx, sy * hy
+        px, py = sx * (hx + POST_OFFSET_M), sy * (hy + POST_OFFSET_M)
+        posts.append(f'    <geom class="frame" type="box" size="0.01 0.01 {post_top / 2:.6g}" '
+                     f'pos="{_v(px, py, post_top / 2)}"/>')
+        carriages.append(
+            f'    <body name="carriage{i}" pos="{_v(x, y, z0)}" gravcomp="1">\n'
+            f'      <joint name="lift{i}" type="slide" axis="0 0 -1" range="{_v(-a.range_m, a.range_m)}"/>\n'
+            f'      <inertial pos="0 0 0" mass="{_v(a.carriage_mass_kg)}" diaginertia="1e-4 1e-4 1e-4"/>\n'
+            f'      <geom class="carriage" type="box" size="{_v(*CARRIAGE_HALF_SIZE_M)}" '
+            f'pos="{_v(sx * CARRIAGE_HALF_SIZE_M[0], sy * CARRIAGE_HALF_SIZE_M[1], 0)}"/>\n'
+            f'    </body>')
+        welds.append(f'    <weld name="corner{i}" body1="carriage{i}" '
+                     f'body2="{FABRIC}_{corner_vertex(fab.resolution, i)}" relpose="0 0 0 1 0 0 0" '
+                     f'solref="{_v(*fab.corner_weld_solref)}"/>')
+        for k, (vertex, dx, dy) in enumerate(clamped_vertices(fab.resolution, fab.spacing_m, fab.corner_clamp_m, i)):
+            welds.append(f'    <weld name="clamp{i}_{k}" body1="carriage{i}" body2="{FABRIC}_{vertex}" '
+                         f'relpose="{_v(dx, dy, 0)} 1 0 0 0" solref="{_v(*fab.corner_weld_solref)}"/>')
+        actuators.append(
+            f'    <pid name="actuator{i}" joint="lift{i}" input="pos" kp="{_v(a.kp_n_per_m)}" '
+            f'dampratio="{_v(a.damping_ratio)}" slewmax="{_v(a.speed_m_per_s)}" '
+            f'ctrlrange="{_v(-a.range_m, a.range_m)}"/>')
+    rails = [f'    <geom class="frame" type="box" size="{_v(hx + 0.04, 0.01, 0.01)}" pos="{_v(0, sy * (hy + POST_OFFSET_M), post_top)}"/>'
+             for sy in (-1, 1)]
+    nl = "\n"
+    return f"""<!-- MANTA-RAY rig, generated by mantaray.sim.model from sim/rig.py: do not edit by hand. -->
+<mujoco model="manta_ray">
+  <compiler angle="radian" autolimits="true" meshdir="assets" texturedir="assets"/>
+  <option timestep="{_v(s.timestep_s)}" integrator="{s.integrator}" solver="{s.solver}" tolerance="{_v(s.tolerance)}"/>
+  <default>
+    <default class="frame">
+      <geom contype="0" conaffinity="0" group="1" rgba="0.75 0.75 0.78 1"/>
+    </default>
+    <default class="carriage">
+      <geom contype="0" conaffinity="0" group="1" mass="0" rgba="0.2 0.2 0.25 1"/>
+    </default>
+  </default>
+  <worldbody>
+{nl.join(posts + rails)}
+{nl.join(carriages)}
+    <flexcomp name="{FABRIC}" type="grid" dim="2" dof="full" count="{fab.resolution} {fab.resolution} 1"
+              spacing="{_v(fab.spacing_m, fab.spacing_m, fab.spacing_m)}" pos="{_v(0, 0, z0)}"
+              radius="{_v(fab.radius_m)}" mass="{_v(fab.mass_kg)}" rgba="0.25 0.45 0.85 1">
+      <contact condim="{c.condim}" friction="{_v(*c.friction)}" solref="{_v(*c.solref)}"
+               solimp="{_v(*c.solimp)}" selfcollide="none"/>
+      <edge equality="true" solref="{_v(*fab.edge_solref)}" solimp="{_v(*fab.edge_solimp)}"/>
+      <elasticity young="{_v(fab.young_pa)}" poisson="{_v(fab.poisson)}" thickness="{_v(fab.thickness_m)}"
+                  damping="{_v(fab.damping_s)}" elastic2d="bend"/>
+    </flexcomp>
+  </worldbody>
+  <equality>
+{nl.join(welds)}
+  </equality>
+  <actuator>
+{nl.join(actuators)}
+  </actuator>
+</mujoco>
+"""
+
+
+def _object_xml(rig: Rig) -> tuple[str, str]:
+    """(asset lines, body) for the rig's object, dropped above the fabric's centre."""
+    o, c = rig.object, rig.contact
+    asset = ""
+    if o.mesh is not None:
+        m = o.mesh
+        src = f'file="{m.file}"' if m.file else f'builtin="{m.builtin}" params="{_v(*m.params)}"'
+        asset = f'    <mesh name="{m.name}" {src} scale="{_v(*m.scale)}" inertia="convex"/>'
+    shape = f'type="mesh" mesh="{o.mesh.name}"' if o.mesh else f'type="{o.shape}" size="{_v(*o.size_m)}"'
+    body = f"""    <body name="{OBJECT}" pos="{_v(0, 0, rig.frame.z0_m + 0.1)}">
+      <freejoint name="{OBJECT}"/>
+      <geom name="{OBJECT}" {shape} mass="{_v(o.mass_kg)}" pos="{_v(*o.geom_pos_m)}"
+            euler="{_v(*o.geom_euler_rad)}" rgba="{_v(*o.rgba)}" condim="{c.condim}"
+            friction="{_v(*c.friction)}" solref="{_v(*c.solref)}" solimp="{_v(*c.solimp)}"/>
+      <site name="{MARKER}" pos="{_v(0, 0, o.half_height_m)}" size="0.005" rgba="0 0 0 1"/>
+    </body>"""
+    return asset, body
+
+
+MARKER_TEXTURE_PX = 256        # [px] side of each ArUco texture (a multiple of the marker's 8 cells with its quiet zone)
+MARKER_PLATE_M = 0.001         # [m] half thickness of a marker plate (visual only)
+
+
+def _marker_xml(rig: Rig) -> tuple[str, str, str]:
+    """(assets, world geoms, object geom) drawing the tracker's ArUco markers that the rig's camera asks for."""
+    if not (rig.camera.corner_markers or rig.camera.object_marker):
+        return "", "", ""
+    from mantaray.host.markers import MarkerLayout, quiet_scale
+
+    layout = MarkerLayout()
+    ids = [*layout.corner_ids, layout.object_id]
+    assets = "\n".join(f'    <texture name="aruco{i}" type="2d" file="aruco_{i}.png"/>\n'
+                       f'    <material name="aruco{i}" texture="aruco{i}" texrepeat="1 1" specular="0" shininess="0"/>'
+                       for i in ids)
+    half_corner = layout.corner_size_m * quiet_scale(layout) / 2
+    z0 = rig.frame.z0_m
+    world = "\n".join(f'    <geom name="corner_marker{k}" type="box" size="{_v(half_corner, half_corner, MARKER_PLATE_M)}" '
+                      f'pos="{_v(x, y, z0 - MARKER_PLATE_M)}" material="aruco{i}" contype="0" conaffinity="0"/>'
+                      for k, (i, (x, y)) in enumerate(zip(layout.corner_ids, layout.corner_centres_m()))
+                      if rig.camera.corner_markers)
+    half_object = layout.object_size_m * quiet_scale(layout) / 2
+    top = rig.object.half_height_m
+    on_object = (f'      <geom name="object_marker" type="box" size="{_v(half_object, half_object, MARKER_PLATE_M)}" '
+                 f'pos="{_v(0, 0, top + MARKER_PLATE_M)}" material="aruco{layout.object_id}" mass="0" contype="0" '
+                 f'conaffinity="0"/>') if rig.camera.object_marker else ""  # on the object's top
+    return assets, world, on_object
+
+
+def write_marker_textures(directory: Path) -> None:
+    """The ArUco textures the scene refers to, as PNG files in directory."""
+    import imageio.v2 as imageio
+
+    from mantaray.host.markers import MarkerLayout, marker_image
+
+    layout = MarkerLayout()
+    directory.mkdir(parents=True, exist_ok=True)
+    for i in (*layout.corner_ids, layout.object_id):
+        imageio.imwrite(directory / f"aruco_{i}.png", marker_image(layout, i, MARKER_TEXTURE_PX))
+
+
+def scene_xml(rig: Rig) -> str:
+    """The scene: includes the model file, adds floor, light, the overhead camera and the object."""
+    z0, cam = rig.frame.z0_m, rig.camera
+    asset, body = _object_xml(rig)
+    marker_assets, marker_geoms, object_marker = _marker_xml(rig)
+    if object_marker:
+        body = body.replace("    </body>", f"{object_marker}\n    </body>")
+    return f"""<!-- MANTA-RAY scene with the {rig.object.name}, generated by mantaray.sim.model: do not edit by hand. -->
+<mujoco model="manta_ray scene ({rig.object.name})">
+  <include file="{MODEL_FILE}"/>
+  <statistic center="{_v(0, 0, z0 - 0.2)}" extent="1.2"/>
+  <visual>
+    <global offwidth="{OFFSCREEN_PX[0]}" offheight="{OFFSCREEN_PX[1]}"/>
+    <headlight diffuse="0.6 0.6 0.6" ambient="0.3 0.3 0.3" specular="0 0 0"/>
+  </visual>
+  <asset>
+    <texture type="2d" name="floor" builtin="checker" mark="edge" rgb1="0.2 0.3 0.4" rgb2="0.1 0.2 0.3"
+             markrgb="0.8 0.8 0.8" width="300" height="300"/>
+    <material name="floor" texture="floor" texuniform="true" texrepeat="5 5" reflectance="0.2"/>
+{asset}
+{marker_assets}
+  </asset>
+  <worldbody>
+    <light pos="{_v(0, 0, z0 + 2)}" dir="0 0 -1" directional="true"/>
+    <geom name="floor" type="plane" size="0 0 0.05" material="floor"/>
+    <camera name="{OVERHEAD}" pos="{_v(0, 0, z0 + cam.height_above_z0_m)}" xyaxes="1 0 0 0 1 0"
+            fovy="{_v(cam.fovy_deg)}"/>
+{marker_geoms}
+{body}
+  </worldbody>
+</mujoco>
+"""
+
+
+def write_model(rig: Rig, directory: str | Path) -> Path:
+    """Write manta_ray.xml, scene_<object>.xml and the object's mesh file into directory; return the scene path.
+
+    The files carry flexcomp's own triangulation; load() re-meshes it with alternating diagonals.
+    """
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    (directory / MODEL_FILE).write_text(model_xml(rig))
+    mesh = rig.object.mesh
+    if mesh is not None and mesh.file:
+        (directory / "assets").mkdir(exist_ok=True)
+        shutil.copyfile(ASSETS / mesh.file, directory / "assets" / mesh.file)
+    if rig.camera.corner_markers or rig.camera.object_marker:
+        write_marker_textures(directory / "assets")
+    scene = directory / f"scene_{rig.object.name}.xml"
+    scene.write_text(scene_xml(rig))
+    return scene
