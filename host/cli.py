@@ -313,18 +313,9 @@ def _actuators(text: str) -> list[int]:
 
 
 # ------------------------------------------------------------------------------------------- markers
-A4_MM = (210.0, 297.0)
-DPI_RANGE = (72, 2400)    # [1/inch] a PNG sheet's resolution: from screen to the finest printers
-
-
 def cmd_markers(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """Write a printable sheet of the rig's ArUco markers at true size (PDF or PNG; print at 100 %)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from .markers import MarkerLayout, marker_image, quiet_scale
+    from .marker_sheet import DPI_RANGE, write_marker_sheet
 
     if not DPI_RANGE[0] <= args.dpi <= DPI_RANGE[1]:
         parser.error(f"--dpi must be {DPI_RANGE[0]}..{DPI_RANGE[1]}, got {args.dpi}")
@@ -332,28 +323,8 @@ def cmd_markers(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
         out = writable_file(args.out, (".pdf", ".png"))
     except OutputError as exc:
         parser.error(str(exc))
-    layout = MarkerLayout()
-    items = [(f"corner {k} (id {i})", i, layout.corner_size_m) for k, i in enumerate(layout.corner_ids)]
-    items += [(f"object (id {layout.object_id})", layout.object_id, layout.object_size_m)] * 2
-    fig = plt.figure(figsize=(A4_MM[0] / 25.4, A4_MM[1] / 25.4))
-    ax = fig.add_axes((0, 0, 1, 1))
-    ax.set_xlim(0, A4_MM[0])
-    ax.set_ylim(0, A4_MM[1])
-    ax.set_axis_off()
-    for n, (label, marker_id, size_m) in enumerate(items):
-        side = size_m * 1000 * quiet_scale(layout)           # [mm] with the white quiet zone
-        x = 25 + (n % 2) * 90
-        y = A4_MM[1] - 40 - (n // 2) * 80 - side
-        ax.imshow(marker_image(layout, marker_id, 480), cmap="gray", vmin=0, vmax=255, interpolation="nearest",
-                  extent=(x, x + side, y, y + side))
-        ax.text(x, y - 6, f"{label}: black square {size_m * 1000:.0f} mm", fontsize=8)
-    ax.plot([25, 125], [15, 15], color="black", lw=1)
-    ax.text(25, 18, "100 mm: check this after printing (print at 100 %, no fit-to-page)", fontsize=8)
-    ax.text(25, 8, f"{layout.dictionary}; corner markers at (±{layout.corner_offset_m[0]}, ±{layout.corner_offset_m[1]})"
-                   " m in the fabric frame, their tops toward +y", fontsize=7)
-    fig.savefig(out, dpi=args.dpi)
-    plt.close(fig)
-    print(f"{out}: {len(items)} markers on A4 at true size" + (f", {args.dpi} dpi" if out.suffix == ".png" else ""))
+    count = write_marker_sheet(out, args.dpi)
+    print(f"{out}: {count} markers on A4 at true size" + (f", {args.dpi} dpi" if out.suffix == ".png" else ""))
     return 0
 
 
@@ -368,43 +339,12 @@ def _squares(text: str) -> tuple[int, int]:
     return nx, ny
 
 
-def charuco_board(args):
-    import cv2
-
-    from .markers import MarkerLayout, dictionary
-
-    squares_x, squares_y = args.squares
-    return cv2.aruco.CharucoBoard((squares_x, squares_y), args.square_mm / 1000, args.marker_mm / 1000,
-                                  dictionary(MarkerLayout()))
-
-
-def calibrate_from_frames(board, frames, min_corners: int = 8):
-    """(Calibration, RMS reprojection error [px], views used) from BGR or grey images of a ChArUco board."""
-    import cv2
-
-    from .tracker import Calibration
-
-    detector = cv2.aruco.CharucoDetector(board)
-    objects, images, size = [], [], None
-    for image in frames:
-        grey = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
-        size = grey.shape[::-1]
-        corners, ids, _, _ = detector.detectBoard(grey)
-        if ids is None or len(ids) < min_corners:
-            continue
-        obj, img = board.matchImagePoints(corners, ids)
-        objects.append(obj)
-        images.append(img)
-    if len(objects) < 5:
-        raise ValueError(f"only {len(objects)} frames showed the board well enough (at least 5 needed)")
-    rms, k, dist, _, _ = cv2.calibrateCamera(objects, images, size, None, None)
-    return Calibration(k, dist.ravel()), float(rms), len(objects)
-
-
 def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """Calibrate the camera with a ChArUco board: --board-out writes the board to print; then show it to the
     camera from several angles (or give a video of that) and the intrinsics go to --out (.npz)."""
     import cv2
+
+    from .charuco import PRINT_DPI, board_image, calibrate_from_frames, charuco_board
 
     if not 0 < args.marker_mm < args.square_mm:
         parser.error(f"the marker ({args.marker_mm:g} mm) must be smaller than its square ({args.square_mm:g} mm) "
@@ -416,15 +356,12 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
             writable_file(args.out, (".npz",))
     except OutputError as exc:
         parser.error(str(exc))
-    board = charuco_board(args)
+    board = charuco_board(args.squares, args.square_mm, args.marker_mm)
     if args.board_out:
-        squares_x, squares_y = args.squares
-        px_per_mm = 300 / 25.4
-        image = board.generateImage((int(squares_x * args.square_mm * px_per_mm),
-                                     int(squares_y * args.square_mm * px_per_mm)))
-        if not cv2.imwrite(args.board_out, image):
+        if not cv2.imwrite(args.board_out, board_image(board, args.squares, args.square_mm)):
             parser.error(f"could not write {args.board_out!r} (an image: .png, .jpg, .tif ...)")
-        print(f"{args.board_out}: {squares_x} x {squares_y} squares of {args.square_mm} mm at 300 dpi")
+        print(f"{args.board_out}: {args.squares[0]} x {args.squares[1]} squares of {args.square_mm} mm at "
+              f"{PRINT_DPI} dpi")
         if args.camera is None:
             return 0
     if args.camera is None:

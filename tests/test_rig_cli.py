@@ -202,11 +202,9 @@ def test_markers_sheet_is_at_true_size(tmp_path):
 
 
 def test_calibrate_recovers_a_cameras_intrinsics_from_charuco_views(tmp_path):
-    from mantaray.host.cli import charuco_board
+    from mantaray.host.charuco import charuco_board
 
-    class Args:
-        squares, square_mm, marker_mm = (7, 5), 30.0, 22.0
-    board = charuco_board(Args)
+    board = charuco_board((7, 5), 30.0, 22.0)
     board_px = board.generateImage((1400, 1000))                    # 0.21 x 0.15 m at 6667 px/m
     k = intrinsics()
     rng = np.random.default_rng(5)
