@@ -8,14 +8,13 @@ builder/frameworks/arduino.py) plus build_flags minus build_unflags from the ini
 (LTO, --gc-sections). Two differences, neither of which changes the code: the Debian Arduino core needs
 DECIMAL_DIG defined (avr-libc's float.h lacks it), and -gdwarf-4 is added so that the DWARF line table can
 attribute code to source files, which is how the core's share of the flash is measured after LTO has
-inlined it into the board's functions.
+inlined it into the board's functions (avr_size.py measures the image and judges it against the budgets).
 
 Exit status: 0 built and within budget, 1 build or configuration error, 3 over budget (2 is a usage error).
 """
 from __future__ import annotations
 
 import argparse
-import bisect
 import configparser
 import json
 import re
@@ -28,6 +27,9 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))   # its sibling avr_size.py, also when loaded by a test
+import avr_size  # noqa: E402
+
 REPO = Path(__file__).resolve().parent.parent
 ARDUINO_AVR = Path("/usr/share/arduino/hardware/arduino/avr")  # Debian package arduino-core-avr
 AVR_LIBC_HEADER = Path("/usr/lib/avr/include/avr/io.h")  # Debian package avr-libc
@@ -37,17 +39,12 @@ TOOLS = {  # command -> Debian package
     "avr-size": "binutils-avr", "avr-c++filt": "binutils-avr",
 }
 
-FLASH_BUDGET = 0.75  # fraction of the flash the bootloader leaves
-RAM_BUDGET = 0.60  # fraction of the RAM for static data; the stack needs the rest
 ARDUINO_VERSION = 10808  # the ARDUINO macro PlatformIO's atmelavr platform defines
 SOURCE_EXTS = (".c", ".cpp", ".S")
-CLONE_SUFFIX = re.compile(r"(\.(lto_priv|constprop|isra|part|cold)\.\d+)+$")
 # Options whose effect this script does not reproduce: refuse them rather than measure a different build.
 UNSUPPORTED_OPTIONS = ("extends", "build_src_filter", "build_src_flags", "lib_deps", "board_build.mcu",
                        "board_build.f_cpu")
 MEASURE_FLAGS = ["-gdwarf-4"]  # debug info only (no code change): lets the line table attribute code to files
-CORE_NAMESPACE = "mr::"  # the portable core's data symbols ...
-BOARD_NAMESPACE = "mr::board::"  # ... except the board layer's (its HAL, pins and actuator bank)
 
 
 @dataclass(frozen=True)
@@ -378,114 +375,6 @@ def step(command: list[str], target: Path, verbose: bool) -> None:
         raise BuildError(f"{command[0]} failed making {target}")
 
 
-def tool_output(command: list[str]) -> str:
-    return subprocess.run(command, capture_output=True, text=True, check=True).stdout
-
-
-def section_sizes(elf: Path) -> dict[str, int]:
-    """[bytes] by section, from avr-size -A."""
-    sizes = {}
-    for line in tool_output(["avr-size", "-A", "-d", str(elf)]).splitlines():
-        parts = line.split()
-        if len(parts) == 3 and parts[0].startswith(".") and parts[1].isdigit():
-            sizes[parts[0]] = int(parts[1])
-    return sizes
-
-
-def symbols(elf: Path) -> list[tuple[int, int, str, str]]:
-    """(address, size [bytes], nm type letter, demangled name) of every sized symbol."""
-    listing = tool_output(["avr-nm", "-S", "--defined-only", str(elf)])
-    rows = [parts for parts in (line.split(maxsplit=3) for line in listing.splitlines()) if len(parts) == 4]
-    # GCC's clone suffixes (.lto_priv.N, .constprop.N, ...) stop the demangler: strip them first.
-    names = "\n".join(CLONE_SUFFIX.sub("", parts[3]) for parts in rows)
-    demangled = subprocess.run(["avr-c++filt"], input=names, capture_output=True, text=True, check=True).stdout
-    return [(int(parts[0], 16), int(parts[1], 16), parts[2], name)
-            for parts, name in zip(rows, demangled.splitlines())]
-
-
-def code_by_file(elf: Path, functions: list[tuple[int, int]]) -> dict[Path, int]:
-    """[bytes] of function code by source file, from the DWARF line table.
-
-    A row covers the bytes up to the next row, clipped to the function it starts in; code without line
-    information (avr-libc and libgcc assembly) is left out.
-    """
-    rows: dict[int, Path] = {}  # address -> file of the line starting there (a later row at one address wins)
-    current = None
-    for line in tool_output(["avr-objdump", "--dwarf=decodedline", str(elf)]).splitlines():
-        if line.endswith(":") and not line[:1].isspace():  # "CU: /path/file.cpp:" or "/path/file.h:"
-            current = Path(line.removeprefix("CU: ")[:-1])
-            continue
-        parts = line.split()
-        if current and len(parts) >= 3 and parts[2].startswith("0x"):
-            rows[int(parts[2], 16)] = current
-    addresses = sorted(rows)
-    ranges: list[list[int]] = []  # functions merged into disjoint [start, end) (aliases share their code)
-    for start, size in sorted(functions):
-        if ranges and start < ranges[-1][1]:
-            ranges[-1][1] = max(ranges[-1][1], start + size)
-        else:
-            ranges.append([start, start + size])
-    by_file: dict[Path, int] = {}
-    for start, end in ranges:
-        for i in range(bisect.bisect_left(addresses, start), len(addresses)):
-            if addresses[i] >= end:
-                break
-            next_row = addresses[i + 1] if i + 1 < len(addresses) else end
-            by_file[rows[addresses[i]]] = by_file.get(rows[addresses[i]], 0) + min(next_row, end) - addresses[i]
-    return by_file
-
-
-def measure(project: Project, plan: Plan) -> dict:
-    """Flash and static RAM of the image and the core's share of them, as PlatformIO counts them."""
-    sections = section_sizes(plan.elf)
-    flash = sum(sections.get(s, 0) for s in (".text", ".data", ".bootloader"))
-    ram = sum(sections.get(s, 0) for s in (".data", ".bss", ".noinit"))
-    syms = symbols(plan.elf)
-    functions = [(addr, size) for addr, size, kind, _ in syms if kind in "tTwW" and size]
-    lib_dir = project.lib_dir
-    core_code = sum(n for path, n in code_by_file(plan.elf, functions).items() if path.is_relative_to(lib_dir))
-    data = [(size, kind, name) for _, size, kind, name in syms if kind in "dDbB"]
-    core_data = [(size, kind) for size, kind, name in data
-                 if name.startswith(CORE_NAMESPACE) and not name.startswith(BOARD_NAMESPACE)]
-    core_ram = sum(size for size, _ in core_data)
-    core_initialised = sum(size for size, kind in core_data if kind in "dD")  # initial values stored in flash
-    board = project.board
-    flash_budget = int(board.flash * FLASH_BUDGET)
-    ram_budget = int(board.ram * RAM_BUDGET)
-    largest = sorted(data, reverse=True)[:5]
-    return {
-        "elf": str(plan.elf),
-        "board": project.board_name,
-        "mcu": board.mcu,
-        "flash": {"used": flash, "max": board.flash, "percent": round(100 * flash / board.flash, 1),
-                  "budget": flash_budget},
-        "ram": {"used": ram, "max": board.ram, "percent": round(100 * ram / board.ram, 1), "budget": ram_budget},
-        "core": {"flash": core_code + core_initialised, "code": core_code, "ram": core_ram},
-        "largest_ram": [{"name": name, "size": size} for size, _, name in largest],
-        "within_budget": flash <= flash_budget and ram <= ram_budget,
-    }
-
-
-def report(sizes: dict, compiled: int, total: int, seconds: float) -> str:
-    flash, ram, core = sizes["flash"], sizes["ram"], sizes["core"]
-
-    def line(label: str, part: dict, pct_of_budget: float) -> str:
-        verdict = "ok" if part["used"] <= part["budget"] else "OVER BUDGET"
-        return (f"{label:<6}{part['used']:>6} B  {part['percent']:5.1f} % of {part['max']:>5} B"
-                f"   budget {pct_of_budget:.0%} = {part['budget']} B: {verdict}")
-
-    largest = ", ".join(f"{item['name']} {item['size']} B" for item in sizes["largest_ram"])
-    return "\n".join([
-        f"{sizes['elf']} ({sizes['board']}, {sizes['mcu']})",
-        line("flash", flash, FLASH_BUDGET) + "   (.text + .data)",
-        line("RAM", ram, RAM_BUDGET) + "   (.data + .bss; the stack takes from the rest)",
-        f"core  {core['flash']:>6} B flash ({core['code']} B code from lib_dir, as linked and inlined, "
-        f"+ initial values), {core['ram']} B static RAM ({CORE_NAMESPACE} data outside {BOARD_NAMESPACE})",
-        f"largest RAM: {largest}",
-        f"compiled {compiled} of {total} objects in {seconds:.1f} s",
-    ])
-
-
 def missing_packages(compiling: bool) -> list[str]:
     """Debian packages the build lacks: the Arduino core (its file list) always, the toolchain to compile."""
     missing = set()
@@ -522,12 +411,12 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         started = time.monotonic()
         compiled, total = execute(plan, max(args.jobs, 1), args.verbose)
-        sizes = measure(project, plan)
+        sizes = avr_size.measure(plan.elf, project.lib_dir, project.board_name, project.board)
         sizes["build_s"] = round(time.monotonic() - started, 2)
     except BuildError as exc:
         print(f"avr_build: {exc}", file=sys.stderr)
         return 1
-    print(json.dumps(sizes, indent=2) if args.json else report(sizes, compiled, total, sizes["build_s"]))
+    print(json.dumps(sizes, indent=2) if args.json else avr_size.report(sizes, compiled, total, sizes["build_s"]))
     over = [f"{label} {sizes[key]['used']} B > {sizes[key]['budget']} B"
             for key, label in (("flash", "flash"), ("ram", "RAM")) if sizes[key]["used"] > sizes[key]["budget"]]
     if over:

@@ -115,7 +115,7 @@ def test_rebuild_skips_up_to_date_objects(build):
 @needs_toolchain
 def test_over_budget_exits_3(build, monkeypatch, capsys):
     out, _ = build
-    monkeypatch.setattr(avr_build, "RAM_BUDGET", 0.01)
+    monkeypatch.setattr(avr_build.avr_size, "RAM_BUDGET", 0.01)
     assert avr_build.main(["--out", str(out)]) == 3
     assert "OVER BUDGET" in capsys.readouterr().out
 
