@@ -10,8 +10,8 @@ from mantaray.protocol import messages as m
 
 from mantaray.protocol.conformance.harness import Dut
 
-HANDSHAKE_TIMEOUT = 5.0  # [s] identify is retried this long before the device counts as silent
-BOOT_WAIT = 2.0  # [s] longest wait for the boot message of a board that resets when its port opens
+HANDSHAKE_TIMEOUT_S = 5.0  # [s] identify is retried this long before the device counts as silent
+BOOT_WAIT_S = 2.0  # [s] longest wait for the boot message of a board that resets when its port opens
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
@@ -71,7 +71,7 @@ class Connection:
             if self.vmcu is None:
                 self._await_boot()
             self.link.send_raw(b"\x00")  # flushes a half-received frame (PROTOCOL.md, framing)
-            deadline = time.monotonic() + HANDSHAKE_TIMEOUT
+            deadline = time.monotonic() + HANDSHAKE_TIMEOUT_S
             while True:
                 try:
                     identity = self.link.identify()
@@ -89,10 +89,10 @@ class Connection:
 
     def _await_boot(self) -> None:
         """PROTOCOL.md, physical layer: opening a Uno's port resets it, and its bootloader must not be
-        talked to; the host waits for the boot message (or BOOT_WAIT) before the handshake. A device
+        talked to; the host waits for the boot message (or BOOT_WAIT_S) before the handshake. A device
         that has already booted (a simulator, a board without auto-reset) just costs the wait; any
         frame it sends meanwhile ends the wait too."""
-        deadline = time.monotonic() + BOOT_WAIT
+        deadline = time.monotonic() + BOOT_WAIT_S
         while (remaining := deadline - time.monotonic()) > 0:
             if self.link.receive(remaining) is not None:
                 return
