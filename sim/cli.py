@@ -237,6 +237,7 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     from .progress import Progress
 
     bar = Progress(total, initial=total - len(todo), unit="trial", label="heatmap")   # on stderr, beside --json
+    _interruptible()
     try:
         if args.executor == "ray":
             try:
@@ -390,7 +391,7 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
     else:
         pool = LocalPool(args.jobs or os.cpu_count() or 1)
     fig3 = None
-    signal.signal(signal.SIGTERM, _interrupt)   # a stopped session's kill ends the search as Ctrl-C does
+    _interruptible()
     try:
         with pool:
             C.run_study(study, evidence, keys, fixed, args.candidates, pool, report_candidate)
@@ -418,8 +419,15 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
     return 0
 
 
+def _interruptible() -> None:
+    """A long run ends as on Ctrl-C (what it did is kept, the same command continues it) on SIGINT, also when
+    started in the background, where SIGINT comes ignored, and on SIGTERM (a stopped session's kill)."""
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, _interrupt)
+
+
 def _interrupt(signum, frame) -> None:
-    """SIGTERM as Ctrl-C: the candidate in flight is queued again and the report written."""
+    """SIGTERM as Ctrl-C."""
     raise KeyboardInterrupt
 
 
