@@ -193,6 +193,9 @@ def render_cpp(schema: dict) -> str:
         out.append(f"  k{camel(err['name'])} = {err['code']},  // {err['doc']}")
     out.append("};")
     out.append(f"constexpr uint8_t kLastErrorCode = {max(e['code'] for e in schema['errors'])};  // nack.code is 1..this")
+    most = max(len(msg["fields"]) for msg in schema["messages"] if msg["direction"] == "host_to_mcu")
+    out.append(f"constexpr uint8_t kMostFields = {most};  // fields of the widest host -> MCU message: nack.field "
+               f"is below this or kNoField")
     out.append("")
     for name, enum in schema["enums"].items():
         out.append(f"// {enum['doc']}")

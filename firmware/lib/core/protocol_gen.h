@@ -27,6 +27,7 @@ enum class ErrorCode : uint8_t {
   kStaleSequence = 9,  // A frame whose sequence number is 1 to 64 behind the newest one taken, or equals it with other content: a delayed or duplicated copy of an older frame, not applied (PROTOCOL.md section 3).
 };
 constexpr uint8_t kLastErrorCode = 9;  // nack.code is 1..this
+constexpr uint8_t kMostFields = 9;  // fields of the widest host -> MCU message: nack.field is below this or kNoField
 
 // Supervisor state.
 enum class State : uint8_t {

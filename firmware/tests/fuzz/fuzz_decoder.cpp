@@ -131,7 +131,7 @@ class Harness {
       proto::decode(f.payload, nack);
       FUZZ_CHECK(nack.ref_id == id && nack.ref_seq == seq);
       FUZZ_CHECK(nack.code >= 1 && nack.code <= proto::kLastErrorCode);
-      FUZZ_CHECK(nack.field <= 8 || nack.field == proto::kNoField);
+      FUZZ_CHECK(nack.field < proto::kMostFields || nack.field == proto::kNoField);
       if (size < 0) FUZZ_CHECK(nack.code == static_cast<uint8_t>(proto::ErrorCode::kUnknownMessage));
       if (size >= 0 && !well_formed) FUZZ_CHECK(nack.code == static_cast<uint8_t>(proto::ErrorCode::kBadLength));
       // A refused command changed nothing.
