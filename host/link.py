@@ -153,11 +153,15 @@ class Link:
         reply = self._await_reply(encode_frame(msg, seq), answers)
         if isinstance(reply, m.Nack):
             if reply.code == m.ErrorCode.STALE_SEQUENCE and not resynced:
-                self.resyncs += 1
-                self.command(m.Identify(), resynced=True)
+                self._resync()
                 return self.command(msg, resynced=True)
             raise CommandRefused(msg, reply)
         return reply
+
+    def _resync(self) -> None:
+        """identify: the firmware forgets the newest frame it took, so this host's next frame counts again."""
+        self.resyncs += 1
+        self.command(m.Identify(), resynced=True)
 
     def position(self, msg: m.ObjectPosition, timeout_s: float | None = None) -> m.Telemetry:
         """Sends one camera frame and returns the telemetry that answers it (not retransmitted: stale by then)."""
@@ -168,8 +172,7 @@ class Link:
             reply = self.receive(remaining)
             if isinstance(reply, m.Nack) and reply.ref_id == msg.ID and reply.ref_seq == seq:
                 if reply.code == m.ErrorCode.STALE_SEQUENCE:     # never applied; the next frame will be
-                    self.resyncs += 1
-                    self.command(m.Identify(), resynced=True)
+                    self._resync()
                     raise LinkError(f"position frame {msg.frame} came behind the firmware's count: identified "
                                     f"again, the next frame counts")
                 raise CommandRefused(msg, reply)

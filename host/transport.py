@@ -44,7 +44,7 @@ class InProcessTransport:
     """The native firmware core loaded as a library: the same firmware as the virtual MCU, with no pty.
 
     Each is one virtual MCU of its own (the core holds no global state), so any number run side by side in one
-    process; close() frees it.
+    process; it is freed with the transport (close() only ends the host's end, as closing a board's port does).
     """
 
     def __init__(self, simulated_clock: bool = True) -> None:

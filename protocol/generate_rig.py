@@ -48,6 +48,12 @@ def value(rig: dict, key: str):
     return rig[section][key]["value"]
 
 
+def _pins(rig: dict, key: str) -> list[int]:
+    """The pins an entry names: one, or one per actuator."""
+    pins = value(rig, key)
+    return pins if isinstance(pins, list) else [pins]
+
+
 def check(rig: dict, schema: dict) -> None:
     """Raises RigDescriptionError on the first disagreement found."""
     for section in ("core", "board"):
@@ -60,13 +66,13 @@ def check(rig: dict, schema: dict) -> None:
         if len(value(rig, key)) != count:
             raise RigDescriptionError(f"rig.toml {key}: {len(value(rig, key))} values for {count} actuators")
     for key in PINS:
-        for pin in value(rig, key) if isinstance(value(rig, key), list) else [value(rig, key)]:
+        for pin in _pins(rig, key):
             if pin not in UNO_PINS:
                 raise RigDescriptionError(f"rig.toml {key}: the Uno has no pin {pin} (0..19)")
     for pin in value(rig, "pwm_pin"):
         if pin not in UNO_PWM:
             raise RigDescriptionError(f"rig.toml pwm_pin: pin {pin} has no PWM on the Uno ({sorted(UNO_PWM)})")
-    used = [p for key in PINS for p in (value(rig, key) if isinstance(value(rig, key), list) else [value(rig, key)])]
+    used = [pin for key in PINS for pin in _pins(rig, key)]
     if len(set(used)) != len(used):
         raise RigDescriptionError(f"rig.toml: a pin is used twice ({sorted(p for p in set(used) if used.count(p) > 1)})")
     reply = {f["name"]: f for m in schema["messages"] if m["name"] == "identify_reply" for f in m["fields"]}

@@ -74,8 +74,7 @@ void Firmware::dispatch() {
   if (size != decoder_.payload_len()) return send_reply(id, seq, ErrorCode::kBadLength, proto::kNoField);
 
   if (id == proto::Identify::kId) {
-    has_newest_ = false;  // a (re)connected host: its sequence numbers start afresh
-    last_command_.valid = last_position_.valid = false;
+    last_command_.valid = last_position_.valid = false;  // a (re)connected host: its sequence numbers start afresh
     supervisor_.forget_positions();
     return send_identify_reply();
   }
@@ -86,7 +85,8 @@ void Firmware::dispatch() {
   const bool copy = last.valid && seq == last.seq && decoder_.crc() == last.crc && id == last.id &&
                     (!position || seq == newest_seq_);
   if (copy) return answer_again(last, id, seq);
-  if (has_newest_ && static_cast<uint8_t>(newest_seq_ - seq) <= kStaleWindow) {  // wraps: 0 the newest, 1.. older
+  const bool any_taken = last_command_.valid || last_position_.valid;
+  if (any_taken && static_cast<uint8_t>(newest_seq_ - seq) <= kStaleWindow) {  // wraps: 0 the newest, 1.. older
     return send_reply(id, seq, ErrorCode::kStaleSequence, proto::kNoField);
   }
   const uint32_t now = hal_.now_us();
@@ -94,7 +94,6 @@ void Firmware::dispatch() {
   const ErrorCode code = position ? supervisor_.position(decoded<proto::ObjectPosition>(decoder_.payload()), now, field)
                                   : handle_command(field);
   apply_outputs();
-  has_newest_ = true;
   newest_seq_ = seq;
   last = Answered{true, id, seq, decoder_.crc(), code, field};
   if (position && code == ErrorCode::kOk) return send_telemetry(now);

@@ -58,8 +58,7 @@ class Firmware {
   // Order (PROTOCOL.md section 3): a copy of the last command or of the last position is answered again; any
   // other frame 0..kStaleWindow sequence numbers behind the newest one taken is a late copy: refused as stale.
   static constexpr uint8_t kStaleWindow = 64;
-  bool has_newest_ = false;
-  uint8_t newest_seq_ = 0;
+  uint8_t newest_seq_ = 0;  // of the newest frame taken (the last command's or the last position's)
   Answered last_command_ = {false, 0, 0, 0, proto::ErrorCode::kOk, proto::kNoField};
   Answered last_position_ = {false, 0, 0, 0, proto::ErrorCode::kOk, proto::kNoField};
 };
