@@ -1,4 +1,4 @@
-"""The rig's MuJoCo model as it runs: loaded from its MJCF (mjcf.py), stepped, commanded, and asked where things are."""
+"""The rig's MuJoCo model as it runs: compiled from the MJCF files mjcf.py writes, stepped, commanded, and asked where things are."""
 from __future__ import annotations
 
 import tempfile
@@ -6,10 +6,9 @@ import tempfile
 import mujoco
 import numpy as np
 
-from .mjcf import FABRIC, MARKER, N_ACTUATORS, OBJECT, alternating_elements, write_model
+from .mjcf import FABRIC, MARKER, N_ACTUATORS, OBJECT, OBJECT_SLIDES, REST_KEY, write_model
 from .rig import FallRule, Rig
 
-REST_KEY = "rest"             # keyframe filled by load(): fabric settled, commands zero, object parked
 AT_REST_SPEED_M_PER_S = 0.01   # [m/s] object linear speed below which it counts as at rest ...
 AT_REST_SPIN_RAD_PER_S = 0.5   # [rad/s] ... with its angular speed below this ...
 AT_REST_HOLD_S = 0.2           # [s] ... for this long without a break
@@ -28,34 +27,26 @@ class SimulationUnstable(RuntimeError):
         return type(self), (self.when,)
 
 
-def _set_rolling_damping(model: mujoco.MjModel, rig: Rig) -> None:
-    """Damping on the object's three rotational dofs: rig.contact.rolling_damping_per_s x its inertia about its lowest point.
+def _object_qpos_adr(model: mujoco.MjModel) -> int:
+    """Where the object's 7 qpos (x, y, z [m], then its orientation quaternion) start."""
+    return int(model.jnt_qposadr[model.joint(OBJECT_SLIDES[0]).id])
 
-    For a sphere rolling on a level sheet that makes its speed decay at exactly that rate (I + m r^2 is
-    the rolling inertia about the contact). MJCF cannot damp only the rotation of a free joint, so this
-    is set on the compiled model; the files write_model() writes leave it out.
-    """
-    body = model.body(OBJECT).id
-    mass_kg, inertia = model.body_mass[body], model.body_inertia[body]
-    about_contact = float(np.mean(inertia)) + mass_kg * rig.object.half_height_m ** 2   # [kg m^2]
-    dof = model.jnt_dofadr[model.joint(OBJECT).id]
-    model.dof_damping[dof + 3:dof + 6] = rig.contact.rolling_damping_per_s * about_contact
+
+def _object_dof_adr(model: mujoco.MjModel) -> int:
+    """Where the object's 6 qvel (world velocity [m/s], then angular velocity in its own frame [rad/s]) start."""
+    return int(model.jnt_dofadr[model.joint(OBJECT_SLIDES[0]).id])
 
 
 def load(rig: Rig, fabric_settle_s: float = 2.0) -> tuple[mujoco.MjModel, mujoco.MjData]:
-    """Compile the scene through MjSpec with the alternating mesh, let the bare fabric settle, keep that as REST_KEY.
+    """Compile the scene write_model() writes, as written; let the bare fabric settle and keep that as REST_KEY.
 
     The object is parked on the floor beside the frame while the fabric settles; place_object()
     starts from REST_KEY. The returned data is in the REST_KEY state.
     """
     with tempfile.TemporaryDirectory() as tmp:
-        spec = mujoco.MjSpec.from_file(str(write_model(rig, tmp)))
-        spec.flexes[0].elem = alternating_elements(rig.fabric.resolution).ravel().tolist()
-        spec.add_key(name=REST_KEY)
-        model = spec.compile()
-    _set_rolling_damping(model, rig)
+        model = mujoco.MjModel.from_xml_path(str(write_model(rig, tmp)))
     data = mujoco.MjData(model)
-    qadr = model.jnt_qposadr[model.joint(OBJECT).id]
+    qadr = _object_qpos_adr(model)
     park_x_m = rig.frame.size_x_m / 2 + PARK_OFFSET_M
     data.qpos[qadr:qadr + 7] = [park_x_m, 0.0, rig.object.half_height_m + 0.01, 1, 0, 0, 0]  # dropped 1 cm
     diverged = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]   # a live view of MuJoCo's counter
@@ -133,7 +124,7 @@ def object_xy(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
 
 def object_speed(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[float, float]:
     """(linear speed [m/s] of the object's origin, angular speed [rad/s])."""
-    dadr = model.jnt_dofadr[model.joint(OBJECT).id]
+    dadr = _object_dof_adr(model)
     return float(np.linalg.norm(data.qvel[dadr:dadr + 3])), float(np.linalg.norm(data.qvel[dadr + 3:dadr + 6]))
 
 
@@ -165,7 +156,7 @@ def drop_object(model: mujoco.MjModel, data: mujoco.MjData, x_m: float, y_m: flo
     mujoco.mj_forward(model, data)
     half_height_m = model.site(MARKER).pos[2]
     z = fabric_height(model, data, x_m, y_m) + half_height_m + DROP_CLEARANCE_M
-    qadr = model.jnt_qposadr[model.joint(OBJECT).id]
+    qadr = _object_qpos_adr(model)
     data.qpos[qadr:qadr + 7] = [x_m, y_m, z, np.cos(yaw_rad / 2), 0.0, 0.0, np.sin(yaw_rad / 2)]
     mujoco.mj_forward(model, data)
 

@@ -48,6 +48,68 @@ def test_written_scene_compiles_as_plain_xml(tmp_path, name):
                            [sx * RIG.frame.size_x_m / 2, sy * RIG.frame.size_y_m / 2, RIG.frame.z0_m])
 
 
+def _seeded_steps(model: mujoco.MjModel, data: mujoco.MjData, seed: int, steps: int) -> np.ndarray:
+    """qpos after each of `steps` steps under corner commands drawn from seed, changed every 0.25 s."""
+    rng, out = np.random.default_rng(seed), []
+    for k in range(steps):
+        if k % round(0.25 / model.opt.timestep) == 0:
+            M.set_commands(model, data, rng.uniform(-0.15, 0.15, J.N_ACTUATORS))
+        mujoco.mj_step(model, data)
+        out.append(data.qpos.copy())
+    return np.array(out)
+
+
+def _same_start(source: tuple[mujoco.MjModel, mujoco.MjData], model: mujoco.MjModel) -> mujoco.MjData:
+    """Data for model in exactly the state source's data is in."""
+    spec = mujoco.mjtState.mjSTATE_INTEGRATION
+    state = np.empty(mujoco.mj_stateSize(source[0], spec))
+    mujoco.mj_getState(source[0], source[1], state, spec)
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, state, spec)
+    return data
+
+
+def test_the_written_scene_is_the_model_that_runs(tmp_path):
+    rng = np.random.default_rng(13)
+    rig = RIG.with_object(str(rng.choice(list(OBJECTS))))
+    loaded, data = M.load(rig)
+    written = mujoco.MjModel.from_xml_path(str(J.write_model(rig, tmp_path)))
+    for name in dir(loaded):   # every compiled array but the keyframe load() fills and the asset paths (other folders)
+        a = getattr(loaded, name)
+        if isinstance(a, np.ndarray) and not name.startswith(("key_", "paths", "_sizes")):
+            assert np.array_equal(a, getattr(written, name), equal_nan=True), name
+    M.place_object(loaded, data, *rng.uniform(-0.1, 0.1, 2), rule=rig.fall)
+    from_disk = _same_start((loaded, data), written)
+    steps = round(1.0 / loaded.opt.timestep)
+    assert np.array_equal(_seeded_steps(loaded, data, 5, steps), _seeded_steps(written, from_disk, 5, steps))
+
+
+def test_the_object_joints_step_as_a_free_joint_with_its_rotation_damped(sphere_scene, tmp_path):
+    """Three slides and a ball (mjcf.OBJECT_SLIDES, OBJECT_TURN) are a free joint whose rotation alone is damped."""
+    model, data = sphere_scene[0], mujoco.MjData(sphere_scene[0])   # the fixture's data stays in the rest state
+    spec = mujoco.MjSpec.from_file(str(J.write_model(RIG, tmp_path)))
+    body = spec.body(J.OBJECT)
+    for joint in list(body.joints):
+        spec.delete(joint)
+    body.add_freejoint()
+    free = spec.compile()
+    dof = free.jnt_dofadr[free.body_jntadr[free.body(J.OBJECT).id]]
+    free.dof_damping[dof + 3:dof + 6] = J.rolling_damping(RIG)
+    assert np.array_equal(free.dof_damping, model.dof_damping)
+    M.place_object(model, data, 0.03, -0.02, rule=RIG.fall)
+    as_free = _same_start((model, data), free)
+    steps = round(1.0 / model.opt.timestep)
+    assert np.array_equal(_seeded_steps(model, data, 8, steps), _seeded_steps(free, as_free, 8, steps))
+
+
+def test_rolling_damping_is_the_rate_times_the_inertia_about_the_contact():
+    """For the sphere, I + m r^2 = 7/5 m r^2: damped at rate beta, a rolling sphere slows at beta."""
+    o = RIG.object
+    r = o.size_m[0]
+    assert J.rolling_damping(RIG) == pytest.approx(RIG.contact.rolling_damping_per_s * 1.4 * o.mass_kg * r ** 2,
+                                                   rel=1e-9)
+
+
 @pytest.fixture(scope="module")
 def sphere_scene():
     return M.load(RIG)
