@@ -103,8 +103,11 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:  # a user-facing tool: one clear line, no traceback
         from mantaray.host.link import LinkError
         from mantaray.paths import NotBuilt
-        from mantaray.sim.model import SimulationUnstable
-        if isinstance(exc, (LinkError, NotBuilt, OSError, SimulationUnstable)):
+        expected = [LinkError, NotBuilt, OSError]
+        simulation = sys.modules.get("mantaray.sim.model")   # only a command that loaded it can have failed in it
+        if simulation is not None:                           # (importing it here would load MuJoCo for the rig)
+            expected.append(simulation.SimulationUnstable)
+        if isinstance(exc, tuple(expected)):
             print(f"mantaray {args.command}: error: {exc}", file=sys.stderr)
             return 1
         raise

@@ -57,5 +57,6 @@ def test_the_installed_package_runs_the_main_job_outside_the_checkout(installed,
     assert vmcu.returncode == 0 and "matches this host" in vmcu.stdout, vmcu.stderr
     run = _run_installed(target, "-m", "mantaray.cli", "sim", "run", "--duration", "0.5", "--json", "--out",
                          str(tmp_path / "out"), cwd=tmp_path)
-    assert run.returncode in (0, 1), run.stderr                   # 1: not reached in 0.5 s, a result
-    assert json.loads(run.stdout.splitlines()[-1])["camera_frames"] == 7 and (tmp_path / "out").is_dir()
+    result = json.loads(run.stdout.splitlines()[-1])
+    assert run.returncode == 1 and not result["success"], run.stderr   # 0.10 m short after 0.5 s: a result, exit 1
+    assert result["camera_frames"] == 7 and (tmp_path / "out").is_dir()
