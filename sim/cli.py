@@ -74,13 +74,12 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     out = _output(parser, writable_dir, args.out)
     stem = _trial_stem(args)
     progress = None
-    if not args.json and sys.stderr.isatty():
-        from tqdm import tqdm
-        bar = tqdm(total=round(args.duration, 2), unit="sim s", bar_format="{l_bar}{bar}| {n:.1f}/{total} sim s "
-                   "[{elapsed}<{remaining}]", file=sys.stderr)
+    if not args.json:
+        from .progress import Progress
+        bar = Progress(float(args.duration), unit="sim s", units="simulated s", label="sim run", line_every_s=5.0)
 
         def progress(t_s: float) -> None:
-            bar.update(round(t_s - bar.n, 3))
+            bar.update(t_s - bar.done)
 
     if args.viewer and not os.environ.get("DISPLAY"):
         parser.error("--viewer needs a display (DISPLAY is not set); use --video to record one instead")

@@ -7,11 +7,16 @@ from typing import TextIO
 
 
 class Progress:
-    """Counts done of total; on a terminal a tqdm bar, otherwise a line at most every line_every_s seconds."""
+    """Counts done of total; on a terminal a tqdm bar, otherwise a line at most every line_every_s seconds.
 
-    def __init__(self, total: int, initial: int = 0, unit: str = "trial", label: str = "",
-                 stream: TextIO | None = None, line_every_s: float = 30.0, enabled: bool = True) -> None:
+    Counts are whole (trials, candidates) or, with a float total, a quantity such as simulated seconds; units is
+    the plural the lines print (unit + "s" unless given)."""
+
+    def __init__(self, total: float, initial: float = 0, unit: str = "trial", label: str = "",
+                 stream: TextIO | None = None, line_every_s: float = 30.0, enabled: bool = True,
+                 units: str | None = None) -> None:
         self.total, self.done, self.unit, self.label = total, initial, unit, label
+        self.units = units or f"{unit}s"
         self.stream = stream or sys.stderr
         self.enabled, self.line_every_s = enabled, line_every_s
         self._initial, self._t0, self._last_line = initial, time.monotonic(), -float("inf")
@@ -28,7 +33,7 @@ class Progress:
             return None
         return (time.monotonic() - self._t0) / ran * (self.total - self.done)
 
-    def update(self, n: int = 1, note: str = "") -> None:
+    def update(self, n: float = 1, note: str = "") -> None:
         self.done += n
         if not self.enabled:
             return
@@ -42,12 +47,16 @@ class Progress:
             self._last_line = now
             eta = self.eta_s()
             left = "" if eta is None else f", about {_duration(eta)} left"
-            print(f"{time.strftime('%H:%M:%S')} {self.label + ': ' if self.label else ''}{self.done}/{self.total} "
-                  f"{self.unit}s{left}{'; ' + note if note else ''}", file=self.stream, flush=True)
+            print(f"{time.strftime('%H:%M:%S')} {self.label + ': ' if self.label else ''}{_count(self.done)}/"
+                  f"{_count(self.total)} {self.units}{left}{'; ' + note if note else ''}", file=self.stream, flush=True)
 
     def close(self) -> None:
         if self._bar is not None:
             self._bar.close()
+
+
+def _count(x: float) -> str:
+    return f"{x:.1f}" if isinstance(x, float) else str(x)
 
 
 def _duration(seconds: float) -> str:

@@ -33,3 +33,22 @@ def test_disabled_progress_prints_nothing():
     progress = Progress(3, stream=out, enabled=False)
     progress.update(3)
     assert out.getvalue() == ""
+
+
+def test_a_quantity_such_as_simulated_time_prints_with_its_own_units():
+    out = io.StringIO()
+    progress = Progress(2.0, unit="sim s", units="simulated s", label="sim run", stream=out, line_every_s=0)
+    for t_s in (0.5, 1.25, 2.0):
+        progress.update(t_s - progress.done)
+    lines = out.getvalue().splitlines()
+    assert [line.split(" ", 1)[1].split(",")[0] for line in lines] == [
+        "sim run: 0.5/2.0 simulated s", "sim run: 1.2/2.0 simulated s", "sim run: 2.0/2.0 simulated s"]
+
+
+def test_sim_run_prints_progress_lines_when_its_output_goes_to_a_log(tmp_path):
+    import subprocess
+    import sys
+    run = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "run", "--duration", "0.5", "--out",
+                          str(tmp_path)], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 1, run.stderr                        # 0.5 s is too short to get there: a result
+    assert re.search(r"^\d\d:\d\d:\d\d sim run: 0\.5/0\.5 simulated s", run.stderr, re.MULTILINE), run.stderr
