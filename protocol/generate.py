@@ -98,6 +98,8 @@ def cpp_message(schema: dict, msg: dict) -> list[str]:
         ctype = TYPES[field["type"]][1]
         dim = f"[{field['count']}]" if "count" in field else ""
         lines.append(f"  {ctype} {field['name']}{dim};  // {field_comment(field)}")
+    for index, field in enumerate(msg["fields"]):   # what nack.field names, for the checks the schema cannot say
+        lines.append(f"  static constexpr uint8_t kField{camel(field['name'])} = {index};")
     for field in msg["fields"]:
         if "scale" in field:
             lines.append(f"  static constexpr float k{camel(field['name'])}Scale = {f32_literal(field['scale'])};"

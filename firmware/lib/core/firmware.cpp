@@ -133,7 +133,7 @@ ErrorCode Firmware::handle_command(uint8_t& field) {
     case proto::SimClock::kId: {
       const ErrorCode code = hal_.sim_clock_set(decoded<proto::SimClock>(payload).now);
       if (code == ErrorCode::kOk) poll();  // what is due at the new time happens before the ack
-      if (code == ErrorCode::kOutOfRange) field = 0;  // the one field, now, went backwards
+      if (code == ErrorCode::kOutOfRange) field = proto::SimClock::kFieldNow;  // it went backwards
       return code;
     }
     default:

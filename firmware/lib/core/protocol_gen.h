@@ -112,6 +112,15 @@ struct Configure {
   uint32_t noise_seed;  // Seed of the noise PRNG (xorshift32; 0 is replaced by 1); reseeded at every start.
   uint16_t deadman;  // [ms] Longest time without a valid position while running before the surface levels and a position_timeout fault latches.
   uint16_t telemetry_period;  // [ms] Period of unsolicited telemetry; 0 = only in answer to object_position. Nonzero values below 5 ms are refused (the link cannot carry them).
+  static constexpr uint8_t kFieldController = 0;
+  static constexpr uint8_t kFieldModuleX = 1;
+  static constexpr uint8_t kFieldModuleY = 2;
+  static constexpr uint8_t kFieldTiltLimit = 3;
+  static constexpr uint8_t kFieldTolerance = 4;
+  static constexpr uint8_t kFieldNoiseAmplitude = 5;
+  static constexpr uint8_t kFieldNoiseSeed = 6;
+  static constexpr uint8_t kFieldDeadman = 7;
+  static constexpr uint8_t kFieldTelemetryPeriod = 8;
 };
 inline void encode(const Configure& m, uint8_t* out) {
   put_u8(out + 0, m.controller);
@@ -174,6 +183,11 @@ struct ConfigurePid {
   float ki;  // [deg/(m s)] Integral gain.
   float kd;  // [deg s/m] Derivative gain (on measurement: no kick when the target changes).
   float integral_limit;  // [deg] Anti-windup bound on the integral term's contribution.
+  static constexpr uint8_t kFieldAxis = 0;
+  static constexpr uint8_t kFieldKp = 1;
+  static constexpr uint8_t kFieldKi = 2;
+  static constexpr uint8_t kFieldKd = 3;
+  static constexpr uint8_t kFieldIntegralLimit = 4;
 };
 inline void encode(const ConfigurePid& m, uint8_t* out) {
   put_u8(out + 0, m.axis);
@@ -209,6 +223,8 @@ struct SetTarget {
   static constexpr uint8_t kSize = 8;  // [bytes] payload
   float x;  // [m] x_d.
   float y;  // [m] y_d.
+  static constexpr uint8_t kFieldX = 0;
+  static constexpr uint8_t kFieldY = 1;
 };
 inline void encode(const SetTarget& m, uint8_t* out) {
   put_f32(out + 0, m.x);
@@ -267,6 +283,8 @@ struct Jog {
   static constexpr uint8_t kSize = 5;  // [bytes] payload
   uint8_t actuator;  // Actuator index (PROTOCOL.md, geometry).
   float position;  // [m] Command, + lowers the corner; within the actuator range.
+  static constexpr uint8_t kFieldActuator = 0;
+  static constexpr uint8_t kFieldPosition = 1;
 };
 inline void encode(const Jog& m, uint8_t* out) {
   put_u8(out + 0, m.actuator);
@@ -288,6 +306,7 @@ struct SimClock {
   static constexpr uint8_t kId = 0x09;
   static constexpr uint8_t kSize = 4;  // [bytes] payload
   uint32_t now;  // [us] New time of the firmware clock.
+  static constexpr uint8_t kFieldNow = 0;
 };
 inline void encode(const SimClock& m, uint8_t* out) {
   put_u32(out + 0, m.now);
@@ -305,6 +324,7 @@ struct Zero {
   static constexpr uint8_t kId = 0x0A;
   static constexpr uint8_t kSize = 1;  // [bytes] payload
   uint8_t actuators;  // Bit i set: zero actuator i (PROTOCOL.md, geometry).
+  static constexpr uint8_t kFieldActuators = 0;
 };
 inline void encode(const Zero& m, uint8_t* out) {
   put_u8(out + 0, m.actuators);
@@ -327,6 +347,11 @@ struct ObjectPosition {
   float x;  // [m] Object x in the fabric frame; within +-module_x (the fabric and half a module beside it), else out_of_range.
   float y;  // [m] Object y in the fabric frame; within +-module_y, else out_of_range.
   uint8_t flags;  // not_visible: the camera lost the object; x and y are ignored. (flags position_flags)
+  static constexpr uint8_t kFieldFrame = 0;
+  static constexpr uint8_t kFieldCaptureTime = 1;
+  static constexpr uint8_t kFieldX = 2;
+  static constexpr uint8_t kFieldY = 3;
+  static constexpr uint8_t kFieldFlags = 4;
 };
 inline void encode(const ObjectPosition& m, uint8_t* out) {
   put_u16(out + 0, m.frame);
@@ -365,6 +390,18 @@ struct IdentifyReply {
   uint16_t encoder_counts;  // Counts per encoder revolution the firmware was built for.
   float pulley_circumference;  // [m/rev] Belt travel per motor revolution the firmware was built for.
   uint32_t actuator_period;  // [us] Period of the firmware's actuator position loops.
+  static constexpr uint8_t kFieldProtocolVersion = 0;
+  static constexpr uint8_t kFieldFirmwareMajor = 1;
+  static constexpr uint8_t kFieldFirmwareMinor = 2;
+  static constexpr uint8_t kFieldFirmwarePatch = 3;
+  static constexpr uint8_t kFieldSchemaHash = 4;
+  static constexpr uint8_t kFieldMaxWire = 5;
+  static constexpr uint8_t kFieldClock = 6;
+  static constexpr uint8_t kFieldActuatorCount = 7;
+  static constexpr uint8_t kFieldActuatorRange = 8;
+  static constexpr uint8_t kFieldEncoderCounts = 9;
+  static constexpr uint8_t kFieldPulleyCircumference = 10;
+  static constexpr uint8_t kFieldActuatorPeriod = 11;
 };
 inline void encode(const IdentifyReply& m, uint8_t* out) {
   put_u16(out + 0, m.protocol_version);
@@ -401,6 +438,8 @@ struct Ack {
   static constexpr uint8_t kSize = 2;  // [bytes] payload
   uint8_t ref_id;  // Message id of the command.
   uint8_t ref_seq;  // Sequence number of the command.
+  static constexpr uint8_t kFieldRefId = 0;
+  static constexpr uint8_t kFieldRefSeq = 1;
 };
 inline void encode(const Ack& m, uint8_t* out) {
   put_u8(out + 0, m.ref_id);
@@ -419,6 +458,10 @@ struct Nack {
   uint8_t ref_seq;  // Sequence number of the command.
   uint8_t code;  // Error code (errors above).
   uint8_t field;  // Index of the offending field in the command, 255 if none.
+  static constexpr uint8_t kFieldRefId = 0;
+  static constexpr uint8_t kFieldRefSeq = 1;
+  static constexpr uint8_t kFieldCode = 2;
+  static constexpr uint8_t kFieldField = 3;
 };
 inline void encode(const Nack& m, uint8_t* out) {
   put_u8(out + 0, m.ref_id);
@@ -449,6 +492,18 @@ struct Telemetry {
   uint16_t crc_errors;  // Frames dropped for a bad CRC since boot (wraps).
   uint16_t frame_errors;  // Frames dropped for bad COBS, oversize or truncation since boot (wraps).
   uint16_t loop_overruns;  // Actuator-loop runs that started a whole period or more late since boot (saturates at 65535; 0 where the actuators are ideal).
+  static constexpr uint8_t kFieldTime = 0;
+  static constexpr uint8_t kFieldState = 1;
+  static constexpr uint8_t kFieldFaults = 2;
+  static constexpr uint8_t kFieldPositionFrame = 3;
+  static constexpr uint8_t kFieldPositionAge = 4;
+  static constexpr uint8_t kFieldTiltZx = 5;
+  static constexpr uint8_t kFieldTiltZy = 6;
+  static constexpr uint8_t kFieldCommand = 7;
+  static constexpr uint8_t kFieldMeasured = 8;
+  static constexpr uint8_t kFieldCrcErrors = 9;
+  static constexpr uint8_t kFieldFrameErrors = 10;
+  static constexpr uint8_t kFieldLoopOverruns = 11;
   static constexpr float kTiltZxScale = 0.01f;  // [deg] per wire unit
   static constexpr float kTiltZyScale = 0.01f;  // [deg] per wire unit
   static constexpr float kCommandScale = 1e-05f;  // [m] per wire unit
@@ -500,6 +555,7 @@ struct Boot {
   static constexpr uint8_t kId = 0x85;
   static constexpr uint8_t kSize = 1;  // [bytes] payload
   uint8_t reset_cause;  // Why it started. (enum reset_cause)
+  static constexpr uint8_t kFieldResetCause = 0;
 };
 inline void encode(const Boot& m, uint8_t* out) {
   put_u8(out + 0, m.reset_cause);

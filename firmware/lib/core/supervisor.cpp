@@ -48,11 +48,11 @@ ErrorCode Supervisor::configure(const proto::Configure& msg, uint8_t& field) {
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
   if (msg.tilt_limit > max_tilt_deg(msg.module_x, msg.module_y, kActuatorRangeM) + kTiltLimitSlackDeg) {
-    field = 3;
+    field = proto::Configure::kFieldTiltLimit;
     return ErrorCode::kOutOfRange;
   }
   if (msg.telemetry_period != 0 && msg.telemetry_period < kMinTelemetryPeriodMs) {
-    field = 8;
+    field = proto::Configure::kFieldTelemetryPeriod;
     return ErrorCode::kOutOfRange;
   }
   config_ = msg;
@@ -75,11 +75,11 @@ ErrorCode Supervisor::set_target(const proto::SetTarget& msg, uint8_t& field) {
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
   if (!inside_module(msg.x, 0.0f, config_)) {
-    field = 0;
+    field = proto::SetTarget::kFieldX;
     return ErrorCode::kOutOfRange;
   }
   if (!inside_module(0.0f, msg.y, config_)) {
-    field = 1;
+    field = proto::SetTarget::kFieldY;
     return ErrorCode::kOutOfRange;
   }
   target_x_ = msg.x;
@@ -125,7 +125,7 @@ ErrorCode Supervisor::jog(const proto::Jog& msg, uint8_t& field) {
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
   if (msg.position > kActuatorRangeM || msg.position < -kActuatorRangeM) {
-    field = 1;
+    field = proto::Jog::kFieldPosition;
     return ErrorCode::kOutOfRange;
   }
   output_.command[msg.actuator] = msg.position;
@@ -152,11 +152,11 @@ ErrorCode Supervisor::position(const proto::ObjectPosition& msg, uint32_t now_us
     // On the fabric, or beside it by at most half the module (an object falling off): anything farther is no
     // measurement of it, and near 1e38 m would overflow the Euclidean distance.
     if (msg.x > config_.module_x || msg.x < -config_.module_x) {
-      field = 2;
+      field = proto::ObjectPosition::kFieldX;
       return ErrorCode::kOutOfRange;
     }
     if (msg.y > config_.module_y || msg.y < -config_.module_y) {
-      field = 3;
+      field = proto::ObjectPosition::kFieldY;
       return ErrorCode::kOutOfRange;
     }
   }
@@ -167,11 +167,11 @@ ErrorCode Supervisor::position(const proto::ObjectPosition& msg, uint32_t now_us
   }
   if (has_frame_) {
     if (msg.frame == last_frame_) {
-      field = 0;
+      field = proto::ObjectPosition::kFieldFrame;
       return ErrorCode::kStalePosition;
     }
     if (static_cast<int32_t>(msg.capture_time - last_capture_us_) <= 0) {
-      field = 1;
+      field = proto::ObjectPosition::kFieldCaptureTime;
       return ErrorCode::kStalePosition;
     }
   }
