@@ -137,12 +137,16 @@ class Link:
                     return msg
         raise LinkError(f"no answer after {self.retries + 1} tries of {self.ack_timeout_s:.3f} s each")
 
-    def command(self, msg: Message, *, resynced: bool = False) -> Message:
+    def command(self, msg: Message, *, resynced: bool = False, checked: bool = True) -> Message:
         """Sends a command and returns its ack (identify_reply for identify); raises CommandRefused on a nack.
 
+        First the schema's own checks (Message.check): what the firmware would refuse by them raises FieldRefused
+        and is not sent. Only a test of the firmware's refusals sends such a message, with checked=False.
         A command refused as stale_sequence was never applied: this host's counter fell behind the firmware's
         (PROTOCOL.md section 3). The link identifies, which starts the firmware's count afresh, and sends it again.
         """
+        if checked:
+            msg.check()
         seq = self._next_seq()
 
         def answers(reply: Message) -> bool:
@@ -154,7 +158,7 @@ class Link:
         if isinstance(reply, m.Nack):
             if reply.code == m.ErrorCode.STALE_SEQUENCE and not resynced:
                 self._resync()
-                return self.command(msg, resynced=True)
+                return self.command(msg, resynced=True, checked=False)
             raise CommandRefused(msg, reply)
         return reply
 
