@@ -24,6 +24,11 @@ class EmergencyStopLatched(RuntimeError):
 
 
 MISSES_BEFORE_RECONNECT = 3  # camera frames in a row without telemetry that mean a lost board, not a lost frame
+SETUP_ATTEMPTS = 5           # times a session sets a board up (reconnecting between tries) before it counts as lost
+
+
+class BoardLost(LinkError):
+    """The session could not reach its board, or set it up again, within its retries: the run cannot go on."""
 UNO_RESET_WAIT_S = 2.5      # [s] the stock bootloader's delay after the DTR reset, with margin
 
 
@@ -159,8 +164,14 @@ class RigSession:
 
     # ----------------------------------------------------------------------------------- connection
     def open(self) -> RigSession:
-        self._connect(self.reconnect_timeout_s)
-        self._apply()
+        """Connects and sets the board up; raises BoardLost when it cannot (IncompatibleFirmware at once)."""
+        try:
+            self._connect(self.reconnect_timeout_s)
+        except IncompatibleFirmware:
+            raise
+        except (LinkError, OSError) as exc:
+            raise BoardLost(str(exc)) from None   # it names the port
+        self._set_up("connected")
         return self
 
     def _connect(self, timeout_s: float) -> None:
@@ -183,20 +194,46 @@ class RigSession:
         if self.running:
             self.link.command(m.Start())
 
-    def _recover(self, why: str) -> None:
-        """Reopen (if the link failed) and re-apply the setup."""
-        self.report(f"{why}: reconnecting to {self.port}")
+    def _set_up(self, why: str) -> None:
+        """Apply the setup, reconnecting and trying again (SETUP_ATTEMPTS in all) when a command of it is lost.
+
+        A refused command (CommandRefused) is the user's setup, not the link: it is raised at once. A board that
+        does not come back within reconnect_timeout_s, or a setup lost every time, raises BoardLost."""
+        for attempt in range(1, SETUP_ATTEMPTS + 1):
+            try:
+                self._apply()
+                self._resets_seen = self.link.resets
+                return
+            except CommandRefused:
+                raise
+            except (LinkError, OSError) as exc:
+                if attempt == SETUP_ATTEMPTS:
+                    raise BoardLost(f"{self.port}: the setup did not get through in {SETUP_ATTEMPTS} tries "
+                                    f"(the last: {exc})") from None
+                self.report(f"{why}: the setup did not get through ({exc}); reconnecting to {self.port}")
+                self._reconnect()
+
+    def _reconnect(self) -> None:
         if self.link is not None:
             _close_quietly(self.link)
         self.link = None
-        self._connect(self.reconnect_timeout_s)
+        try:
+            self._connect(self.reconnect_timeout_s)
+        except IncompatibleFirmware:
+            raise
+        except (LinkError, OSError) as exc:
+            raise BoardLost(str(exc)) from None   # it names the port
         self.reconnects += 1
+
+    def _recover(self, why: str) -> None:
+        """Reopen the link and re-apply the setup."""
+        self.report(f"{why}: reconnecting to {self.port}")
+        self._reconnect()
         self._restore("reconnected")
 
     def _restore(self, why: str) -> None:
-        self._apply()
+        self._set_up(why)
         self.restores += 1
-        self._resets_seen = self.link.resets
         if self.estopped:
             self.report(f"{why}: the emergency stop is latched again; stop() clears it")
         else:
@@ -204,14 +241,18 @@ class RigSession:
 
     # ----------------------------------------------------------------------------------- commands
     def command(self, msg) -> m.Message:
-        """A command through the session: on a failed link it reconnects, restores, and sends it once more."""
-        try:
-            return self.link.command(msg)
-        except CommandRefused:
-            raise
-        except (LinkError, OSError) as exc:
-            self._recover(f"link failed ({exc})")
-            return self.link.command(msg)
+        """A command through the session: on a failed link it reconnects, restores and sends it again, SETUP_ATTEMPTS
+        times in all; then BoardLost. A nack (CommandRefused) is raised as it is."""
+        for attempt in range(1, SETUP_ATTEMPTS + 1):
+            try:
+                return self.link.command(msg)
+            except CommandRefused:
+                raise
+            except (LinkError, OSError) as exc:
+                if attempt == SETUP_ATTEMPTS:
+                    raise BoardLost(f"{self.port}: {msg.NAME} did not get through in {SETUP_ATTEMPTS} tries "
+                                    f"(the last: {exc})") from None
+                self._recover(f"link failed ({exc})")
 
     def set_target(self, x_m: float, y_m: float) -> None:
         self.setup.target = (x_m, y_m)
@@ -260,7 +301,7 @@ class RigSession:
         self._missed_in_a_row = 0
         if self.link.resets != self._resets_seen:    # the board restarted (its boot came in): idle, defaults
             self.report("the firmware reset")
-            self._restore("after the reset")
+            self._restore("after the reset")          # BoardLost when the board cannot be set up again
         return telemetry
 
     def close(self) -> None:

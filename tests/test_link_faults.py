@@ -1,6 +1,8 @@
 """The host's link and session against the virtual MCU: faults on the wire, garbage, board resets and unplugging."""
 from __future__ import annotations
 
+import itertools
+import math
 import os
 import tempfile
 import threading
@@ -11,10 +13,11 @@ import pytest
 
 from mantaray.host.faults import FaultInjector
 from mantaray.host.link import IncompatibleFirmware, Link, LinkError
-from mantaray.host.session import RigSession, Setup, connect
+from mantaray.host.session import BoardLost, RigSession, Setup, connect
 from mantaray.host.transport import SerialTransport
 from mantaray.host.vmcu import VirtualMcu
 from mantaray.protocol import messages as m
+from mantaray.protocol.codec import FieldRefused
 
 WIRE_M = 1e-5   # [m] command telemetry resolution
 
@@ -352,3 +355,73 @@ def test_a_host_whose_count_fell_behind_identifies_and_sends_again():
         link.position(m.ObjectPosition(frame=2, capture_time=84000, x=0.0, y=0.0))
     assert link.resyncs == 2
     assert link.position(m.ObjectPosition(frame=3, capture_time=168000, x=0.0, y=0.0)).position_frame == 3
+
+
+def _faulty_session(port: str, p_byte: float, seed: int, events: list) -> RigSession:
+    """A session whose every (re)opened port drops and flips each byte with probability p_byte, its own draw each."""
+    seeds = itertools.count(seed * 1000)
+    return RigSession(port, Setup(m.Configure(telemetry_period=0), target=(0.1, 0.0)), ack_timeout_s=0.05,
+                      reconnect_timeout_s=5.0, report=events.append,
+                      open_transport=lambda path: FaultInjector(SerialTransport(path), p_drop=p_byte, p_flip=p_byte,
+                                                                seed=next(seeds)))
+
+
+def test_a_session_rides_out_a_link_that_loses_every_other_round_trip():
+    """0.5 % of bytes dropped and 0.5 % flipped: about half the position round trips fail. The session skips lost
+    frames, reconnects when several in a row are lost, sets the board up again, and never lets an error out."""
+    events = []
+    with VirtualMcu(clock="wall") as vmcu:
+        session = _faulty_session(vmcu.path, 0.005, 1, events)
+        session.open()
+        session.start()
+        answered = sum(session.position(m.ObjectPosition(frame=k, capture_time=k * 83_333, x=0.0, y=0.0)) is not None
+                       for k in range(1, 151))
+        session.stop()
+        session.close()
+    assert 30 < answered < 140, answered                       # the faults bit, and the run went on through them
+    assert session.reconnects > 0 and session.restores == session.reconnects
+    assert any("sent again" in text for text in events)
+
+
+def test_a_link_too_poor_to_set_a_board_up_ends_the_session_in_one_clear_error():
+    """5 % of bytes dropped and 5 % flipped: neither the handshake nor a setup gets through. open() ends in one
+    BoardLost that names the port once; nothing else escapes."""
+    events = []
+    with VirtualMcu(clock="wall") as vmcu:
+        session = _faulty_session(vmcu.path, 0.05, 2, events)
+        with pytest.raises(BoardLost) as lost:
+            session.open()
+        session.close()
+    assert str(lost.value).startswith(f"{vmcu.path}: ") and str(lost.value).count(vmcu.path) == 1, lost.value
+
+
+class _Recorder:
+    """A transport that keeps what is written and never answers."""
+
+    def __init__(self) -> None:
+        self.written = b""
+
+    def write(self, data: bytes) -> None:
+        self.written += data
+
+    def read(self, timeout_s: float) -> bytes:
+        return b""
+
+    def close(self) -> None:
+        pass
+
+
+@pytest.mark.parametrize("command, field", [
+    (m.Configure(tolerance=0.0), "tolerance"),
+    (m.Configure(module_x=math.nan), "module_x"),
+    (m.ConfigurePid(axis=m.Axis.X, kp=-1.0, ki=0.0, kd=0.0, integral_limit=1.0), "kp"),
+    (m.Jog(actuator=7, position=0.0), "actuator"),
+])
+def test_the_link_sends_nothing_the_schema_refuses(command, field):
+    wire = _Recorder()
+    with pytest.raises(FieldRefused) as refused:
+        Link(wire).command(command)
+    assert refused.value.field == field and wire.written == b""
+    with pytest.raises(LinkError):                      # unchecked, it goes out (a test of the firmware's checks)
+        Link(wire, ack_timeout_s=0.01, retries=0).command(command, checked=False)
+    assert wire.written
