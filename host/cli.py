@@ -7,6 +7,7 @@ import signal
 import sys
 import time
 
+from mantaray.arguments import number
 from mantaray.outputs import IMAGE_SUFFIXES, OutputError, writable_dir, writable_file
 from mantaray.protocol import messages as m
 from mantaray.protocol.codec import bounds_text, choices
@@ -77,8 +78,8 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from mantaray.plots import path_phase_figure
 
     from .link import LinkError
-    from .loop import ClosedLoop, Tolerance
-    from .session import RigSession, Setup, check_port, controller_axes
+    from .loop import STOPPED_REACHED, ClosedLoop, Frame, Tolerance
+    from .session import BoardLost, RigSession, Setup, check_port, controller_axes
     from .tracker import Calibration, FrameSource, Tracker
 
     if args.path is not None:
@@ -89,6 +90,9 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if abs(cx) + args.radius > hx or abs(cy) + args.radius > hy:
             parser.error(f"the circle of radius {args.radius:g} m about {cx:g},{cy:g} is not on the fabric "
                          f"(|x| <= {hx:g} m, |y| <= {hy:g} m)")
+    if args.marker_height >= args.camera_height:
+        parser.error(f"--marker-height ({args.marker_height:g} m) must be below the camera (--camera-height "
+                     f"{args.camera_height:g} m)")
     try:
         check_port(args.port)
         configure = m.Configure(controller=m.Controller[args.controller.upper()], tolerance=args.tolerance,
@@ -98,12 +102,12 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         for fields in gains.values():
             del fields["axis"]
         calibration = Calibration.load(args.calibration) if args.calibration else None
+        source = FrameSource(args.camera)            # a camera that does not open is the user's to fix, before work
         out = writable_dir(args.out)
     except (ValueError, OSError, KeyError, LinkError) as exc:
         parser.error(str(exc))
     tracker = Tracker(marker_height_m=args.marker_height, camera_height_m=args.camera_height,
                       calibration=calibration, blob=args.blob)
-    source = FrameSource(args.camera)
     stamp = time.strftime("%Y%m%d-%H%M%S")
     log = RunLog(out / f"rig-{stamp}.jsonl", {"args": {k: v for k, v in vars(args).items() if k != "func"}})
     events = []
@@ -126,18 +130,17 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     half_m = _half_module_m()
     session = RigSession(args.port, Setup(configure, gains, target=targets_along(args, 0.0)), report=report)
     loop = ClosedLoop(session.position)
-    judge = Tolerance(args.tolerance, args.hold)     # on what the camera sees: the rig knows nothing better
-    try:
-        session.open()
-        log.write("identify", {k: v if isinstance(v, float) else int(v) for k, v in vars(session.identity).items()})
-        signal.signal(signal.SIGINT, on_sigint)
-        session.start()
+    seen = {}                                        # the tracker's last observation, for the log
+
+    def frames():
+        """The camera's frames, tracked, until Ctrl-C, the end of the video, the timeout or the object off the fabric."""
+        nonlocal outcome
         t0 = wall0 = None
         while not interrupted:
             grabbed = source.read()
             if grabbed is None:
                 outcome = "camera stopped"
-                break
+                return
             image, capture_s = grabbed
             if t0 is None:
                 t0, wall0 = capture_s, time.monotonic()
@@ -145,29 +148,46 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             if source.is_file:                       # a recording plays at its own pace, as a camera would
                 time.sleep(max(0.0, run_s - (time.monotonic() - wall0)))
             if run_s > args.timeout:
-                break
-            target = targets_along(args, run_s)
-            if args.path is not None:
-                session.set_target(*target)
-            obs = tracker.observe(image, capture_s)
+                return
+            obs = seen["obs"] = tracker.observe(image, capture_s)
             if obs.visible and (abs(obs.xy_m[0]) > 2 * half_m[0] or abs(obs.xy_m[1]) > 2 * half_m[1]):
                 report(f"the object was seen at {obs.xy_m[0]:+.3f},{obs.xy_m[1]:+.3f} m, off the fabric by more "
                        f"than half a module")    # what the firmware refuses
                 outcome = "fell off"
-                break
-            telemetry = loop.step(run_s, obs.xy_m if obs.visible else None, target)
-            log.write("position", {"frame": loop.frame, "capture_s": round(run_s, 6), "status": obs.status,
-                                   "xy_m": obs.xy_m, "corners_seen": list(obs.corners_seen)})
-            if telemetry is not None:
-                log.write("telemetry", {k: (list(v) if isinstance(v, tuple) else int(v) if isinstance(v, int)
-                                            else v) for k, v in vars(telemetry).items()})
-            if args.path is None and obs.visible and judge.update(run_s, obs.xy_m, target):
-                outcome = "reached"
-                break
+                return
+            target = targets_along(args, run_s)
+            judged = obs.xy_m if args.path is None and obs.visible else None   # what the camera sees: the rig knows
+            yield Frame(run_s, obs.xy_m if obs.visible else None, target, judged_xy_m=judged,   # nothing better
+                        deliver=(lambda target=target: move_target(target)) if args.path is not None else None)
+
+    def move_target(target) -> bool:
+        """Before a frame along a path: the target moves on (the run goes on)."""
+        session.set_target(*target)
+        return True
+
+    def record(frame, telemetry) -> None:
+        obs = seen["obs"]
+        log.write("position", {"frame": loop.frame, "capture_s": round(frame.capture_s, 6), "status": obs.status,
+                               "xy_m": obs.xy_m, "corners_seen": list(obs.corners_seen)})
+        if telemetry is not None:
+            log.write("telemetry", {k: (list(v) if isinstance(v, tuple) else int(v) if isinstance(v, int)
+                                        else v) for k, v in vars(telemetry).items()})
+
+    try:
+        session.open()
+        log.write("identify", {k: v if isinstance(v, float) else int(v) for k, v in vars(session.identity).items()})
+        signal.signal(signal.SIGINT, on_sigint)
+        session.start()
+        stopped = loop.run(frames(), Tolerance(args.tolerance, args.hold), stop_when_reached=True, on_frame=record)
+        if stopped == STOPPED_REACHED:
+            outcome = "reached"
         if interrupted:
             outcome = "interrupted"
     except KeyboardInterrupt:                        # while connecting, or a second Ctrl-C
         outcome = "interrupted"
+    except LinkError as exc:                         # what the session's retries could not absorb: the run ends
+        report(f"the run ended: {exc}")
+        outcome = "board lost" if isinstance(exc, BoardLost) else "refused"
     finally:
         signal.signal(signal.SIGINT, previous)
         try:
@@ -256,7 +276,12 @@ def cmd_jog(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     until `stop` (which levels the surface) or `start`."""
     from .link import CommandRefused
 
+    from mantaray.protocol.rig import ACTUATOR_RANGE_M
+
     jog = _checked(parser, m.Jog(actuator=args.actuator, position=args.position))
+    if abs(args.position) > ACTUATOR_RANGE_M:      # the firmware refuses it too, but only once connected
+        parser.error(f"--position must be within ±{ACTUATOR_RANGE_M:g} m (the actuators' travel, protocol/rig.toml), "
+                     f"got {args.position:g}")
     link = _connect(args, parser)
     try:
         link.command(jog)
@@ -403,11 +428,11 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     rig.add_argument("--tolerance", type=float, default=0.02, help=f"ε [m], {bounds_text(m.Configure, 'tolerance')}")
     rig.add_argument("--gains", type=parse_gains, metavar="KP,KI,KD[,ILIM]",
                      help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
-    rig.add_argument("--hold", type=float, default=1.0, help="seconds within ε that count as reached")
-    rig.add_argument("--timeout", type=float, default=60.0, help="give up after this many seconds (paper: 60)")
-    rig.add_argument("--marker-height", type=float, default=0.0,
+    rig.add_argument("--hold", type=number(0), default=1.0, help="seconds within ε that count as reached")
+    rig.add_argument("--timeout", type=number(0, above=True), default=60.0, help="give up after this many seconds (paper: 60)")
+    rig.add_argument("--marker-height", type=number(0), default=0.0,
                      help="height [m] of the object's marker (or blob) above the corner markers' plane")
-    rig.add_argument("--camera-height", type=float, default=1.0, help="camera above that plane [m], without "
+    rig.add_argument("--camera-height", type=number(0, above=True), default=1.0, help="camera above that plane [m], without "
                      "--calibration")
     rig.add_argument("--calibration", help="camera calibration (.npz from mantaray calibrate): full pose")
     rig.add_argument("--blob", type=_hsv_range, metavar="H,S,V:H,S,V",
@@ -418,8 +443,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     monitor = sub.add_parser("monitor", help="live decoded telemetry from a firmware", description=cmd_monitor.__doc__,
                              formatter_class=fmt)
     monitor.add_argument("--port", required=True, help="serial device path of the firmware")
-    monitor.add_argument("--count", type=int, default=0, help="stop after this many telemetry frames (0: never)")
-    monitor.add_argument("--seconds", type=float, default=0.0, help="stop after this long (0: never)")
+    monitor.add_argument("--count", type=number(0, integer=True), default=0, help="stop after this many telemetry frames (0: never)")
+    monitor.add_argument("--seconds", type=number(0), default=0.0, help="stop after this long (0: never)")
     monitor.set_defaults(func=lambda args: cmd_monitor(args, monitor))
 
     actuator = next(f for f in m.Jog.FIELDS if f.name == "actuator")
@@ -429,7 +454,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     jog.add_argument("--actuator", type=int, required=True, choices=range(int(actuator.min), int(actuator.max) + 1),
                      help="which carriage (PROTOCOL.md, geometry: 0 -x-y, 1 +x-y, 2 -x+y, 3 +x+y)")
     jog.add_argument("--position", type=float, required=True, help="where to [m], + lowers the corner")
-    jog.add_argument("--wait", type=float, default=10.0, help="give up waiting for the carriage after this [s]")
+    jog.add_argument("--wait", type=number(0, above=True), default=10.0, help="give up waiting for the carriage after this [s]")
     jog.set_defaults(func=lambda args: cmd_jog(args, jog))
 
     zero = sub.add_parser("zero", help="take the carriages' present positions as 0 m (homing)",
@@ -451,7 +476,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     calibrate.add_argument("--board-out", help="write the board to print (PNG at 300 dpi)")
     calibrate.add_argument("--squares", type=_squares, default=(7, 5), metavar="NXxNY",
                            help="board squares, at least 2 x 2")
-    calibrate.add_argument("--square-mm", type=float, default=30.0, help="square side [mm]")
-    calibrate.add_argument("--marker-mm", type=float, default=22.0, help="marker side [mm]")
-    calibrate.add_argument("--frames", type=int, default=200, help="read at most this many frames")
+    calibrate.add_argument("--square-mm", type=number(0, above=True), default=30.0, help="square side [mm]")
+    calibrate.add_argument("--marker-mm", type=number(0, above=True), default=22.0, help="marker side [mm]")
+    calibrate.add_argument("--frames", type=number(1, integer=True), default=200, help="read at most this many frames")
     calibrate.set_defaults(func=lambda args: cmd_calibrate(args, calibrate))

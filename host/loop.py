@@ -1,15 +1,15 @@
 """The closed loop, one for the rig and the simulation: camera frames in, position frames out, telemetry and the
-trajectory recorded, the target's tolerance judged.
+trajectory recorded, the target's tolerance judged, the run ended by its stop rules.
 
-What differs between the two is outside it: where a frame comes from (the tracker on the rig's camera, the plant
-in the simulation) and how a position frame reaches the firmware (`send`: a RigSession on the rig, a Link in
+What differs between the two is outside it: where a frame comes from (`frames`: the tracker on the rig's camera, the
+plant in the simulation) and how a position frame reaches the firmware (`send`: a RigSession on the rig, a Link in
 lock-step in the simulation). Times are trial time [s] from the start; positions [m] in the fabric frame.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, Iterable
 
 import numpy as np
 
@@ -35,6 +35,20 @@ class Tolerance:
             self.first_s = t_s
         self._since_s = (self._since_s if self._since_s is not None else t_s) if near else None
         return self._since_s is not None and t_s - self._since_s >= self.hold_s
+
+
+@dataclass
+class Frame:
+    """One camera frame, as a source gives it to ClosedLoop.run."""
+    capture_s: float                # [s] trial time it was taken
+    measured_xy_m: object           # (x, y) [m] what the firmware is sent; None: not seen (sent as not visible)
+    target_m: tuple[float, float]   # [m] the target at this frame
+    judged_xy_m: object = None      # (x, y) [m] where the tolerance is judged (None: not judged at this frame)
+    dropped: bool = False           # taken, but never reaches the firmware
+    deliver: Callable[[], bool] | None = None   # called before it is sent (the simulation's latency); False ends the run
+
+
+STOPPED_REACHED, STOPPED_TIMEOUT, STOPPED_BY_SOURCE = "reached", "timeout", "source"   # why ClosedLoop.run ended
 
 
 @dataclass
@@ -68,6 +82,30 @@ class ClosedLoop:
             self.on_telemetry(telemetry)
         self._record(capture_s, measured_xy_m if visible else None, target_m, telemetry)
         return telemetry
+
+    def run(self, frames: Iterable[Frame], judge: Tolerance, *, until_s: float = math.inf, stop_when_reached: bool,
+            on_frame: Callable[[Frame, m.Telemetry | None], None] | None = None) -> str:
+        """Drive the loop with a source's frames until a stop rule ends it; returns why (STOPPED_*).
+
+        Each frame, in order: past until_s the run ends (timeout); the tolerance is judged, and once it holds a run
+        with stop_when_reached ends (reached); deliver() runs; the frame is sent (or recorded as dropped); on_frame
+        sees it with its answer. A source that ends (camera stopped, object fell) ends the run by its own reason."""
+        for frame in frames:
+            if frame.capture_s > until_s:
+                return STOPPED_TIMEOUT
+            if frame.judged_xy_m is not None and judge.update(frame.capture_s, frame.judged_xy_m, frame.target_m) \
+                    and stop_when_reached:
+                return STOPPED_REACHED
+            if frame.deliver is not None and not frame.deliver():
+                return STOPPED_BY_SOURCE
+            telemetry = None
+            if frame.dropped:
+                self.dropped(frame.capture_s, frame.target_m)
+            else:
+                telemetry = self.step(frame.capture_s, frame.measured_xy_m, frame.target_m)
+            if on_frame is not None:
+                on_frame(frame, telemetry)
+        return STOPPED_BY_SOURCE
 
     def dropped(self, capture_s: float, target_m) -> None:
         """A frame the camera took (its number is used up) that never reached the firmware: a row with no answer."""

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mantaray.host.link import Link, LinkError
-from mantaray.host.loop import U32, US_PER_S, ClosedLoop, Tolerance
+from mantaray.host.loop import U32, US_PER_S, ClosedLoop, Frame, Tolerance
 from mantaray.host.session import Setup
 from mantaray.protocol import messages as m
 from mantaray.protocol import rig as rig_description
@@ -250,39 +250,52 @@ class Bridge:
         """
         self._watch, self._answered = LinkWatch(), set()
         resets0, lost0 = self.link.resets, self.link.lost_frames
-        rng = np.random.default_rng(spec.seed)
         trial = self._start(spec)
         loop = ClosedLoop(lambda msg: self._send(msg, trial), time_base_us=trial.base_us, frame=self.frame,
                           on_telemetry=lambda reply: M.set_commands(self.model, self.data, reply.command))
         judge = Tolerance(spec.tolerance_m)             # on the true position: where the object really is
-        tracking, true_xy_rows, fell = self.tracking, [], False
+        true_xy_rows = []
+
+        def record(frame: Frame, telemetry) -> None:
+            true_xy_rows.append(frame.judged_xy_m)
+            if progress is not None:
+                progress(frame.capture_s)
+
+        loop.run(self._frames(spec, trial), judge, stop_when_reached=spec.stop_when_reached, on_frame=record)
+        self.frame = loop.frame
+        self._stop(trial, resets0, lost0)
+        return self._result(spec, trial, loop.arrays(), np.asarray(true_xy_rows).reshape(-1, 2), judge, trial.fell)
+
+    def _frames(self, spec: TrialSpec, trial: _Trial):
+        """The camera's frames at its rate over T, the physics stepped to each; ends early if the object falls off.
+
+        Each frame is judged on the true position. Its delivery draws the camera's drop and noise, measures (the
+        tracker renders the frame), and steps the physics on by the camera's latency."""
+        rng = np.random.default_rng(spec.seed)
+        tracking = self.tracking
         period_s = 1.0 / tracking.rate_hz
         for k in range(int(math.floor(spec.duration_s * tracking.rate_hz + 1e-9)) + 1):
             capture_s = k * period_s
             if self._advance(trial, capture_s):
-                fell = True
-                break
-            true_xy = M.object_xy(self.model, self.data)
-            if judge.update(capture_s, true_xy, spec.target_m) and spec.stop_when_reached:
-                break
-            dropped = rng.random() < tracking.drop_rate
-            measured = self._measure(capture_s, true_xy, rng)
-            deliver_s = capture_s + tracking.latency_s
-            if tracking.latency_s and self._advance(trial, deliver_s):
-                fell = True
-                break
-            if dropped:
-                self._watch.dropped_frames += 1
-                loop.dropped(capture_s, spec.target_m)
-            else:
-                trial.deliver_us = trial.base_us + round(deliver_s * US_PER_S)
-                loop.step(capture_s, measured, spec.target_m)
-            true_xy_rows.append(true_xy)
-            if progress is not None:
-                progress(capture_s)
-        self.frame = loop.frame
-        self._stop(trial, resets0, lost0)
-        return self._result(spec, trial, loop.arrays(), np.asarray(true_xy_rows).reshape(-1, 2), judge, fell)
+                trial.fell = True
+                return
+            frame = Frame(capture_s, None, spec.target_m, judged_xy_m=M.object_xy(self.model, self.data))
+            frame.deliver = lambda frame=frame: self._deliver(frame, trial, rng)
+            yield frame
+
+    def _deliver(self, frame: Frame, trial: _Trial, rng: np.random.Generator) -> bool:
+        """What the camera makes of a frame by the time it reaches the firmware; False if the object fell meanwhile."""
+        tracking = self.tracking
+        frame.dropped = rng.random() < tracking.drop_rate
+        frame.measured_xy_m = self._measure(frame.capture_s, frame.judged_xy_m, rng)
+        deliver_s = frame.capture_s + tracking.latency_s
+        if tracking.latency_s and self._advance(trial, deliver_s):
+            trial.fell = True
+            return False
+        if frame.dropped:
+            self._watch.dropped_frames += 1
+        trial.deliver_us = trial.base_us + round(deliver_s * US_PER_S)
+        return True
 
     def _start(self, spec: TrialSpec) -> _Trial:
         """Set the firmware up, drop the object, start the controller at trial time 0."""
@@ -373,5 +386,6 @@ class _Trial:
     base_us: int                    # [us] the firmware's clock at trial time 0
     wall_start_s: float             # [s] perf_counter at trial time 0 (real time paces the physics to it)
     deliver_us: int = 0             # [us] the firmware's clock when the present frame arrives
+    fell: bool = False              # the object fell off (the trial ended there)
     physics_s: float = 0.0          # [s] wall time spent stepping MuJoCo
     link_s: float = 0.0             # [s] wall time spent in the protocol exchange

@@ -15,7 +15,7 @@ from mantaray.paths import REPO
 ALLOWED = {"protocol": set(), "protocol/conformance": {"protocol", "host"}, "host": {"protocol"},
            "sim": {"protocol", "host"}}
 PACKAGE_OF = {"protocol": "protocol", "protocol/conformance": "protocol", "host": "host", "sim": "sim"}
-SHARED = {"mantaray.paths", "mantaray.outputs", "mantaray.plots"}
+SHARED = {"mantaray.paths", "mantaray.outputs", "mantaray.plots", "mantaray.arguments"}
 
 
 def _imports(path: Path) -> set[str]:

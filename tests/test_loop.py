@@ -1,5 +1,5 @@
 """The closed loop the rig and the simulation share: frames numbered and timed as the protocol says, unseen and
-dropped frames recorded without an answer, the tolerance judged with and without a hold."""
+dropped frames recorded without an answer, the tolerance judged with and without a hold, the run ended by its stop rules."""
 from __future__ import annotations
 
 import math
@@ -9,7 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from mantaray.host.link import Link
-from mantaray.host.loop import ClosedLoop, Tolerance
+from mantaray.host.loop import STOPPED_BY_SOURCE, STOPPED_REACHED, ClosedLoop, Frame, Tolerance
 from mantaray.host.session import Setup
 from mantaray.host.transport import InProcessTransport
 from mantaray.protocol import messages as m
@@ -72,3 +72,31 @@ def test_a_setup_is_sent_in_the_order_the_firmware_takes_it():
     link = Link(InProcessTransport(simulated_clock=True))
     for command in commands:
         assert isinstance(link.command(command), m.Ack)
+
+
+def _frames(xs, target=(0.0, 0.0), **fields):
+    return [Frame(0.1 * k, (x, 0.0), target, judged_xy_m=(x, 0.0), **fields) for k, x in enumerate(xs)]
+
+
+@given(st.lists(st.floats(-0.3, 0.3), min_size=1, max_size=30), st.booleans())
+def test_run_ends_at_the_first_frame_within_only_when_told_to_stop_there(xs, stop):
+    sent, seen = [], []
+    loop = ClosedLoop(lambda msg: sent.append(msg.frame) or _telemetry(msg.frame))
+    why = loop.run(_frames(xs), Tolerance(0.02), stop_when_reached=stop, on_frame=lambda f, t: seen.append(t))
+    first = next((k for k, x in enumerate(xs) if abs(x) < 0.02), None)
+    if stop and first is not None:
+        assert why == STOPPED_REACHED and len(sent) == first          # the frame judged within is not sent
+    else:
+        assert why == STOPPED_BY_SOURCE and len(sent) == len(xs)
+    assert [t.position_frame for t in seen] == sent                  # on_frame sees each sent frame's answer
+
+
+def test_run_records_dropped_frames_and_ends_when_a_delivery_says_so():
+    delivered = []
+    frames = _frames([0.2, 0.2, 0.2, 0.2])
+    frames[1].dropped = True
+    frames[2].deliver = lambda: delivered.append(2) or False        # the object fell on the way to the firmware
+    loop = ClosedLoop(lambda msg: _telemetry(msg.frame))
+    assert loop.run(frames, Tolerance(0.02), stop_when_reached=True) == STOPPED_BY_SOURCE
+    rows = loop.arrays()
+    assert delivered == [2] and len(rows["t_s"]) == 2 and rows["state"].tolist() == [int(m.State.RUNNING), -1]

@@ -147,6 +147,24 @@ def test_a_port_that_is_no_serial_device_is_refused_at_once_in_one_line(still_vi
      "noise_amplitude: 1 m is outside 0..0.25 m"),
     (("jog", "--port", "/dev/null", "--actuator", "4", "--position", "0.1"), "invalid choice: 4"),
     (("jog", "--port", "/dev/null", "--actuator", "0", "--position", "nan"), "jog.position: must be a finite number"),
+    (("jog", "--port", "/dev/null", "--actuator", "0", "--position", "0.3"), "--position must be within ±0.25 m"),
+    (("jog", "--port", "/dev/null", "--actuator", "0", "--position", "0.1", "--wait", "-1"),
+     "argument --wait: must be > 0, got -1"),
+    (("monitor", "--port", "/dev/null", "--count", "-1"), "argument --count: must be >= 0, got -1"),
+    (("monitor", "--port", "/dev/null", "--seconds", "-1"), "argument --seconds: must be >= 0, got -1"),
+    (("rig", "--port", "/dev/null", "--camera", "0", "--target", "0,0", "--hold", "-1"),
+     "argument --hold: must be >= 0, got -1"),
+    (("rig", "--port", "/dev/null", "--camera", "0", "--target", "0,0", "--timeout", "0"),
+     "argument --timeout: must be > 0, got 0"),
+    (("rig", "--port", "/dev/null", "--camera", "0", "--target", "0,0", "--marker-height", "-1"),
+     "argument --marker-height: must be >= 0, got -1"),
+    (("rig", "--port", "/dev/null", "--camera", "0", "--target", "0,0", "--camera-height", "0"),
+     "argument --camera-height: must be > 0, got 0"),
+    (("rig", "--port", "/dev/null", "--camera", "0", "--target", "0,0", "--marker-height", "1.5"),
+     "must be below the camera"),
+    (("rig", "--port", "/dev/null", "--camera", "/nonexistent/video.avi", "--target", "0,0"),
+     "cannot open video file '/nonexistent/video.avi'"),
+    (("calibrate", "--board-out", "board.png", "--square-mm", "0"), "argument --square-mm: must be > 0, got 0"),
     (("zero", "--port", "/dev/null", "--actuators", "0,9"), "actuators are 0..3"),
     (("zero", "--port", "/dev/null", "--actuators", "one"), "expected actuator indices"),
 ])
@@ -172,7 +190,7 @@ def test_jog_moves_one_carriage_and_zero_takes_it_as_the_reference():
         jog = _mantaray("jog", "--port", vmcu.path, "--actuator", "2", "--position", "0.03")
         assert jog.returncode == 0 and "actuator 2: commanded +0.0300 m, measured +0.0300 m" in jog.stdout, jog
         far = _mantaray("jog", "--port", vmcu.path, "--actuator", "2", "--position", "0.3")
-        assert far.returncode == 2 and "jog refused: out_of_range (field position)" in far.stderr
+        assert far.returncode == 2 and "--position must be within ±0.25 m" in far.stderr   # before connecting
         zero = _mantaray("zero", "--port", vmcu.path, "--actuators", "2")
         assert zero.returncode == 0 and "actuators 2: their present positions are now 0 m" in zero.stdout
         link = Link(SerialTransport(vmcu.path))
