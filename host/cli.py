@@ -128,7 +128,8 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     previous = signal.getsignal(signal.SIGINT)
     outcome = "timeout"
     half_m = _half_module_m()
-    session = RigSession(args.port, Setup(configure, gains, target=targets_along(args, 0.0)), report=report)
+    session = RigSession(args.port, Setup(configure, gains, target=targets_along(args, 0.0)), report=report,
+                         reconnect_timeout_s=args.reconnect_timeout)
     loop = ClosedLoop(session.position)
     seen = {}                                        # the tracker's last observation, for the log
 
@@ -429,6 +430,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     rig.add_argument("--gains", type=parse_gains, metavar="KP,KI,KD[,ILIM]",
                      help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
     rig.add_argument("--hold", type=number(0), default=1.0, help="seconds within ε that count as reached")
+    rig.add_argument("--reconnect-timeout", type=number(0, above=True), default=30.0,
+                     help="how long to wait for a board that went away (unplugged, reset) before the run ends [s]")
     rig.add_argument("--timeout", type=number(0, above=True), default=60.0, help="give up after this many seconds (paper: 60)")
     rig.add_argument("--marker-height", type=number(0), default=0.0,
                      help="height [m] of the object's marker (or blob) above the corner markers' plane")

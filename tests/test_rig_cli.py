@@ -99,6 +99,20 @@ def test_ctrl_c_levels_the_surface_and_stops(still_video, tmp_path):
     assert _log(tmp_path)[-1]["outcome"] == "interrupted" and out.startswith("interrupted")
 
 
+def test_a_board_that_goes_away_ends_the_run_with_its_log_and_figure(still_video, tmp_path):
+    vmcu = VirtualMcu(clock="wall")
+    vmcu.__enter__()
+    rig = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "rig", "--port", vmcu.path, "--camera", still_video,
+                            "--target=-0.2,0.2", "--reconnect-timeout", "2", "--out", str(tmp_path)], cwd=REPO,
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(4)
+    vmcu.__exit__(None, None, None)                # unplugged for good
+    out, err = rig.communicate(timeout=120)
+    assert rig.returncode == 1 and out.startswith("board lost"), err
+    assert "the run ended: " in err and "Traceback" not in err
+    assert _log(tmp_path)[-1]["outcome"] == "board lost" and len(list(tmp_path.glob("rig-*.png"))) == 1
+
+
 def test_rig_follows_a_circle(tmp_path):
     video = _video(tmp_path / "c.avi", lambda k: (0.0, 0.0), int(3 * FPS))
     with VirtualMcu(clock="wall") as vmcu:
