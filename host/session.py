@@ -38,8 +38,13 @@ def is_pty(port: str) -> bool:
 
 
 def controller_axes(controller: str) -> tuple[m.Axis, ...]:
-    """The PIDs a controller runs: Manhattan's x and y (Algorithm 1), Euclidean's radial one (Algorithm 2)."""
-    return (m.Axis.X, m.Axis.Y) if controller == "manhattan" else (m.Axis.RADIAL,)
+    """The PIDs a controller runs: Manhattan's and the scheduled one's x and y, Euclidean's radial one, the
+    cascade's vx and vy (schema.toml, enums.controller and enums.axis)."""
+    return CONTROLLER_AXES[m.Controller[controller.upper()]]
+
+
+CONTROLLER_AXES = {m.Controller.MANHATTAN: (m.Axis.X, m.Axis.Y), m.Controller.EUCLIDEAN: (m.Axis.RADIAL,),
+                   m.Controller.SCHEDULED: (m.Axis.X, m.Axis.Y), m.Controller.CASCADE: (m.Axis.VX, m.Axis.VY)}
 
 
 def check_port(port: str) -> None:

@@ -205,6 +205,7 @@ def render_cpp(schema: dict) -> str:
         for vname, value in enum["values"].items():
             out.append(f"  k{camel(vname)} = {value},")
         out.append("};")
+        out.append(f"constexpr uint8_t k{camel(name)}Count = {max(enum['values'].values()) + 1};  // values 0..this - 1")
         out.append("")
     for name, flags in schema["flags"].items():
         out.append(f"// {flags['doc']}")

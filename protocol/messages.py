@@ -9,7 +9,7 @@ from typing import ClassVar
 from .codec import FieldSpec, Message
 
 PROTOCOL_VERSION = 1
-SCHEMA_HASH = 0xC62B6878
+SCHEMA_HASH = 0xB5A57DAB
 MAX_PACKET = 44  # [bytes] id + seq + payload + CRC
 MAX_WIRE = 46  # [bytes] COBS packet + delimiter
 NO_FIELD = 255
@@ -54,18 +54,22 @@ class State(enum.IntEnum):
 
 
 class Controller(enum.IntEnum):
-    """Tilt controller: Manhattan (Algorithm 1, two PIDs) or Euclidean (Algorithm 2, one PID)."""
+    """Tilt controller: the paper's Manhattan (Algorithm 1, PIDs x and y) or Euclidean (Algorithm 2, PID radial); beyond the paper, scheduled (Manhattan's PIDs with gains and tilt limits scheduled on the position and speed, configure_schedule) or cascade (a position loop asking for a velocity, PIDs vx and vy tilting for it, configure_cascade)."""
 
     MANHATTAN = 0
     EUCLIDEAN = 1
+    SCHEDULED = 2
+    CASCADE = 3
 
 
 class Axis(enum.IntEnum):
-    """Which PID configure_pid sets: x and y are Manhattan's, radial is Euclidean's."""
+    """Which PID configure_pid sets: x and y are Manhattan's and scheduled's, radial is Euclidean's, vx and vy the cascade's inner loops (their error is a velocity: kp in deg s/m, ki in deg/m, kd in deg s^2/m)."""
 
     X = 0
     Y = 1
     RADIAL = 2
+    VX = 3
+    VY = 4
 
 
 class Clock(enum.IntEnum):
@@ -105,6 +109,8 @@ PID_DEFAULTS = {
     Axis.X: {'kp': 30.9, 'ki': 26.78, 'kd': 15.45, 'integral_limit': 26.565051},
     Axis.Y: {'kp': 30.9, 'ki': 26.78, 'kd': 15.45, 'integral_limit': 26.565051},
     Axis.RADIAL: {'kp': 86.72, 'ki': 27.91, 'kd': 10.19, 'integral_limit': 26.565051},
+    Axis.VX: {'kp': 100.0, 'ki': 30.0, 'kd': 0.0, 'integral_limit': 26.565051},
+    Axis.VY: {'kp': 100.0, 'ki': 30.0, 'kd': 0.0, 'integral_limit': 26.565051},
 }
 
 
@@ -129,7 +135,7 @@ class Configure(Message):
     NAME: ClassVar[str] = 'configure'
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'ack'
-    SIZE: ClassVar[int] = 29  # [bytes] payload
+    SIZE: ClassVar[int] = 33  # [bytes] payload
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('controller', 'B', 1, None, Controller, None, None, ''),
         FieldSpec('module_x', 'f', 1, None, None, 0.1, 10.0, 'm'),
@@ -140,6 +146,7 @@ class Configure(Message):
         FieldSpec('noise_seed', 'I', 1, None, None, None, None, ''),
         FieldSpec('deadman', 'H', 1, None, None, 20, 60000, 'ms'),
         FieldSpec('telemetry_period', 'H', 1, None, None, 0, 60000, 'ms'),
+        FieldSpec('velocity_filter', 'f', 1, None, None, 0.0, 10.0, 's'),
     )
 
     controller: Controller = Controller.MANHATTAN  # Manhattan or Euclidean. (enum controller)
@@ -151,6 +158,7 @@ class Configure(Message):
     noise_seed: int = 1  # Seed of the noise PRNG (xorshift32; 0 is replaced by 1); reseeded at every start.
     deadman: int = 500  # [ms] Longest time without a valid position while running before the surface levels and a position_timeout fault latches.
     telemetry_period: int = 100  # [ms] Period of unsolicited telemetry; 0 = only in answer to object_position. Nonzero values below 5 ms are refused (the link cannot carry them).
+    velocity_filter: float = 0.05  # [s] Time constant of the first-order low-pass on the camera-frame velocity (scheduled and cascade); 0: the raw frame difference.
 
 
 @dataclass(frozen=True)
@@ -282,6 +290,48 @@ class Zero(Message):
     )
 
     actuators: int = 0  # Bit i set: zero actuator i (PROTOCOL.md, geometry).
+
+
+@dataclass(frozen=True)
+class ConfigureSchedule(Message):
+    """The position-scheduled Manhattan controller's schedule (PROTOCOL.md, controllers). Only in idle. Its defaults schedule nothing: it then steps as Manhattan."""
+
+    ID: ClassVar[int] = 0x0B
+    NAME: ClassVar[str] = 'configure_schedule'
+    DIRECTION: ClassVar[str] = 'host_to_mcu'
+    REPLY: ClassVar[str | None] = 'ack'
+    SIZE: ClassVar[int] = 20  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('edge_zone', 'f', 1, None, None, 0.001, 5.0, 'm'),
+        FieldSpec('edge_gain', 'f', 1, None, None, 0.0, 1.0, ''),
+        FieldSpec('edge_tilt', 'f', 1, None, None, 0.0, 1.0, ''),
+        FieldSpec('edge_brake', 'f', 1, None, None, 0.0, 100.0, ''),
+        FieldSpec('brake_speed', 'f', 1, None, None, 0.0, 10.0, 'm/s'),
+    )
+
+    edge_zone: float = 0.05  # [m] Width of the band along each edge where the schedule acts, growing linearly to the edge.
+    edge_gain: float = 1.0  # kp and ki at the edge the object is nearest to along the axis, relative to the axis's own.
+    edge_tilt: float = 1.0  # Tilt limit toward that edge, at the edge, relative to tilt_limit (the tilt away from it keeps the whole limit).
+    edge_brake: float = 0.0  # kd at the edge is (1 + edge_brake) times the axis's own.
+    brake_speed: float = 0.0  # [m/s] Speed at which the tilt along the object's motion on an axis has faded to 0 (a tilt against it, which brakes, stays free); 0: no such limit.
+
+
+@dataclass(frozen=True)
+class ConfigureCascade(Message):
+    """The cascaded controller's outer loop (PROTOCOL.md, controllers); its inner PIDs are configure_pid's vx and vy. Only in idle."""
+
+    ID: ClassVar[int] = 0x0C
+    NAME: ClassVar[str] = 'configure_cascade'
+    DIRECTION: ClassVar[str] = 'host_to_mcu'
+    REPLY: ClassVar[str | None] = 'ack'
+    SIZE: ClassVar[int] = 8  # [bytes] payload
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('position_gain', 'f', 1, None, None, 0.0, 100.0, '1/s'),
+        FieldSpec('speed_limit', 'f', 1, None, None, 0.001, 5.0, 'm/s'),
+    )
+
+    position_gain: float = 3.0  # [1/s] Velocity asked for per metre of error, on each axis.
+    speed_limit: float = 0.15  # [m/s] The most the outer loop asks for, on each axis.
 
 
 @dataclass(frozen=True)
@@ -440,4 +490,4 @@ class Boot(Message):
     reset_cause: ResetCause = ResetCause.POWER_ON  # Why it started. (enum reset_cause)
 
 
-MESSAGES: dict[int, type[Message]] = {m.ID: m for m in (Identify, Configure, ConfigurePid, SetTarget, Start, Stop, EmergencyStop, Jog, SimClock, Zero, ObjectPosition, IdentifyReply, Ack, Nack, Telemetry, Boot)}
+MESSAGES: dict[int, type[Message]] = {m.ID: m for m in (Identify, Configure, ConfigurePid, SetTarget, Start, Stop, EmergencyStop, Jog, SimClock, Zero, ConfigureSchedule, ConfigureCascade, ObjectPosition, IdentifyReply, Ack, Nack, Telemetry, Boot)}

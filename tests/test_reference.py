@@ -5,13 +5,14 @@ import ctypes
 import math
 import struct
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import beyond_reference as beyond  # noqa: E402
 import paper_reference as ref  # noqa: E402
 
 from mantaray.host.link import Link  # noqa: E402
@@ -145,13 +146,16 @@ def test_xorshift_reference_known_values():
 # --------------------------------------------------------------- (b) the controllers, in the firmware
 @dataclass
 class RunConfig:
-    kind: str  # 'manhattan' or 'euclidean'
+    kind: str  # 'manhattan', 'euclidean', 'scheduled' or 'cascade'
     tilt_limit: float
     alpha: float
     seed: int
     deadman: int  # [ms]
     telemetry_period: int  # [ms]
-    gains: dict[str, ref.Gains]
+    gains: dict[str, ref.Gains]  # by axis name: x, y, radial, vx, vy (absent: the firmware's defaults)
+    velocity_filter: float = f32(0.05)  # [s]
+    schedule: beyond.Schedule = field(default_factory=beyond.Schedule)
+    cascade: beyond.Cascade = field(default_factory=beyond.Cascade)
 
 
 def random_config(rng, kind: str, deadman: int = 60000) -> RunConfig:
@@ -164,7 +168,12 @@ def random_config(rng, kind: str, deadman: int = 60000) -> RunConfig:
                      seed=int(rng.integers(0, 2**32)),
                      deadman=deadman,
                      telemetry_period=int(rng.choice([0, 0, 5, 40])),
-                     gains={"x": gains(), "y": gains(), "radial": gains()})
+                     gains={"x": gains(), "y": gains(), "radial": gains(), "vx": gains(), "vy": gains()},
+                     velocity_filter=f32(rng.choice([0.0, rng.uniform(0.0, 0.5)])),
+                     schedule=beyond.Schedule(*(f32(v) for v in (rng.uniform(0.005, 0.3), rng.uniform(0, 1),
+                                                                 rng.uniform(0, 1), rng.uniform(0, 20),
+                                                                 rng.choice([0.0, rng.uniform(0.01, 2.0)])))),
+                     cascade=beyond.Cascade(f32(rng.uniform(0, 20)), f32(rng.uniform(0.001, 1.0))))
 
 
 class Harness:
@@ -175,14 +184,21 @@ class Harness:
         self.link = Link(InProcessTransport(simulated_clock=True))  # a fresh boot: the core's state is global
         self.link.identify()
         self.link.command(m.Configure(
-            controller=m.Controller.MANHATTAN if cfg.kind == "manhattan" else m.Controller.EUCLIDEAN,
-            module_x=0.5, module_y=0.5, tilt_limit=cfg.tilt_limit, tolerance=0.02,
-            noise_amplitude=cfg.alpha, noise_seed=cfg.seed, deadman=cfg.deadman,
-            telemetry_period=cfg.telemetry_period))
-        for axis, name in ((m.Axis.X, "x"), (m.Axis.Y, "y"), (m.Axis.RADIAL, "radial")):
-            g = cfg.gains[name]
-            self.link.command(m.ConfigurePid(axis=axis, kp=g.kp, ki=g.ki, kd=g.kd, integral_limit=g.integral_limit))
-        self.model = ref.Controller(cfg.kind, 0.5, 0.5, cfg.tilt_limit, cfg.alpha, cfg.gains, cfg.seed)
+            controller=m.Controller[cfg.kind.upper()], module_x=0.5, module_y=0.5, tilt_limit=cfg.tilt_limit,
+            tolerance=0.02, noise_amplitude=cfg.alpha, noise_seed=cfg.seed, deadman=cfg.deadman,
+            telemetry_period=cfg.telemetry_period, velocity_filter=cfg.velocity_filter))
+        for axis in m.Axis:
+            g = cfg.gains.get(axis.name.lower())
+            if g is not None:
+                self.link.command(m.ConfigurePid(axis=axis, kp=g.kp, ki=g.ki, kd=g.kd,
+                                                 integral_limit=g.integral_limit))
+        self.link.command(m.ConfigureSchedule(**vars(cfg.schedule)))
+        self.link.command(m.ConfigureCascade(**vars(cfg.cascade)))
+        if cfg.kind in ("manhattan", "euclidean"):
+            self.model = ref.Controller(cfg.kind, 0.5, 0.5, cfg.tilt_limit, cfg.alpha, cfg.gains, cfg.seed)
+        else:
+            self.model = beyond.BeyondController(cfg.kind, 0.5, 0.5, cfg.tilt_limit, cfg.alpha, cfg.gains,
+                                                 cfg.velocity_filter, cfg.schedule, cfg.cascade, cfg.seed)
         self.frame = 0
         self.capture_us = 1_000_000
         self.clock_us = 0
@@ -290,6 +306,26 @@ def test_controllers_match_the_paper_step_by_step(run):
     h = Harness(random_config(rng, kind, deadman=60000 if run < 6 else 150))
     drive(h, rng, steps=320, allow_long_gaps=run >= 6)
     assert h.steps >= 280
+
+
+@pytest.mark.parametrize("run", range(8))
+def test_controllers_beyond_the_paper_match_their_reference_step_by_step(run):
+    """The scheduled and cascade controllers, their settings and gains drawn at random, against beyond_reference."""
+    rng = np.random.default_rng(3000 + run)
+    kind = "scheduled" if run % 2 == 0 else "cascade"
+    h = Harness(random_config(rng, kind, deadman=60000 if run < 6 else 150))
+    drive(h, rng, steps=320, allow_long_gaps=run >= 6)
+    assert h.steps >= 280
+
+
+def test_the_scheduled_controller_with_its_default_schedule_steps_as_the_papers_manhattan():
+    """configure_schedule's defaults schedule nothing: the firmware's scheduled against the paper's Algorithm 1."""
+    rng = np.random.default_rng(77)
+    cfg = random_config(rng, "scheduled")
+    cfg.schedule = beyond.Schedule()
+    h = Harness(cfg)
+    h.model = ref.Controller("manhattan", 0.5, 0.5, cfg.tilt_limit, cfg.alpha, cfg.gains, cfg.seed)
+    drive(h, rng, steps=200)
 
 
 def test_paper_gains_and_defaults_match():

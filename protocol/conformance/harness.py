@@ -7,6 +7,7 @@ import time
 from typing import Iterable
 
 from mantaray.host.link import CommandRefused, Link
+from mantaray.host.session import CONTROLLER_AXES
 from mantaray.protocol import messages as m
 from mantaray.protocol import rig
 from mantaray.protocol.codec import Message
@@ -296,17 +297,20 @@ class Dut:
 
 
 # ------------------------------------------------------------------ reference runs ("changes nothing")
-# A configuration that differs from BASE_CONFIG in every field; config_fingerprint tells each apart.
-BASE_CONFIG = dataclasses.replace(DEFAULT_CONFIG, noise_amplitude=0.002)
+# A configuration that differs from BASE_CONFIG in every field; config_fingerprint tells each apart. The base runs
+# the cascade, whose steps read the velocity filter (the paper's controllers do not).
+BASE_CONFIG = dataclasses.replace(DEFAULT_CONFIG, noise_amplitude=0.002, controller=m.Controller.CASCADE)
 ALT_CONFIG = m.Configure(controller=m.Controller.EUCLIDEAN, module_x=0.4, module_y=0.3, tilt_limit=10.0,
-                         tolerance=0.2, noise_amplitude=0.05, noise_seed=7, deadman=20, telemetry_period=20)
+                         tolerance=0.2, noise_amplitude=0.05, noise_seed=7, deadman=20, telemetry_period=20,
+                         velocity_filter=1.0)
 
 
 def config_fingerprint(dut: Dut) -> tuple:
     """Runs a short, fixed scenario from idle and returns what the firmware did, in a form that differs
     for every field of BASE_CONFIG vs ALT_CONFIG: module sizes (set_target bounds), controller,
     tilt_limit, noise and seed (first step's tilts and commands), tolerance (reached or not),
-    telemetry_period (unsolicited telemetry) and deadman (fault after 50 ms). Ends in idle."""
+    telemetry_period (unsolicited telemetry), deadman (fault after 50 ms) and velocity_filter (the cascade's second
+    step's tilts). Ends in idle."""
     r1 = dut.result(m.SetTarget(0.22, 0.0))
     r2 = dut.result(m.SetTarget(0.2, 0.2))
     dut.set_target(0.18, 0.12)
@@ -316,7 +320,7 @@ def config_fingerprint(dut: Dut) -> tuple:
     periodic = dut.advance(0.05)
     t3 = dut.probe()
     dut.stop()
-    return (r1.name, r2.name, summary(t1), summary(t2)[0], bool(periodic), summary(t3)[:2])
+    return (r1.name, r2.name, summary(t1), summary(t2)[:4], bool(periodic), summary(t3)[:2])
 
 
 def base_config_fingerprint(dut: Dut) -> tuple:
@@ -329,7 +333,11 @@ def base_config_fingerprint(dut: Dut) -> tuple:
 
 # PID gains that differ from the boot gains in every field; pid_fingerprint tells each apart.
 ALT_GAINS = {"kp": 20.0, "ki": 100.0, "kd": 5.0, "integral_limit": 0.5}
-PID_TARGET = {m.Axis.X: (0.2, 0.0), m.Axis.Y: (0.0, 0.2), m.Axis.RADIAL: (0.2, 0.0)}
+PID_TARGET = {m.Axis.X: (0.2, 0.0), m.Axis.Y: (0.0, 0.2), m.Axis.RADIAL: (0.2, 0.0), m.Axis.VX: (0.2, 0.0),
+              m.Axis.VY: (0.0, 0.2)}
+# (position along the axis [m], dt [s]) of the three steps; the cascade's slower ones wind its integral past 0.5 deg
+PID_STEPS = {axis: ((0.0, 0.1), (0.02, 0.1), (0.02, 0.1)) for axis in m.Axis}
+PID_STEPS.update({axis: ((0.0, 0.1), (0.02, 0.5), (0.02, 0.5)) for axis in (m.Axis.VX, m.Axis.VY)})
 
 
 def pid_fingerprint(dut: Dut, axes: Iterable[m.Axis] = tuple(m.Axis)) -> dict:
@@ -338,14 +346,14 @@ def pid_fingerprint(dut: Dut, axes: Iterable[m.Axis] = tuple(m.Axis)) -> dict:
     tilts of each step. Ends in idle with DEFAULT_CONFIG."""
     out = {}
     for axis in axes:
-        controller = m.Controller.EUCLIDEAN if axis == m.Axis.RADIAL else m.Controller.MANHATTAN
+        controller = next(c for c, axes_of in CONTROLLER_AXES.items() if axis in axes_of)   # the first that runs it
         dut.configure(controller=controller)
         tx, ty = PID_TARGET[axis]
         dut.set_target(tx, ty)
         dut.start()
         along = (1.0, 0.0) if ty == 0.0 else (0.0, 1.0)
         steps = []
-        for s, dt in ((0.0, 0.1), (0.02, 0.1), (0.02, 0.1)):
+        for s, dt in PID_STEPS[axis]:
             t = dut.position(s * along[0], s * along[1], dt=dt)
             steps.append((t.tilt_zx, t.tilt_zy))
         dut.stop()

@@ -24,7 +24,7 @@ def max_tilt(module_x: float, module_y: float) -> float:
 # Each case: fields changed from ALT_CONFIG (valid, and different from BASE_CONFIG in every field, so a
 # partly applied refusal would show), the error and the field it must name.
 BAD = [
-    ({"controller": 2}, OUT, "controller"),
+    ({"controller": len(m.Controller)}, OUT, "controller"),
     ({"controller": 255}, OUT, "controller"),
     ({"module_x": NAN}, NOT_FINITE, "module_x"),
     ({"module_x": INF}, NOT_FINITE, "module_x"),
@@ -64,6 +64,9 @@ BAD = [
     ({"telemetry_period": 4}, OUT, "telemetry_period"),
     ({"telemetry_period": 60001}, OUT, "telemetry_period"),
     ({"telemetry_period": 65535}, OUT, "telemetry_period"),
+    ({"velocity_filter": NAN}, NOT_FINITE, "velocity_filter"),
+    ({"velocity_filter": f32_below(0.0)}, OUT, "velocity_filter"),
+    ({"velocity_filter": f32_above(10.0)}, OUT, "velocity_filter"),
 ]
 
 
@@ -97,8 +100,7 @@ def test_several_bad_fields_name_one_of_them(dut, changes, bad):
 
 
 ACCEPTED = [
-    {"controller": m.Controller.MANHATTAN},
-    {"controller": m.Controller.EUCLIDEAN},
+    *({"controller": controller} for controller in m.Controller),
     {"module_x": f32(0.1)},
     {"module_x": 10.0, "tilt_limit": 1.0},
     {"module_y": f32(0.1)},
@@ -119,6 +121,8 @@ ACCEPTED = [
     {"telemetry_period": 0},
     {"telemetry_period": 5},
     {"telemetry_period": 60000},
+    {"velocity_filter": 0.0},
+    {"velocity_filter": 10.0},
 ]
 
 

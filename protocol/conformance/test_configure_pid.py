@@ -12,7 +12,7 @@ from mantaray.protocol.conformance.harness import (
 NAN, INF = math.nan, math.inf
 OUT, NOT_FINITE = m.ErrorCode.OUT_OF_RANGE, m.ErrorCode.NOT_FINITE
 
-BAD = [({"axis": 3}, OUT, "axis"), ({"axis": 255}, OUT, "axis")]
+BAD = [({"axis": len(m.Axis)}, OUT, "axis"), ({"axis": 255}, OUT, "axis")]
 for _gain, _max in (("kp", 10000.0), ("ki", 10000.0), ("kd", 10000.0), ("integral_limit", 90.0)):
     BAD += [
         ({_gain: NAN}, NOT_FINITE, _gain),

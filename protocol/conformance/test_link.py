@@ -27,7 +27,9 @@ def running(dut, x: float = 0.1, y: float = 0.0) -> m.Telemetry:
 
 
 # ------------------------------------------------------------------------------------------ unknown ids
-UNKNOWN_IDS = [0x00, 0x0B, 0x0F, 0x11, 0x7F, 0x80, 0x81, 0x82, 0x83, 0x84, 0x85, 0xFE, 0xFF]
+# The edges of the id space, the first id after the commands, and every firmware -> host id (no command either)
+UNKNOWN_IDS = sorted({0x00, 0x0F, 0x11, 0x7F, 0x80, 0xFE, 0xFF, max(i for i in KNOWN_IDS if i < 0x10) + 1,
+                      *(cls.ID for cls in m.MESSAGES.values() if cls.DIRECTION == "mcu_to_host")} - KNOWN_IDS)
 
 
 @pytest.mark.parametrize("payload", [b"", b"\x01" * 8, bytes(range(40))], ids=["empty", "8-bytes", "40-bytes"])

@@ -1,14 +1,52 @@
-// Manhattan and Euclidean control steps: PID -> tilt -> plane -> noisy, clamped actuator commands.
+// Tilt control steps: the paper's Manhattan and Euclidean, and the scheduled and cascaded controllers beyond it:
+// PIDs -> tilt -> plane -> noisy, clamped actuator commands.
 #include "controller.h"
 
-#include <math.h>  // hypotf
+#include <math.h>  // fabsf, hypotf
 
 namespace mr {
+
+namespace {
+
+float clamp01(float x) { return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x); }
+
+// One axis of the position-scheduled Manhattan controller. p [m] is the object's coordinate on the axis, half [m]
+// the module's half side along it, v [m/s] its filtered velocity. Within edge_zone of the edge the object is
+// nearest to, kp and ki ease toward edge_gain times themselves, kd grows by edge_brake times itself and the tilt
+// toward that edge is limited to edge_tilt times the limit; with brake_speed > 0 the tilt along the motion fades
+// to 0 as the speed reaches brake_speed (a tilt against it, which brakes, stays free).
+float scheduled_axis(Pid& pid, const PidGains& gains, const ScheduleConfig& s, float tilt_limit, float half,
+                     float p, float error, float error_rate, float v, float dt) {
+  const float near_edge = clamp01(1.0f - (half - fabsf(p)) / s.edge_zone);  // 0 inside, 1 at or past the edge
+  const float ease = 1.0f - near_edge * (1.0f - s.edge_gain);
+  const PidGains scheduled{gains.kp * ease, gains.ki * ease, gains.kd * (1.0f + near_edge * s.edge_brake),
+                           gains.integral_limit};
+  const float toward_edge = tilt_limit * (1.0f - near_edge * (1.0f - s.edge_tilt));
+  float high = p > 0.0f ? toward_edge : tilt_limit;  // a positive tilt moves the object toward +x (+y)
+  float low = p < 0.0f ? -toward_edge : -tilt_limit;
+  if (s.brake_speed > 0.0f) {
+    const float along_motion = clamp01(1.0f - fabsf(v) / s.brake_speed);
+    if (v > 0.0f) high *= along_motion;
+    if (v < 0.0f) low *= along_motion;
+  }
+  return pid.update(scheduled, error, error_rate, dt, low, high);
+}
+
+// One axis of the cascaded controller: the outer loop asks for a velocity toward the target, the inner PID
+// tilts for it. v [m/s] is the filtered velocity and acceleration [m/s^2] its change since the previous step.
+float cascade_axis(Pid& pid, const PidGains& gains, const CascadeConfig& c, float tilt_limit, float error, float v,
+                   float acceleration, float dt) {
+  const float wanted = clamp_symmetric(c.position_gain * error, c.speed_limit);  // [m/s]
+  return pid.update(gains, wanted - v, -acceleration, dt, -tilt_limit, tilt_limit);
+}
+
+}  // namespace
 
 void TiltController::reset(uint32_t noise_seed) {
   for (Pid& pid : pid_) pid.reset();
   noise_.seed(noise_seed);
   has_prev_ = false;
+  vx_ = vy_ = 0.0f;
 }
 
 float TiltController::step(const ControllerConfig& config, float target_x, float target_y, float x, float y,
@@ -18,27 +56,56 @@ float TiltController::step(const ControllerConfig& config, float target_x, float
   const float ex = target_x - x;
   const float ey = target_y - y;
   const float distance = hypotf(ex, ey);  // no underflow or overflow of the squares
-  Normal normal;
-  if (config.kind == proto::Controller::kManhattan) {
-    // The error at the previous measurement against today's target: its change is the object's motion only.
-    const float rate_x = rate_known ? (ex - (target_x - prev_x_)) / dt : 0.0f;
-    const float rate_y = rate_known ? (ey - (target_y - prev_y_)) / dt : 0.0f;
-    out.tilt_zx = pid_[0].update(config.pid[0], ex, rate_x, dt, config.tilt_limit);
-    out.tilt_zy = pid_[1].update(config.pid[1], ey, rate_y, dt, config.tilt_limit);
-    normal = manhattan_normal(out.tilt_zx, out.tilt_zy);
+  // The object's velocity [m/s]: camera-frame differences through a first-order low-pass of velocity_filter [s].
+  const float last_vx = vx_;
+  const float last_vy = vy_;
+  if (rate_known) {
+    const float blend = dt / (config.velocity_filter + dt);
+    vx_ += blend * ((x - prev_x_) / dt - vx_);
+    vy_ += blend * ((y - prev_y_) / dt - vy_);
   } else {
-    float rate = 0.0f;
-    if (rate_known) {
-      const float px = target_x - prev_x_;
-      const float py = target_y - prev_y_;
-      rate = (distance - hypotf(px, py)) / dt;
+    vx_ = vy_ = 0.0f;
+  }
+  // Manhattan's (and the schedule's) derivative: the error at the previous measurement against today's target,
+  // so its change is the object's motion only.
+  const float rate_x = rate_known ? (ex - (target_x - prev_x_)) / dt : 0.0f;
+  const float rate_y = rate_known ? (ey - (target_y - prev_y_)) / dt : 0.0f;
+  Normal normal;
+  switch (config.kind) {
+    case proto::Controller::kEuclidean: {
+      float rate = 0.0f;
+      if (rate_known) {
+        const float px = target_x - prev_x_;
+        const float py = target_y - prev_y_;
+        rate = (distance - hypotf(px, py)) / dt;
+      }
+      const float theta = pid_[kRadial].update(config.pid[kRadial], distance, rate, dt, config.tilt_limit);
+      const float ux = distance > 0.0f ? ex / distance : 0.0f;
+      const float uy = distance > 0.0f ? ey / distance : 0.0f;
+      out.tilt_zx = theta * ux;
+      out.tilt_zy = theta * uy;
+      normal = euclidean_normal(theta, ex, ey);
+      break;
     }
-    const float theta = pid_[2].update(config.pid[2], distance, rate, dt, config.tilt_limit);
-    const float ux = distance > 0.0f ? ex / distance : 0.0f;
-    const float uy = distance > 0.0f ? ey / distance : 0.0f;
-    out.tilt_zx = theta * ux;
-    out.tilt_zy = theta * uy;
-    normal = euclidean_normal(theta, ex, ey);
+    case proto::Controller::kScheduled:
+      out.tilt_zx = scheduled_axis(pid_[kX], config.pid[kX], config.schedule, config.tilt_limit,
+                                   0.5f * config.module_x, x, ex, rate_x, vx_, dt);
+      out.tilt_zy = scheduled_axis(pid_[kY], config.pid[kY], config.schedule, config.tilt_limit,
+                                   0.5f * config.module_y, y, ey, rate_y, vy_, dt);
+      normal = manhattan_normal(out.tilt_zx, out.tilt_zy);
+      break;
+    case proto::Controller::kCascade:
+      out.tilt_zx = cascade_axis(pid_[kVx], config.pid[kVx], config.cascade, config.tilt_limit, ex, vx_,
+                                 rate_known ? (vx_ - last_vx) / dt : 0.0f, dt);
+      out.tilt_zy = cascade_axis(pid_[kVy], config.pid[kVy], config.cascade, config.tilt_limit, ey, vy_,
+                                 rate_known ? (vy_ - last_vy) / dt : 0.0f, dt);
+      normal = manhattan_normal(out.tilt_zx, out.tilt_zy);
+      break;
+    default:  // Manhattan
+      out.tilt_zx = pid_[kX].update(config.pid[kX], ex, rate_x, dt, config.tilt_limit);
+      out.tilt_zy = pid_[kY].update(config.pid[kY], ey, rate_y, dt, config.tilt_limit);
+      normal = manhattan_normal(out.tilt_zx, out.tilt_zy);
+      break;
   }
   plane_commands(normal, config.module_x, config.module_y, out.command);
   for (float& a : out.command) {

@@ -1,4 +1,5 @@
-// Tilt controllers of the paper: Manhattan (Algorithm 1) and Euclidean (Algorithm 2), with the noise term.
+// Tilt controllers: the paper's Manhattan (Algorithm 1) and Euclidean (Algorithm 2), and beyond the paper a
+// position-scheduled Manhattan and a cascaded position-velocity controller; all with the noise term.
 #pragma once
 
 #include <stdint.h>  // uint32_t
@@ -6,10 +7,31 @@
 #include "pid.h"           // Pid, PidGains
 #include "plane.h"         // plane transform
 #include "prng.h"          // Xorshift32
-#include "protocol_gen.h"  // proto::Controller, proto::Axis
+#include "protocol_gen.h"  // proto::Controller, proto::Axis, proto::kAxisCount
 #include "rig_config.h"    // kActuatorCount
 
 namespace mr {
+
+// The PIDs by proto::Axis: x, y (Manhattan, scheduled), radial (Euclidean), vx, vy (the cascade's inner loops).
+constexpr uint8_t kX = static_cast<uint8_t>(proto::Axis::kX);
+constexpr uint8_t kY = static_cast<uint8_t>(proto::Axis::kY);
+constexpr uint8_t kRadial = static_cast<uint8_t>(proto::Axis::kRadial);
+constexpr uint8_t kVx = static_cast<uint8_t>(proto::Axis::kVx);
+constexpr uint8_t kVy = static_cast<uint8_t>(proto::Axis::kVy);
+constexpr uint8_t kPidCount = proto::kAxisCount;
+
+struct ScheduleConfig {  // configure_schedule
+  float edge_zone;    // [m] width of the band along each edge where the schedule acts
+  float edge_gain;    // [-] kp and ki at the edge, relative to the axis's own
+  float edge_tilt;    // [-] the tilt toward the nearest edge at the edge, relative to the limit
+  float edge_brake;   // [-] extra kd at the edge, relative to the axis's own
+  float brake_speed;  // [m/s] speed at which the tilt along the motion reaches 0; 0: off
+};
+
+struct CascadeConfig {  // configure_cascade
+  float position_gain;  // [1/s] velocity asked per metre of error
+  float speed_limit;    // [m/s] the most the outer loop asks for
+};
 
 struct ControllerConfig {
   proto::Controller kind;
@@ -17,7 +39,10 @@ struct ControllerConfig {
   float module_y;         // [m] n
   float tilt_limit;       // [deg] saturation of every tilt output
   float noise_amplitude;  // [m] alpha
-  PidGains pid[3];        // indexed by proto::Axis: x, y (Manhattan), radial (Euclidean)
+  float velocity_filter;  // [s] time constant of the velocity estimate's low-pass
+  PidGains pid[kPidCount];
+  ScheduleConfig schedule;
+  CascadeConfig cascade;
 };
 
 struct ControllerOutput {
@@ -28,7 +53,7 @@ struct ControllerOutput {
 
 class TiltController {
  public:
-  // Forgets the PIDs' state and the previous position; reseeds the noise.
+  // Forgets the PIDs' state, the previous position and the velocity; reseeds the noise.
   void reset(uint32_t noise_seed);
 
   // One control step at a measured object position (x, y) [m] for the target (target_x, target_y) [m].
@@ -38,10 +63,12 @@ class TiltController {
              ControllerOutput& out);
 
  private:
-  Pid pid_[3];
+  Pid pid_[kPidCount];
   Xorshift32 noise_;
   float prev_x_ = 0.0f;  // [m] previous measured position
   float prev_y_ = 0.0f;  // [m]
+  float vx_ = 0.0f;      // [m/s] filtered velocity (0 until a rate is known)
+  float vy_ = 0.0f;      // [m/s]
   bool has_prev_ = false;
 };
 

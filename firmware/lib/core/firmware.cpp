@@ -112,6 +112,10 @@ ErrorCode Firmware::handle_command(uint8_t& field) {
       return supervisor_.configure(decoded<proto::Configure>(payload), field);
     case proto::ConfigurePid::kId:
       return supervisor_.configure_pid(decoded<proto::ConfigurePid>(payload), field);
+    case proto::ConfigureSchedule::kId:
+      return supervisor_.configure_schedule(decoded<proto::ConfigureSchedule>(payload), field);
+    case proto::ConfigureCascade::kId:
+      return supervisor_.configure_cascade(decoded<proto::ConfigureCascade>(payload), field);
     case proto::SetTarget::kId:
       return supervisor_.set_target(decoded<proto::SetTarget>(payload), field);
     case proto::Start::kId:

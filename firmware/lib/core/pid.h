@@ -22,8 +22,12 @@ class Pid {
   // error [m]; error_rate [m/s]: the error's change caused by the measured object's motion alone,
   // computed against the current target, so a new target causes no derivative kick; dt [s] since
   // the previous update, 0 on the first one (no integration then). Returns the tilt [deg] within
-  // +-output_limit. The integral stops growing while the output saturates in its direction.
-  float update(const PidGains& gains, float error, float error_rate, float dt, float output_limit);
+  // [low, high] (low <= 0 <= high). The integral stops growing while the output saturates in its direction.
+  float update(const PidGains& gains, float error, float error_rate, float dt, float low, float high);
+  // The same within +-output_limit.
+  float update(const PidGains& gains, float error, float error_rate, float dt, float output_limit) {
+    return update(gains, error, error_rate, dt, -output_limit, output_limit);
+  }
 
   float integral() const { return integral_; }  // [deg]
 
@@ -31,7 +35,9 @@ class Pid {
   float integral_ = 0.0f;  // [deg]
 };
 
+// Clamps x to [low, high]; NaN becomes 0.
+float clamp(float x, float low, float high);
 // Clamps x to [-limit, limit]; NaN becomes 0.
-float clamp_symmetric(float x, float limit);
+inline float clamp_symmetric(float x, float limit) { return clamp(x, -limit, limit); }
 
 }  // namespace mr

@@ -9,7 +9,7 @@ namespace mr {
 namespace proto {
 
 constexpr uint16_t kProtocolVersion = 1;
-constexpr uint32_t kSchemaHash = 0xC62B6878u;
+constexpr uint32_t kSchemaHash = 0xB5A57DABu;
 constexpr uint8_t kMaxPacket = 44;  // [bytes] id + seq + payload + CRC
 constexpr uint8_t kMaxWire = 46;  // [bytes] COBS packet + delimiter
 constexpr uint8_t kNoField = 255;  // nack.field when no single field is at fault
@@ -27,7 +27,7 @@ enum class ErrorCode : uint8_t {
   kStaleSequence = 9,  // A frame whose sequence number is 1 to 64 behind the newest one taken, or equals it with other content: a delayed or duplicated copy of an older frame, not applied (PROTOCOL.md section 3).
 };
 constexpr uint8_t kLastErrorCode = 9;  // nack.code is 1..this
-constexpr uint8_t kMostFields = 9;  // fields of the widest host -> MCU message: nack.field is below this or kNoField
+constexpr uint8_t kMostFields = 10;  // fields of the widest host -> MCU message: nack.field is below this or kNoField
 
 // Supervisor state.
 enum class State : uint8_t {
@@ -37,25 +37,33 @@ enum class State : uint8_t {
   kFault = 3,
   kEstop = 4,
 };
+constexpr uint8_t kStateCount = 5;  // values 0..this - 1
 
-// Tilt controller: Manhattan (Algorithm 1, two PIDs) or Euclidean (Algorithm 2, one PID).
+// Tilt controller: the paper's Manhattan (Algorithm 1, PIDs x and y) or Euclidean (Algorithm 2, PID radial); beyond the paper, scheduled (Manhattan's PIDs with gains and tilt limits scheduled on the position and speed, configure_schedule) or cascade (a position loop asking for a velocity, PIDs vx and vy tilting for it, configure_cascade).
 enum class Controller : uint8_t {
   kManhattan = 0,
   kEuclidean = 1,
+  kScheduled = 2,
+  kCascade = 3,
 };
+constexpr uint8_t kControllerCount = 4;  // values 0..this - 1
 
-// Which PID configure_pid sets: x and y are Manhattan's, radial is Euclidean's.
+// Which PID configure_pid sets: x and y are Manhattan's and scheduled's, radial is Euclidean's, vx and vy the cascade's inner loops (their error is a velocity: kp in deg s/m, ki in deg/m, kd in deg s^2/m).
 enum class Axis : uint8_t {
   kX = 0,
   kY = 1,
   kRadial = 2,
+  kVx = 3,
+  kVy = 4,
 };
+constexpr uint8_t kAxisCount = 5;  // values 0..this - 1
 
 // Where the firmware's time comes from.
 enum class Clock : uint8_t {
   kWall = 0,
   kSimulated = 1,
 };
+constexpr uint8_t kClockCount = 2;  // values 0..this - 1
 
 // Why the firmware (re)started, reported in boot.
 enum class ResetCause : uint8_t {
@@ -65,6 +73,7 @@ enum class ResetCause : uint8_t {
   kWatchdog = 3,
   kUnknown = 4,
 };
+constexpr uint8_t kResetCauseCount = 5;  // values 0..this - 1
 
 // object_position.flags bits.
 namespace position_flags {
@@ -85,6 +94,8 @@ constexpr PidDefaults kPidDefaults[] = {
     {30.9f, 26.78f, 15.45f, 26.565051f},  // x
     {30.9f, 26.78f, 15.45f, 26.565051f},  // y
     {86.72f, 27.91f, 10.19f, 26.565051f},  // radial
+    {100.0f, 30.0f, 0.0f, 26.565051f},  // vx
+    {100.0f, 30.0f, 0.0f, 26.565051f},  // vy
 };
 
 // Handshake: ask for protocol version, firmware version and schema hash.
@@ -102,7 +113,7 @@ inline ErrorCode validate(const Identify& /*m*/, uint8_t& /*field*/) {
 // Controller-wide settings. Only in idle. Validated whole: any bad field refuses the lot and changes nothing.
 struct Configure {
   static constexpr uint8_t kId = 0x02;
-  static constexpr uint8_t kSize = 29;  // [bytes] payload
+  static constexpr uint8_t kSize = 33;  // [bytes] payload
   uint8_t controller;  // Manhattan or Euclidean. (enum controller)
   float module_x;  // [m] Module size m along x (actuators at x = +-m/2).
   float module_y;  // [m] Module size n along y (actuators at y = +-n/2).
@@ -112,6 +123,7 @@ struct Configure {
   uint32_t noise_seed;  // Seed of the noise PRNG (xorshift32; 0 is replaced by 1); reseeded at every start.
   uint16_t deadman;  // [ms] Longest time without a valid position while running before the surface levels and a position_timeout fault latches.
   uint16_t telemetry_period;  // [ms] Period of unsolicited telemetry; 0 = only in answer to object_position. Nonzero values below 5 ms are refused (the link cannot carry them).
+  float velocity_filter;  // [s] Time constant of the first-order low-pass on the camera-frame velocity (scheduled and cascade); 0: the raw frame difference.
   static constexpr uint8_t kFieldController = 0;
   static constexpr uint8_t kFieldModuleX = 1;
   static constexpr uint8_t kFieldModuleY = 2;
@@ -121,6 +133,7 @@ struct Configure {
   static constexpr uint8_t kFieldNoiseSeed = 6;
   static constexpr uint8_t kFieldDeadman = 7;
   static constexpr uint8_t kFieldTelemetryPeriod = 8;
+  static constexpr uint8_t kFieldVelocityFilter = 9;
 };
 inline void encode(const Configure& m, uint8_t* out) {
   put_u8(out + 0, m.controller);
@@ -132,6 +145,7 @@ inline void encode(const Configure& m, uint8_t* out) {
   put_u32(out + 21, m.noise_seed);
   put_u16(out + 25, m.deadman);
   put_u16(out + 27, m.telemetry_period);
+  put_f32(out + 29, m.velocity_filter);
 }
 inline void decode(const uint8_t* in, Configure& m) {
   m.controller = get_u8(in + 0);
@@ -143,10 +157,11 @@ inline void decode(const uint8_t* in, Configure& m) {
   m.noise_seed = get_u32(in + 21);
   m.deadman = get_u16(in + 25);
   m.telemetry_period = get_u16(in + 27);
+  m.velocity_filter = get_f32(in + 29);
 }
 // Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
 inline ErrorCode validate(const Configure& m, uint8_t& field) {
-  if ((m.controller != 0 && m.controller != 1)) { field = 0; return ErrorCode::kOutOfRange; }
+  if ((m.controller != 0 && m.controller != 1 && m.controller != 2 && m.controller != 3)) { field = 0; return ErrorCode::kOutOfRange; }
   if (!is_finite(m.module_x)) { field = 1; return ErrorCode::kNotFinite; }
   if ((m.module_x < 0.1f) || (m.module_x > 10.0f)) { field = 1; return ErrorCode::kOutOfRange; }
   if (!is_finite(m.module_y)) { field = 2; return ErrorCode::kNotFinite; }
@@ -159,6 +174,8 @@ inline ErrorCode validate(const Configure& m, uint8_t& field) {
   if ((m.noise_amplitude < 0.0f) || (m.noise_amplitude > 0.25f)) { field = 5; return ErrorCode::kOutOfRange; }
   if ((m.deadman < 20) || (m.deadman > 60000)) { field = 7; return ErrorCode::kOutOfRange; }
   if ((m.telemetry_period > 60000)) { field = 8; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.velocity_filter)) { field = 9; return ErrorCode::kNotFinite; }
+  if ((m.velocity_filter < 0.0f) || (m.velocity_filter > 10.0f)) { field = 9; return ErrorCode::kOutOfRange; }
   return ErrorCode::kOk;
 }
 // Boot values from the schema.
@@ -172,6 +189,7 @@ inline void set_defaults(Configure& m) {
   m.noise_seed = 1;
   m.deadman = 500;
   m.telemetry_period = 100;
+  m.velocity_filter = 0.05f;
 }
 
 // Gains of one PID. Only in idle. Output unit is degrees of tilt (see PROTOCOL.md, units).
@@ -205,7 +223,7 @@ inline void decode(const uint8_t* in, ConfigurePid& m) {
 }
 // Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
 inline ErrorCode validate(const ConfigurePid& m, uint8_t& field) {
-  if ((m.axis != 0 && m.axis != 1 && m.axis != 2)) { field = 0; return ErrorCode::kOutOfRange; }
+  if ((m.axis != 0 && m.axis != 1 && m.axis != 2 && m.axis != 3 && m.axis != 4)) { field = 0; return ErrorCode::kOutOfRange; }
   if (!is_finite(m.kp)) { field = 1; return ErrorCode::kNotFinite; }
   if ((m.kp < 0.0f) || (m.kp > 10000.0f)) { field = 1; return ErrorCode::kOutOfRange; }
   if (!is_finite(m.ki)) { field = 2; return ErrorCode::kNotFinite; }
@@ -336,6 +354,89 @@ inline void decode(const uint8_t* in, Zero& m) {
 inline ErrorCode validate(const Zero& m, uint8_t& field) {
   if ((m.actuators < 1) || (m.actuators > 15)) { field = 0; return ErrorCode::kOutOfRange; }
   return ErrorCode::kOk;
+}
+
+// The position-scheduled Manhattan controller's schedule (PROTOCOL.md, controllers). Only in idle. Its defaults schedule nothing: it then steps as Manhattan.
+struct ConfigureSchedule {
+  static constexpr uint8_t kId = 0x0B;
+  static constexpr uint8_t kSize = 20;  // [bytes] payload
+  float edge_zone;  // [m] Width of the band along each edge where the schedule acts, growing linearly to the edge.
+  float edge_gain;  // kp and ki at the edge the object is nearest to along the axis, relative to the axis's own.
+  float edge_tilt;  // Tilt limit toward that edge, at the edge, relative to tilt_limit (the tilt away from it keeps the whole limit).
+  float edge_brake;  // kd at the edge is (1 + edge_brake) times the axis's own.
+  float brake_speed;  // [m/s] Speed at which the tilt along the object's motion on an axis has faded to 0 (a tilt against it, which brakes, stays free); 0: no such limit.
+  static constexpr uint8_t kFieldEdgeZone = 0;
+  static constexpr uint8_t kFieldEdgeGain = 1;
+  static constexpr uint8_t kFieldEdgeTilt = 2;
+  static constexpr uint8_t kFieldEdgeBrake = 3;
+  static constexpr uint8_t kFieldBrakeSpeed = 4;
+};
+inline void encode(const ConfigureSchedule& m, uint8_t* out) {
+  put_f32(out + 0, m.edge_zone);
+  put_f32(out + 4, m.edge_gain);
+  put_f32(out + 8, m.edge_tilt);
+  put_f32(out + 12, m.edge_brake);
+  put_f32(out + 16, m.brake_speed);
+}
+inline void decode(const uint8_t* in, ConfigureSchedule& m) {
+  m.edge_zone = get_f32(in + 0);
+  m.edge_gain = get_f32(in + 4);
+  m.edge_tilt = get_f32(in + 8);
+  m.edge_brake = get_f32(in + 12);
+  m.brake_speed = get_f32(in + 16);
+}
+// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
+inline ErrorCode validate(const ConfigureSchedule& m, uint8_t& field) {
+  if (!is_finite(m.edge_zone)) { field = 0; return ErrorCode::kNotFinite; }
+  if ((m.edge_zone < 0.001f) || (m.edge_zone > 5.0f)) { field = 0; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.edge_gain)) { field = 1; return ErrorCode::kNotFinite; }
+  if ((m.edge_gain < 0.0f) || (m.edge_gain > 1.0f)) { field = 1; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.edge_tilt)) { field = 2; return ErrorCode::kNotFinite; }
+  if ((m.edge_tilt < 0.0f) || (m.edge_tilt > 1.0f)) { field = 2; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.edge_brake)) { field = 3; return ErrorCode::kNotFinite; }
+  if ((m.edge_brake < 0.0f) || (m.edge_brake > 100.0f)) { field = 3; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.brake_speed)) { field = 4; return ErrorCode::kNotFinite; }
+  if ((m.brake_speed < 0.0f) || (m.brake_speed > 10.0f)) { field = 4; return ErrorCode::kOutOfRange; }
+  return ErrorCode::kOk;
+}
+// Boot values from the schema.
+inline void set_defaults(ConfigureSchedule& m) {
+  m.edge_zone = 0.05f;
+  m.edge_gain = 1.0f;
+  m.edge_tilt = 1.0f;
+  m.edge_brake = 0.0f;
+  m.brake_speed = 0.0f;
+}
+
+// The cascaded controller's outer loop (PROTOCOL.md, controllers); its inner PIDs are configure_pid's vx and vy. Only in idle.
+struct ConfigureCascade {
+  static constexpr uint8_t kId = 0x0C;
+  static constexpr uint8_t kSize = 8;  // [bytes] payload
+  float position_gain;  // [1/s] Velocity asked for per metre of error, on each axis.
+  float speed_limit;  // [m/s] The most the outer loop asks for, on each axis.
+  static constexpr uint8_t kFieldPositionGain = 0;
+  static constexpr uint8_t kFieldSpeedLimit = 1;
+};
+inline void encode(const ConfigureCascade& m, uint8_t* out) {
+  put_f32(out + 0, m.position_gain);
+  put_f32(out + 4, m.speed_limit);
+}
+inline void decode(const uint8_t* in, ConfigureCascade& m) {
+  m.position_gain = get_f32(in + 0);
+  m.speed_limit = get_f32(in + 4);
+}
+// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
+inline ErrorCode validate(const ConfigureCascade& m, uint8_t& field) {
+  if (!is_finite(m.position_gain)) { field = 0; return ErrorCode::kNotFinite; }
+  if ((m.position_gain < 0.0f) || (m.position_gain > 100.0f)) { field = 0; return ErrorCode::kOutOfRange; }
+  if (!is_finite(m.speed_limit)) { field = 1; return ErrorCode::kNotFinite; }
+  if ((m.speed_limit < 0.001f) || (m.speed_limit > 5.0f)) { field = 1; return ErrorCode::kOutOfRange; }
+  return ErrorCode::kOk;
+}
+// Boot values from the schema.
+inline void set_defaults(ConfigureCascade& m) {
+  m.position_gain = 3.0f;
+  m.speed_limit = 0.15f;
 }
 
 // One camera measurement. Answered by telemetry (or a nack); one controller step when running.
@@ -577,6 +678,8 @@ inline int8_t host_to_mcu_size(uint8_t id) {
     case Jog::kId: return Jog::kSize;
     case SimClock::kId: return SimClock::kSize;
     case Zero::kId: return Zero::kSize;
+    case ConfigureSchedule::kId: return ConfigureSchedule::kSize;
+    case ConfigureCascade::kId: return ConfigureCascade::kSize;
     case ObjectPosition::kId: return ObjectPosition::kSize;
     default: return -1;
   }
@@ -595,7 +698,7 @@ inline int8_t mcu_to_host_size(uint8_t id) {
 }
 
 // Every message id travelling host -> MCU, in schema order (for the fuzzer and the tests: no hand-kept list).
-constexpr uint8_t kHostToMcuIds[] = {Identify::kId, Configure::kId, ConfigurePid::kId, SetTarget::kId, Start::kId, Stop::kId, EmergencyStop::kId, Jog::kId, SimClock::kId, Zero::kId, ObjectPosition::kId};
+constexpr uint8_t kHostToMcuIds[] = {Identify::kId, Configure::kId, ConfigurePid::kId, SetTarget::kId, Start::kId, Stop::kId, EmergencyStop::kId, Jog::kId, SimClock::kId, Zero::kId, ConfigureSchedule::kId, ConfigureCascade::kId, ObjectPosition::kId};
 
 }  // namespace proto
 }  // namespace mr

@@ -24,10 +24,17 @@ bool inside_module(float x, float y, const proto::Configure& c) {
 
 Supervisor::Supervisor() {
   proto::set_defaults(config_);
-  for (uint8_t axis = 0; axis < 3; ++axis) {
+  take_configure();
+  for (uint8_t axis = 0; axis < kPidCount; ++axis) {
     const proto::PidDefaults& d = proto::kPidDefaults[axis];
-    pid_[axis] = PidGains{d.kp, d.ki, d.kd, d.integral_limit};
+    control_.pid[axis] = PidGains{d.kp, d.ki, d.kd, d.integral_limit};
   }
+  proto::ConfigureSchedule schedule;
+  proto::set_defaults(schedule);
+  take(schedule);
+  proto::ConfigureCascade cascade;
+  proto::set_defaults(cascade);
+  take(cascade);
   level();
 }
 
@@ -37,9 +44,21 @@ void Supervisor::level() {
   for (float& a : output_.command) a = 0.0f;
 }
 
-ControllerConfig Supervisor::controller_config() const {
-  return ControllerConfig{static_cast<proto::Controller>(config_.controller), config_.module_x, config_.module_y,
-                          config_.tilt_limit, config_.noise_amplitude, {pid_[0], pid_[1], pid_[2]}};
+void Supervisor::take_configure() {
+  control_.kind = static_cast<proto::Controller>(config_.controller);
+  control_.module_x = config_.module_x;
+  control_.module_y = config_.module_y;
+  control_.tilt_limit = config_.tilt_limit;
+  control_.noise_amplitude = config_.noise_amplitude;
+  control_.velocity_filter = config_.velocity_filter;
+}
+
+void Supervisor::take(const proto::ConfigureSchedule& msg) {
+  control_.schedule = ScheduleConfig{msg.edge_zone, msg.edge_gain, msg.edge_tilt, msg.edge_brake, msg.brake_speed};
+}
+
+void Supervisor::take(const proto::ConfigureCascade& msg) {
+  control_.cascade = CascadeConfig{msg.position_gain, msg.speed_limit};
 }
 
 ErrorCode Supervisor::configure(const proto::Configure& msg, uint8_t& field) {
@@ -56,6 +75,7 @@ ErrorCode Supervisor::configure(const proto::Configure& msg, uint8_t& field) {
     return ErrorCode::kOutOfRange;
   }
   config_ = msg;
+  take_configure();
   if (has_target_ && !inside_module(target_x_, target_y_, config_)) has_target_ = false;
   return ErrorCode::kOk;
 }
@@ -65,7 +85,25 @@ ErrorCode Supervisor::configure_pid(const proto::ConfigurePid& msg, uint8_t& fie
   if (state_ != State::kIdle) return ErrorCode::kBadState;
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
-  pid_[msg.axis] = PidGains{msg.kp, msg.ki, msg.kd, msg.integral_limit};
+  control_.pid[msg.axis] = PidGains{msg.kp, msg.ki, msg.kd, msg.integral_limit};
+  return ErrorCode::kOk;
+}
+
+ErrorCode Supervisor::configure_schedule(const proto::ConfigureSchedule& msg, uint8_t& field) {
+  field = proto::kNoField;
+  if (state_ != State::kIdle) return ErrorCode::kBadState;
+  const ErrorCode local = proto::validate(msg, field);
+  if (local != ErrorCode::kOk) return local;
+  take(msg);
+  return ErrorCode::kOk;
+}
+
+ErrorCode Supervisor::configure_cascade(const proto::ConfigureCascade& msg, uint8_t& field) {
+  field = proto::kNoField;
+  if (state_ != State::kIdle) return ErrorCode::kBadState;
+  const ErrorCode local = proto::validate(msg, field);
+  if (local != ErrorCode::kOk) return local;
+  take(msg);
   return ErrorCode::kOk;
 }
 
@@ -193,7 +231,7 @@ ErrorCode Supervisor::position(const proto::ObjectPosition& msg, uint32_t now_us
   }
   has_step_ = true;
   last_step_capture_us_ = msg.capture_time;
-  const float distance = controller_.step(controller_config(), target_x_, target_y_, msg.x, msg.y, dt, output_);
+  const float distance = controller_.step(control_, target_x_, target_y_, msg.x, msg.y, dt, output_);
   state_ = distance < config_.tolerance ? State::kReached : State::kRunning;
   return ErrorCode::kOk;
 }

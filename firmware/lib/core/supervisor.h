@@ -22,6 +22,8 @@ class Supervisor {
   // Each returns kOk or the error to nack with; field is set to the offending field's index (or kNoField).
   proto::ErrorCode configure(const proto::Configure& msg, uint8_t& field);
   proto::ErrorCode configure_pid(const proto::ConfigurePid& msg, uint8_t& field);
+  proto::ErrorCode configure_schedule(const proto::ConfigureSchedule& msg, uint8_t& field);
+  proto::ErrorCode configure_cascade(const proto::ConfigureCascade& msg, uint8_t& field);
   proto::ErrorCode set_target(const proto::SetTarget& msg, uint8_t& field);
   proto::ErrorCode start(uint32_t now_us);
   void stop();
@@ -50,10 +52,12 @@ class Supervisor {
 
  private:
   void level();
-  ControllerConfig controller_config() const;
+  void take_configure();  // the controller's share of config_ into control_
+  void take(const proto::ConfigureSchedule& msg);
+  void take(const proto::ConfigureCascade& msg);
 
   proto::Configure config_;
-  PidGains pid_[3];
+  ControllerConfig control_;  // what every controller step reads: kept, not rebuilt on the Uno's small stack
   TiltController controller_;
   ControllerOutput output_;
   proto::State state_ = proto::State::kIdle;

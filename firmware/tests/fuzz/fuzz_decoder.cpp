@@ -274,15 +274,27 @@ class Messages {
     switch (id) {
       case proto::Configure::kId: {
         const uint8_t c = u8();
-        proto::Configure m{static_cast<uint8_t>(c < 0xF0 ? c & 1 : c), f32(0.1f, 10.0f), f32(0.1f, 10.0f),
-                           f32(0.1f, 30.0f), f32(0.001f, 0.5f), f32(0.0f, 0.25f), u32(), u16(), u16()};
+        proto::Configure m{static_cast<uint8_t>(c < 0xF0 ? c % proto::kControllerCount : c), f32(0.1f, 10.0f),
+                           f32(0.1f, 10.0f), f32(0.1f, 30.0f), f32(0.001f, 0.5f), f32(0.0f, 0.25f), u32(), u16(),
+                           u16(), f32(0.0f, 10.0f)};
         return proto::encode(m, payload);
       }
       case proto::ConfigurePid::kId: {
         const uint8_t a = u8();
-        proto::ConfigurePid m{static_cast<uint8_t>(a < 0xF0 ? a % 3 : a), f32(0.0f, 200.0f), f32(0.0f, 200.0f),
-                              f32(0.0f, 200.0f), f32(0.0f, 90.0f)};
+        proto::ConfigurePid m{static_cast<uint8_t>(a < 0xF0 ? a % proto::kAxisCount : a), f32(0.0f, 200.0f),
+                              f32(0.0f, 200.0f), f32(0.0f, 200.0f), f32(0.0f, 90.0f)};
         return proto::encode(m, payload);
+      }
+      case proto::ConfigureSchedule::kId: {
+        const float zone = f32(0.001f, 0.3f);
+        const float gain = f32(0.0f, 1.0f);
+        const float tilt = f32(0.0f, 1.0f);
+        const float brake = f32(0.0f, 20.0f);
+        return proto::encode(proto::ConfigureSchedule{zone, gain, tilt, brake, f32(0.0f, 2.0f)}, payload);
+      }
+      case proto::ConfigureCascade::kId: {
+        const float gain = f32(0.0f, 20.0f);
+        return proto::encode(proto::ConfigureCascade{gain, f32(0.001f, 1.0f)}, payload);
       }
       case proto::SetTarget::kId: {
         const float x = f32(-0.6f, 0.6f);

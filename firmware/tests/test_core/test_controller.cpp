@@ -22,7 +22,9 @@ const float kMax = std::numeric_limits<float>::max();
 mr::ControllerConfig paper(Controller kind, float noise = 0.0f) {
   const mr::PidGains xy{30.9f, 26.78f, 15.45f, 26.565051f};
   const mr::PidGains radial{86.72f, 27.91f, 10.19f, 26.565051f};
-  return mr::ControllerConfig{kind, 0.5f, 0.5f, 26.565051f, noise, {xy, xy, radial}};
+  const mr::PidGains velocity{100.0f, 30.0f, 0.0f, 26.565051f};
+  return mr::ControllerConfig{kind, 0.5f, 0.5f, 26.565051f, noise, 0.05f, {xy, xy, radial, velocity, velocity},
+                              mr::ScheduleConfig{0.05f, 1.0f, 1.0f, 0.0f, 0.0f}, mr::CascadeConfig{3.0f, 0.15f}};
 }
 
 bool commands_ok(const mr::ControllerOutput& out) {

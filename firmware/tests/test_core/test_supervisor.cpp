@@ -32,7 +32,8 @@ bool same(const proto::Configure& a, const proto::Configure& b) {
   // Field by field: the struct has padding bytes.
   return a.controller == b.controller && a.module_x == b.module_x && a.module_y == b.module_y &&
          a.tilt_limit == b.tilt_limit && a.tolerance == b.tolerance && a.noise_amplitude == b.noise_amplitude &&
-         a.noise_seed == b.noise_seed && a.deadman == b.deadman && a.telemetry_period == b.telemetry_period;
+         a.noise_seed == b.noise_seed && a.deadman == b.deadman && a.telemetry_period == b.telemetry_period &&
+         a.velocity_filter == b.velocity_filter;
 }
 
 proto::ObjectPosition pos(uint16_t frame, uint32_t capture_us, float x, float y, bool visible = true) {
@@ -170,7 +171,7 @@ TEST_CASE("supervisor: configure refuses each bad field with its index and chang
     uint8_t field;
   };
   const Case cases[] = {
-      {"controller 2", [](proto::Configure& c) { c.controller = 2; }, ErrorCode::kOutOfRange, 0},
+      {"controller 4", [](proto::Configure& c) { c.controller = proto::kControllerCount; }, ErrorCode::kOutOfRange, 0},
       {"controller 255", [](proto::Configure& c) { c.controller = 255; }, ErrorCode::kOutOfRange, 0},
       {"module_x NaN", [](proto::Configure& c) { c.module_x = kNaN; }, ErrorCode::kNotFinite, 1},
       {"module_x inf", [](proto::Configure& c) { c.module_x = kInf; }, ErrorCode::kNotFinite, 1},
@@ -197,6 +198,9 @@ TEST_CASE("supervisor: configure refuses each bad field with its index and chang
       {"telemetry_period 3", [](proto::Configure& c) { c.telemetry_period = 3; }, ErrorCode::kOutOfRange, 8},
       {"telemetry_period 4", [](proto::Configure& c) { c.telemetry_period = 4; }, ErrorCode::kOutOfRange, 8},
       {"telemetry_period 60001", [](proto::Configure& c) { c.telemetry_period = 60001; }, ErrorCode::kOutOfRange, 8},
+      {"velocity_filter NaN", [](proto::Configure& c) { c.velocity_filter = kNaN; }, ErrorCode::kNotFinite, 9},
+      {"velocity_filter -0.01", [](proto::Configure& c) { c.velocity_filter = -0.01f; }, ErrorCode::kOutOfRange, 9},
+      {"velocity_filter 10.5", [](proto::Configure& c) { c.velocity_filter = 10.5f; }, ErrorCode::kOutOfRange, 9},
   };
   Supervisor s;
   // Start from a valid non-default config so "unchanged" is not "back to defaults".
@@ -208,6 +212,7 @@ TEST_CASE("supervisor: configure refuses each bad field with its index and chang
   before.noise_seed = 77;
   before.deadman = 250;
   before.telemetry_period = 50;
+  before.velocity_filter = 0.2f;
   REQUIRE(configure(s, before) == ErrorCode::kOk);
   REQUIRE(same(s.config(), before));
   for (const Case& c : cases) {
@@ -320,7 +325,7 @@ TEST_CASE("supervisor: configure_pid refuses each bad field; a refused one leave
     uint8_t field;
   };
   const Case cases[] = {
-      {{3, 1.0f, 1.0f, 1.0f, 1.0f}, ErrorCode::kOutOfRange, 0},
+      {{proto::kAxisCount, 1.0f, 1.0f, 1.0f, 1.0f}, ErrorCode::kOutOfRange, 0},
       {{0, kNaN, 1.0f, 1.0f, 1.0f}, ErrorCode::kNotFinite, 1},
       {{0, -1.0f, 1.0f, 1.0f, 1.0f}, ErrorCode::kOutOfRange, 1},
       {{1, 10001.0f, 1.0f, 1.0f, 1.0f}, ErrorCode::kOutOfRange, 1},
