@@ -10,7 +10,8 @@ there, so a fresh clone continues the committed runs instead of repeating them. 
 session of a run is kept in docs/figures/heatmaps.json, so the total a run took is known even when it
 was split. The figures are copied to docs/figures/ beside the scores, regions and zone rates, and the
 paper's findings F1-F5 (sim/findings.py) on the two sphere maps, under both success rules. A plant that reads
-the paper's success rule as "reached" ends each trial at its first frame within eps (--stop-when-reached).
+the paper's success rule as "reached" ends each trial at its first frame within eps (--stop-when-reached), unless
+--to-end runs every trial to T (both success rules measured; the run's name gets _to_end).
 """
 from __future__ import annotations
 
@@ -74,6 +75,9 @@ def main() -> int:
     parser.add_argument("--out", default="out/heatmap")
     parser.add_argument("--figures", default="docs/figures")
     parser.add_argument("--plant", default=DEFAULT_PLANT, help="the simulated plant (a [plant.NAME] of sim/plant.toml)")
+    parser.add_argument("--to-end", action="store_true",
+                        help="run every trial to T, also on a plant read with the paper's stopping rule, so that both "
+                             "success rules are measured (the baseline of docs/results.md, Beyond the paper)")
     args = parser.parse_args()
     from mantaray.sim.parameters import plant_names
 
@@ -82,7 +86,9 @@ def main() -> int:
     suffix = "" if args.plant == DEFAULT_PLANT else f"_{args.plant}"
     # A plant read with the paper's stopping rule ends its trials there (exact for that rule, 2-4x faster);
     # its maps then carry no "ends within eps at T".
-    stop = ["--stop-when-reached"] if Plant(args.plant).success_rule == "reached" else []
+    stop = ["--stop-when-reached"] if Plant(args.plant).success_rule == "reached" and not args.to_end else []
+    if stop == [] and Plant(args.plant).success_rule == "reached":
+        suffix += "_to_end"
     names = args.runs.split(",")
     unknown = [n for n in names if n not in RUNS]
     if unknown:
