@@ -28,6 +28,31 @@ def parse_gains(text: str) -> tuple[float, float, float, float]:
     return values
 
 
+def controller_settings(parser: argparse.ArgumentParser, args: argparse.Namespace):
+    """The controller settings a command runs with: --settings FILE (its controller), else --controller's boot
+    values; a --controller that contradicts the file is a usage error. Sets args.controller."""
+    from .controller_settings import ControllerSettings, SettingsError
+
+    try:
+        settings = (ControllerSettings.load(args.settings) if args.settings else
+                    ControllerSettings(args.controller or "manhattan"))
+    except SettingsError as exc:
+        parser.error(str(exc))
+    if args.controller and args.controller != settings.controller:
+        parser.error(f"--controller {args.controller} contradicts {args.settings}, which sets up the "
+                     f"{settings.controller} controller")
+    args.controller = settings.controller
+    return settings
+
+
+def add_controller_arguments(parser: argparse.ArgumentParser) -> None:
+    """--controller and --settings, as every command that runs a controller takes them."""
+    parser.add_argument("--controller", choices=choices(m.Controller),
+                        help="the tilt controller (default: manhattan, or the one --settings names)")
+    parser.add_argument("--settings", metavar="FILE",
+                        help="a controller's settings (TOML, as mantaray sim tune writes: host/controller_settings.py)")
+
+
 def _half_module_m() -> tuple[float, float]:
     """[m] half the module's sides, as configured on the firmware (protocol defaults)."""
     return m.Configure.module_x / 2, m.Configure.module_y / 2
@@ -93,14 +118,16 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     if args.marker_height >= args.camera_height:
         parser.error(f"--marker-height ({args.marker_height:g} m) must be below the camera (--camera-height "
                      f"{args.camera_height:g} m)")
+    settings = controller_settings(parser, args)
     try:
         check_port(args.port)
-        configure = m.Configure(controller=m.Controller[args.controller.upper()], tolerance=args.tolerance,
-                                noise_amplitude=args.alpha, telemetry_period=0).check()
+        configure = settings.configure(m.Configure(tolerance=args.tolerance, noise_amplitude=args.alpha,
+                                                   telemetry_period=0)).check()
         gains = {} if args.gains is None else {
             axis: m.ConfigurePid(axis, *args.gains).check().as_dict() for axis in controller_axes(args.controller)}
         for fields in gains.values():
             del fields["axis"]
+        gains = settings.gains(gains)
         calibration = Calibration.load(args.calibration) if args.calibration else None
         source = FrameSource(args.camera)            # a camera that does not open is the user's to fix, before work
         out = writable_dir(args.out)
@@ -128,7 +155,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     previous = signal.getsignal(signal.SIGINT)
     outcome = "timeout"
     half_m = _half_module_m()
-    session = RigSession(args.port, Setup(configure, gains, target=targets_along(args, 0.0)), report=report,
+    session = RigSession(args.port, Setup(configure, gains, targets_along(args, 0.0), settings.commands()), report=report,
                          reconnect_timeout_s=args.reconnect_timeout)
     loop = ClosedLoop(session.position)
     seen = {}                                        # the tracker's last observation, for the log
@@ -424,7 +451,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     rig.add_argument("--path", choices=["circle"], help="follow a path instead of a fixed target (paper Fig. 1A)")
     rig.add_argument("--radius", type=float, default=0.1, help="circle radius [m]")
     rig.add_argument("--period", type=float, default=30.0, help="time for one lap of the circle [s]")
-    rig.add_argument("--controller", choices=choices(m.Controller), default="manhattan")
+    add_controller_arguments(rig)
     rig.add_argument("--alpha", type=float, default=0.05, help=f"noise amplitude α [m], {bounds_text(m.Configure, 'noise_amplitude')} (paper's hardware: 0.05)")
     rig.add_argument("--tolerance", type=float, default=0.02, help=f"ε [m], {bounds_text(m.Configure, 'tolerance')}")
     rig.add_argument("--gains", type=parse_gains, metavar="KP,KI,KD[,ILIM]",

@@ -132,10 +132,12 @@ class Setup:
     configure: m.Configure = field(default_factory=m.Configure)
     gains: dict[m.Axis, dict] = field(default_factory=dict)      # axis -> configure_pid fields (the rest: as booted)
     target: tuple[float, float] | None = None                     # [m]
+    controller_commands: list[m.Message] = field(default_factory=list)   # configure_schedule, configure_cascade
 
     def commands(self) -> list[m.Message]:
-        """In the order the firmware takes them (in idle): configure, each PID's gains, the target."""
-        out: list[m.Message] = [self.configure]
+        """In the order the firmware takes them (in idle): configure, the controller's own settings, each PID's
+        gains, the target."""
+        out: list[m.Message] = [self.configure, *self.controller_commands]
         out += [m.ConfigurePid(axis=axis, **gains) for axis, gains in self.gains.items()]
         if self.target is not None:
             out.append(m.SetTarget(x=self.target[0], y=self.target[1]))

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from mantaray.host.controller_settings import ControllerSettings
 from mantaray.host.link import Link, LinkError
 from mantaray.host.loop import U32, US_PER_S, ClosedLoop, Frame, Tolerance
 from mantaray.host.session import Setup
@@ -82,6 +83,7 @@ class TrialSpec:
     seed: int = 1                          # camera noise, drops and the firmware's noise PRNG
     gains: dict[str, Gains] = field(default_factory=dict)   # axis name (x, y, radial) -> gains; absent: firmware defaults
     stop_when_reached: bool = False        # end at the first frame within epsilon, as the paper's loop does
+    settings: tuple[tuple[str, float], ...] = ()   # the controller's own settings (host/controller_settings.py keys)
 
     def __post_init__(self) -> None:
         if self.controller.upper() not in m.Controller.__members__:
@@ -93,6 +95,7 @@ class TrialSpec:
         for axis in self.gains:
             if axis.upper() not in m.Axis.__members__:
                 raise ValueError(f"gains are for axes {', '.join(choices(m.Axis))}, got {axis!r}")
+        self.controller_settings()                     # the keys and values of settings (SettingsError: a ValueError)
         for command in self.setup().commands():   # the schema's bounds, before any firmware sees them
             try:
                 command.check()
@@ -112,7 +115,11 @@ class TrialSpec:
         for axis in m.Axis:
             g = self.gains.get(axis.name.lower())
             gains[axis] = dict(vars(g) if g else m.PID_DEFAULTS[axis])
-        return Setup(configure, gains, self.target_m)
+        settings = self.controller_settings()     # all of them every time: nothing stays from an earlier trial
+        return Setup(settings.configure(configure), settings.gains(gains), self.target_m, settings.commands())
+
+    def controller_settings(self) -> ControllerSettings:
+        return ControllerSettings(self.controller, self.settings)
 
 
 def is_success(fell_off: bool, final_error_m: float, tolerance_m: float) -> bool:

@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 from mantaray.protocol import messages as m
-from mantaray.host.cli import parse_gains
+from mantaray.host.cli import add_controller_arguments, controller_settings, parse_gains
 from mantaray.outputs import FIGURE_SUFFIXES, OutputError, writable_dir, writable_file
 from mantaray.protocol.codec import bounds_text, choices
 
@@ -51,6 +51,7 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from .plant import Plant
     from mantaray.plots import path_phase_figure
 
+    settings = controller_settings(parser, args)
     plant = Plant(args.plant)
     rig = plant.rig(args.object)
     if args.vision:
@@ -63,7 +64,8 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
                                   drop_rate=args.drop, vision=args.vision)
         spec = TrialSpec(args.start, args.target, controller=args.controller, duration_s=args.duration,
                          alpha_m=args.alpha, tolerance_m=args.tolerance, seed=args.seed,
-                         gains=controller_gains(args.controller, args.gains, plant.gain_scale))
+                         gains=controller_gains(args.controller, args.gains, plant.gain_scale),
+                         settings=settings.values)
     except ValueError as exc:
         parser.error(str(exc))
 
@@ -207,12 +209,13 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     from .results_file import ResultsFile
     from .executors import run, run_local, run_ray
 
+    settings = controller_settings(parser, args)
     try:
         protocol = Experiment(object_name=args.object, controller=args.controller, cells=args.cells,
                             trials_per_cell=args.trials, tolerance_m=args.tolerance, duration_s=args.duration,
                             alpha_m=args.alpha, seed=args.seed, gains=args.gains, resolution=args.resolution,
                             timestep_s=args.timestep, only_cells=args.only_cells, plant=args.plant,
-                            stop_when_reached=args.stop_when_reached)
+                            stop_when_reached=args.stop_when_reached, settings=settings.values)
     except ValueError as exc:
         parser.error(str(exc))
     if args.jobs is not None and args.jobs < 1:
@@ -220,7 +223,9 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     plant = "" if args.plant == DEFAULT_PLANT else f"_{args.plant}"
     if args.ray_address and args.executor != "ray":
         parser.error("--ray-address needs --executor ray")
-    out = _output(parser, writable_dir, args.out or f"out/heatmap/{args.object}_{args.controller}_alpha{args.alpha:g}{plant}")
+    tuned = f"_{Path(args.settings).stem}" if args.settings else ""
+    out = _output(parser, writable_dir,
+                  args.out or f"out/heatmap/{args.object}_{args.controller}{tuned}_alpha{args.alpha:g}{plant}")
     try:
         results = ResultsFile.open(out / "results.jsonl", protocol)
     except (ExperimentMismatch, ValueError) as exc:
@@ -461,8 +466,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
             "Writes the trajectory plot (paper Fig. 3 style), the trajectory (.npz) and, on request, a video."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     run.add_argument("--object", choices=sorted(OBJECTS), default="sphere", help="the paper's object (Table I)")
-    run.add_argument("--controller", choices=choices(m.Controller), default="manhattan",
-                     help="Manhattan: two PIDs (Algorithm 1); Euclidean: one along the error (Algorithm 2)")
+    add_controller_arguments(run)
     run.add_argument("--start", type=_point, default=(0.05, -0.05), metavar="X,Y", help="object start [m]")
     run.add_argument("--target", type=_point, default=(-0.05, 0.05), metavar="X,Y", help="target p_d [m]")
     run.add_argument("--duration", type=float, default=10.0, help="runtime T [s]; success is judged at its end")
@@ -495,7 +499,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "heatmap", help="the paper's success heatmap (Fig. 2) over the workspace", description=cmd_heatmap.__doc__,
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     heat.add_argument("--object", choices=sorted(OBJECTS), default="sphere", help="the paper's object (Table I)")
-    heat.add_argument("--controller", choices=choices(m.Controller), default="manhattan")
+    add_controller_arguments(heat)
     heat.add_argument("--cells", type=int, default=20, help="cells per side of the workspace (paper: 20)")
     heat.add_argument("--trials", type=int, default=10, help="trials per cell, N (paper: 10)")
     heat.add_argument("--tolerance", type=float, default=0.02, help=f"ε [m], {bounds_text(m.Configure, 'tolerance')}")

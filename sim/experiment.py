@@ -46,6 +46,7 @@ class Experiment:
     plant: str = DEFAULT_PLANT              # the named plant (sim/plant.toml) ...
     plant_set: tuple[tuple[str, float | str], ...] = ()   # ... with these values set over it
     stop_when_reached: bool = False         # end each trial at the first frame within epsilon (the paper's loop)
+    settings: tuple[tuple[str, float], ...] = ()   # the controller's own settings (host/controller_settings.py)
 
     def __post_init__(self) -> None:
         checks = [
@@ -86,6 +87,7 @@ class Experiment:
     def from_json(cls, data: dict) -> Experiment:
         fields = {k: (tuple(v) if isinstance(v, list) else v) for k, v in data.items()}
         fields["plant_set"] = tuple(tuple(kv) for kv in fields.get("plant_set", ()))
+        fields["settings"] = tuple(tuple(kv) for kv in fields.get("settings", ()))
         return cls(**fields)
 
 
@@ -132,7 +134,7 @@ def trial_spec(protocol: Experiment, trial: Trial) -> TrialSpec:
     return TrialSpec(trial.start_m, trial.target_m, controller=protocol.controller, duration_s=protocol.duration_s,
                      alpha_m=protocol.alpha_m, tolerance_m=protocol.tolerance_m, seed=trial.seed,
                      gains=controller_gains(protocol.controller, protocol.gains, protocol.plant_model().gain_scale),
-                     stop_when_reached=protocol.stop_when_reached)
+                     stop_when_reached=protocol.stop_when_reached, settings=protocol.settings)
 
 
 def controller_gains(controller: str, gains: tuple[float, float, float, float] | None,

@@ -1,0 +1,153 @@
+"""A controller's settings as one file: which controller, and the schema fields it changes from the firmware's boot values.
+
+The tuner (mantaray sim tune) writes one; `mantaray rig --settings`, `mantaray sim run --settings` and
+`mantaray sim heatmap --settings` read it, and a firmware takes it as the commands it becomes (Setup.commands). Every
+key is a field of protocol/schema.toml, so the file says nothing the firmware does not check itself:
+
+    controller = "scheduled"
+    [configure]             # only the controller's own fields: tilt_limit, velocity_filter
+    tilt_limit = 22.0
+    [configure_schedule]    # any field of configure_schedule or configure_cascade
+    edge_zone = 0.08
+    [pid.x]                 # the PIDs the controller runs (host/session.py, controller_axes)
+    kp = 40.0
+"""
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from mantaray.protocol import messages as m
+from mantaray.protocol.codec import FieldRefused
+
+from .session import controller_axes
+
+CONFIGURE_KEYS = ("tilt_limit", "velocity_filter")   # what a controller's settings may change of configure
+SETTINGS_MESSAGES = {cls.NAME: cls for cls in (m.ConfigureSchedule, m.ConfigureCascade)}
+PID_KEYS = tuple(spec.name for spec in m.ConfigurePid.FIELDS if spec.name != "axis")
+
+
+class SettingsError(ValueError):
+    """A settings file or value the schema (or the controller) does not allow; the message names the key."""
+
+
+@dataclass(frozen=True)
+class ControllerSettings:
+    """controller and flat (key, value) pairs, kept sorted: "configure.tilt_limit", "configure_schedule.edge_zone",
+    "pid.x.kp"."""
+    controller: str = "manhattan"
+    values: tuple[tuple[str, float], ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.controller.upper() not in m.Controller.__members__:
+            raise SettingsError(f"controller must be one of {', '.join(c.name.lower() for c in m.Controller)}, "
+                                f"got {self.controller!r}")
+        keys = [str(k) for k, _ in self.values]
+        object.__setattr__(self, "values", tuple(sorted((str(k), float(v)) for k, v in self.values)))  # canonical
+        if len(set(keys)) != len(keys):
+            raise SettingsError(f"a key is given twice: {sorted(k for k in keys if keys.count(k) > 1)[0]}")
+        axes = {a.name.lower() for a in controller_axes(self.controller)}
+        for key in keys:
+            section, _, name = key.rpartition(".")
+            allowed = (section == "configure" and name in CONFIGURE_KEYS) or \
+                (section in SETTINGS_MESSAGES and name in {s.name for s in SETTINGS_MESSAGES[section].FIELDS}) or \
+                (section.startswith("pid.") and section[4:] in axes and name in PID_KEYS)
+            if not allowed:
+                raise SettingsError(f"{key!r} is no setting of the {self.controller} controller; its settings are "
+                                    f"configure.{{{','.join(CONFIGURE_KEYS)}}}, {', '.join(SETTINGS_MESSAGES)} fields "
+                                    f"and pid.{{{','.join(sorted(axes))}}}.{{{','.join(PID_KEYS)}}}")
+        pids = [m.ConfigurePid(axis=axis, **fields) for axis, fields in self.gains({}).items()]
+        for command in [*self.commands(), *pids]:   # every value within the schema's bounds, before a firmware sees it
+            try:
+                command.check()
+            except FieldRefused as refused:
+                raise SettingsError(f"{self._key_of(command, refused.field)}: {refused.reason} "
+                                    f"(protocol/schema.toml)") from None
+        try:
+            self.configure(m.Configure()).check()
+        except FieldRefused as refused:
+            raise SettingsError(f"configure.{refused.field}: {refused.reason} (protocol/schema.toml)") from None
+
+    def _key_of(self, command: m.Message, field: str) -> str:
+        if isinstance(command, m.ConfigurePid):
+            return f"pid.{command.axis.name.lower()}.{field}"
+        return f"{command.NAME}.{field}"
+
+    def get(self, key: str) -> float | None:
+        return dict(self.values).get(key)
+
+    def with_values(self, mapping: dict[str, float]) -> ControllerSettings:
+        """These settings with more keys set (or changed)."""
+        merged = dict(self.values) | {k: float(v) for k, v in mapping.items()}
+        return ControllerSettings(self.controller, tuple(merged.items()))
+
+    # ------------------------------------------------------------------------------- as commands
+    def configure(self, base: m.Configure) -> m.Configure:
+        """base with this controller and its configure fields."""
+        fields = {name: self.get(f"configure.{name}") for name in CONFIGURE_KEYS}
+        return dataclasses.replace(base, controller=m.Controller[self.controller.upper()],
+                                   **{k: v for k, v in fields.items() if v is not None})
+
+    def gains(self, base: dict[m.Axis, dict]) -> dict[m.Axis, dict]:
+        """base (axis -> configure_pid fields) with this controller's PID keys set over it."""
+        out = {axis: dict(fields) for axis, fields in base.items()}
+        for axis in controller_axes(self.controller):
+            for name in PID_KEYS:
+                value = self.get(f"pid.{axis.name.lower()}.{name}")
+                if value is not None:
+                    out.setdefault(axis, dict(m.PID_DEFAULTS[axis]))[name] = value
+        return out
+
+    def commands(self) -> list[m.Message]:
+        """configure_schedule and configure_cascade with these values over their boot values (the PIDs: gains())."""
+        return [cls(**{s.name: v for s in cls.FIELDS if (v := self.get(f"{name}.{s.name}")) is not None})
+                for name, cls in SETTINGS_MESSAGES.items()]
+
+    # ------------------------------------------------------------------------------------- a file
+    def dumps(self, comment: str = "") -> str:
+        """The TOML the file holds (comment, if given, as its first lines)."""
+        lines = [f"# {line}" for line in comment.splitlines()]
+        lines.append(f'controller = "{self.controller}"')
+        sections: dict[str, list[tuple[str, float]]] = {}
+        for key, value in self.values:
+            section, _, name = key.rpartition(".")
+            sections.setdefault(section, []).append((name, value))
+        for section, items in sections.items():
+            lines += ["", f"[{section}]", *(f"{name} = {value!r}" for name, value in items)]
+        return "\n".join(lines) + "\n"
+
+    @classmethod
+    def loads(cls, text: str, source: str = "settings") -> ControllerSettings:
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise SettingsError(f"{source}: not TOML ({exc})") from None
+        controller = data.pop("controller", None)
+        if not isinstance(controller, str):
+            raise SettingsError(f"{source}: needs controller = \"NAME\"")
+        values = []
+
+        def walk(prefix: str, table: dict) -> None:
+            for key, value in table.items():
+                if isinstance(value, dict):
+                    walk(f"{prefix}{key}.", value)
+                elif isinstance(value, (int, float)) and not isinstance(value, bool):
+                    values.append((f"{prefix}{key}", float(value)))
+                else:
+                    raise SettingsError(f"{source}: {prefix}{key} must be a number, got {value!r}")
+
+        walk("", data)
+        try:
+            return cls(controller, tuple(values))
+        except SettingsError as exc:
+            raise SettingsError(f"{source}: {exc}") from None
+
+    @classmethod
+    def load(cls, path: str | Path) -> ControllerSettings:
+        try:
+            text = Path(path).read_text()
+        except OSError as exc:
+            raise SettingsError(f"cannot read the settings {path}: {exc.strerror or exc}") from None
+        return cls.loads(text, str(path))

@@ -1,0 +1,83 @@
+"""A controller's settings file: every key a schema field the controller uses, round trip through TOML, the commands
+it becomes, and one clear error for each mistake."""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from mantaray.host.controller_settings import SETTINGS_MESSAGES, ControllerSettings, SettingsError
+from mantaray.host.session import Setup, controller_axes
+from mantaray.paths import REPO
+from mantaray.protocol import messages as m
+
+
+def _keys(controller: str) -> list[tuple[str, float, float]]:
+    """(key, low, high) of every setting the controller takes, from the schema's bounds."""
+    out = [(f"configure.{name}", spec.min, spec.max) for spec in m.Configure.FIELDS
+           for name in ("tilt_limit", "velocity_filter") if spec.name == name]
+    out += [(f"{msg}.{spec.name}", spec.min, spec.max) for msg, cls in SETTINGS_MESSAGES.items() for spec in cls.FIELDS]
+    out += [(f"pid.{axis.name.lower()}.{spec.name}", spec.min, spec.max) for axis in controller_axes(controller)
+            for spec in m.ConfigurePid.FIELDS if spec.name != "axis"]
+    return out
+
+
+@st.composite
+def settings(draw):
+    controller = draw(st.sampled_from([c.name.lower() for c in m.Controller]))
+    chosen = draw(st.lists(st.sampled_from(_keys(controller)), unique_by=lambda k: k[0], max_size=8))
+    values = tuple((key, draw(st.floats(low, min(high, 26.5) if key == "configure.tilt_limit" else high,
+                                        allow_nan=False))) for key, low, high in chosen)
+    return ControllerSettings(controller, values)
+
+
+@given(settings())
+def test_a_file_reads_back_as_it_was_written(s):
+    assert ControllerSettings.loads(s.dumps("written by a test")) == s
+
+
+@given(settings())
+def test_the_settings_become_commands_that_carry_every_value(s):
+    setup = Setup(s.configure(m.Configure()), s.gains({}), (0.0, 0.0), s.commands())
+    sent = setup.commands()
+    assert [type(c) for c in sent[:3]] == [m.Configure, m.ConfigureSchedule, m.ConfigureCascade]
+    assert sent[0].controller == m.Controller[s.controller.upper()]
+    for key, value in s.values:
+        section, _, name = key.rpartition(".")
+        if section.startswith("pid."):
+            carriers = [c for c in sent if isinstance(c, m.ConfigurePid) and c.axis.name.lower() == section[4:]]
+        else:
+            carriers = [c for c in sent if c.NAME == section]
+        assert len(carriers) == 1 and getattr(carriers[0], name) == value, key
+    for command in sent:
+        command.check()
+
+
+@pytest.mark.parametrize("text, needle", [
+    ('controller = "spiral"', "controller must be one of manhattan, euclidean, scheduled, cascade"),
+    ("[configure]\ntilt_limit = 10", "needs controller"),
+    ('controller = "manhattan"\n[configure]\ntolerance = 0.1', "'configure.tolerance' is no setting"),
+    ('controller = "euclidean"\n[pid.x]\nkp = 3', "'pid.x.kp' is no setting of the euclidean controller"),
+    ('controller = "cascade"\n[configure_cascade]\nspeed_limit = 9', "configure_cascade.speed_limit: 9 m/s is outside"),
+    ('controller = "scheduled"\n[configure_schedule]\nedge_gain = "high"', "edge_gain must be a number"),
+    ('controller = "scheduled"\n[pid.x]\nkd = -1', "pid.x.kd: -1 deg s/m is outside"),
+    ('controller = "scheduled" [', "not TOML"),
+])
+def test_each_mistake_is_one_clear_error(text, needle):
+    with pytest.raises(SettingsError, match=None) as refused:
+        ControllerSettings.loads(text, "tuned.toml")
+    assert str(refused.value).startswith("tuned.toml: ") and needle in str(refused.value), refused.value
+
+
+def test_the_commands_take_a_settings_file_and_refuse_a_contradicting_controller(tmp_path):
+    path = tmp_path / "tuned.toml"
+    path.write_text(ControllerSettings("scheduled", (("configure_schedule.edge_tilt", 0.3),)).dumps())
+    run = [sys.executable, "-m", "mantaray.cli", "sim", "run", "--settings", str(path), "--duration", "0.5",
+           "--json", "--out", str(tmp_path / "out")]
+    ran = subprocess.run(run, cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert ran.returncode == 1 and '"controller": "scheduled"' in ran.stdout, ran.stderr
+    refused = subprocess.run([*run, "--controller", "cascade"], cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert refused.returncode == 2 and "contradicts" in refused.stderr and "Traceback" not in refused.stderr
