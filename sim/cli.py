@@ -14,7 +14,7 @@ from pathlib import Path
 from mantaray.protocol import messages as m
 from mantaray.host.cli import add_controller_arguments, controller_settings, parse_gains
 from mantaray.outputs import FIGURE_SUFFIXES, OutputError, writable_dir, writable_file
-from mantaray.protocol.codec import bounds_text, choices
+from mantaray.protocol.codec import bounds_text
 
 from .objects import OBJECTS
 from .parameters import plant_names
