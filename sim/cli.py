@@ -14,7 +14,8 @@ from pathlib import Path
 from mantaray.protocol import messages as m
 from mantaray.host.cli import add_controller_arguments, controller_settings, parse_gains
 from mantaray.outputs import FIGURE_SUFFIXES, OutputError, writable_dir, writable_file
-from mantaray.protocol.codec import bounds_text
+from mantaray.arguments import number
+from mantaray.protocol.codec import bounds_text, choices
 
 from .objects import OBJECTS
 from .parameters import plant_names
@@ -338,7 +339,6 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
 
     from . import calibrate as C
     from . import parameters as P
-    from .executors import LocalPool, RayPool
     from .logfit import LogEvidence, check_logs
     from .plant import Plant, parse_setting
     from .progress import Progress
@@ -386,14 +386,7 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
             note += f", {info['passed']} findings hold" if evidence.kind == "findings" else ""
         progress.update(1, note=note)
 
-    if args.executor == "ray":
-        try:
-            import ray  # noqa: F401  (only to say clearly when it is missing)
-        except ImportError:
-            parser.error("--executor ray needs Ray: pip install 'mantaray[ray]'")
-        pool = RayPool(args.jobs, args.ray_address)
-    else:
-        pool = LocalPool(args.jobs or os.cpu_count() or 1)
+    pool = _pool(parser, args)
     fig3 = None
     _interruptible()
     try:
@@ -420,6 +413,107 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
         best = report["best"]
         print(f"{report['candidates']} candidates; best #{best['number']}: objectives {best['objectives']}; "
               f"report {out / 'report.md'}" if best else f"no candidate evaluated; {out / 'report.md'}")
+    return 0
+
+
+def _pool(parser: argparse.ArgumentParser, args: argparse.Namespace):
+    """The worker pool --executor asks for: this machine's processes (--jobs), or Ray (a cluster at --ray-address)."""
+    from .executors import LocalPool, RayPool
+
+    if args.executor == "ray":
+        try:
+            import ray  # noqa: F401  (only to say clearly when it is missing)
+        except ImportError:
+            parser.error("--executor ray needs Ray: pip install 'mantaray[ray]'")
+        return RayPool(args.jobs, args.ray_address)
+    return LocalPool(args.jobs or os.cpu_count() or 1)
+
+
+def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """Tune a controller's settings for a plant: an Optuna search on a stratified sample of heatmap cells, then the
+    paper's full protocol with the best settings on another seed (the search never sees those trials).
+
+    A candidate scores the targets it misses under both success rules (within ε at T, and within ε at any frame).
+    The study is OUT/study.db (SQLite): interrupt it and the same command continues; --candidates is the total the
+    study should hold. Writes OUT/settings.toml (for mantaray rig --settings, sim run and sim heatmap),
+    report.json (both scores, beside the paper's Manhattan on the same sample) and history.png; the final check's
+    trials go to OUT/final/results.jsonl (resumable too)."""
+    from . import calibrate as C
+    from . import tune as T
+    from .experiment import ExperimentMismatch
+    from .progress import Progress
+
+    try:
+        evidence = T.TuningEvidence(controller=args.controller, object_name=args.object, alpha_m=args.alpha,
+                                    plant=args.plant, cells_per_stratum=args.cells_per_stratum,
+                                    trials_per_cell=args.trials_per_cell, duration_s=args.duration, seed=args.seed,
+                                    resolution=args.resolution, timestep_s=args.timestep)
+        evidence.experiment(T.settings_of(args.controller, T.boot_values(args.controller)))   # refuses bad sizes now
+        if args.final_trials:
+            evidence.final_experiment(T.settings_of(args.controller, {}), args.final_trials, args.final_seed,
+                                      args.final_cells)
+    except ValueError as exc:
+        parser.error(str(exc))
+    if args.final_trials and args.final_seed == args.seed:
+        parser.error("--final-seed must differ from --seed: the final check must not run the trials the search saw")
+    if args.ray_address and args.executor != "ray":
+        parser.error("--ray-address needs --executor ray")
+    out = _output(parser, writable_dir,
+                  args.out or f"out/tune/{args.object}_{args.controller}_alpha{args.alpha:g}_{args.plant}")
+    try:
+        study = T.open_tuning(out / "study.db", evidence)
+    except C.StudyMismatch as exc:
+        print(f"mantaray sim tune: {exc}", file=sys.stderr)
+        return 2
+    done = len(C.completed(study))
+    if 0 < done < args.candidates:
+        print(f"continuing {out / 'study.db'}: {done} of {args.candidates} candidates already evaluated",
+              file=sys.stderr)
+    progress = Progress(max(args.candidates, done), initial=done, unit="candidate", label="tune", line_every_s=0)
+
+    def report_candidate(n: int, total: int, info: dict) -> None:
+        note = ("the physics diverged: scored the worst" if "unstable" in info else
+                f"misses {info['objectives'][0]:.3f} (within ε at T {info['success']:.2f}, reached "
+                f"{info['reached']:.2f}, fell off {info['fell_off']:.2f})")
+        progress.update(1, note=note)
+
+    _interruptible()
+    final = None
+    try:
+        with _pool(parser, args) as pool:
+            baseline = study.user_attrs.get("baseline")
+            if baseline is None:                 # the paper's Manhattan on the same sample, once per study
+                baseline = evidence.baseline(pool)
+                study.set_user_attr("baseline", baseline)
+            C.run_study(study, evidence, T.SPACE[args.controller], {}, args.candidates, pool, report_candidate)
+            progress.close()
+            best = T.best_settings(study, evidence)
+            if args.final_trials and best is not None:
+                final_path = out / "final" / "results.jsonl"
+                final = T.final_check(evidence, best, args.final_trials, args.final_seed, pool, final_path,
+                                      cells=args.final_cells)
+    except ExperimentMismatch as exc:
+        print(f"mantaray sim tune: {exc} (the best settings changed since the final check began: delete "
+              f"{out / 'final'} to check the new ones)", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        progress.close()
+        T.write_report(study, evidence, out, study.user_attrs.get("baseline"))
+        print(f"\ninterrupted: {len(C.completed(study))} candidates are in {out / 'study.db'}; the same command "
+              f"continues (report so far in {out / 'report.json'})", file=sys.stderr)
+        return 130
+    report = T.write_report(study, evidence, out, baseline, final)
+    if args.json:
+        print(json.dumps(report))
+    else:
+        best, base = report["best"], report["baseline_on_the_sample"]
+        line = (f"{report['candidates']} candidates; best #{best['number']}: within ε at T {best['success']:.2f}, "
+                f"reached {best['reached']:.2f}, fell off {best['fell_off']:.2f} on the search's sample (the paper's "
+                f"Manhattan: {base['success']:.2f}, {base['reached']:.2f}, {base['fell_off']:.2f})")
+        if final is not None:
+            line += (f"; full protocol on seed {final['seed']}: score {final['score']:.1f}, reached "
+                     f"{final['reach_score']:.1f}, fell off {final['fell_off']:.2f}")
+        print(line + f"; settings {out / 'settings.toml'}, report {out / 'report.json'}")
     return 0
 
 
@@ -554,6 +648,37 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     cal.add_argument("--ray-address", help="address of a running Ray cluster")
     cal.add_argument("--json", action="store_true", help="print the report as JSON on stdout (progress stays on stderr)")
     cal.set_defaults(func=lambda args: cmd_calibrate(args, cal))
+
+    tune = sim_sub.add_parser("tune", help="tune a controller's settings for a plant (Optuna, resumable)",
+                              description=cmd_tune.__doc__, formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    tune.add_argument("--controller", choices=choices(m.Controller), default="scheduled",
+                      help="the controller whose settings are searched (sim/tune.py, SPACE, says which)")
+    tune.add_argument("--object", choices=sorted(OBJECTS), default="sphere", help="the paper's object (Table I)")
+    tune.add_argument("--alpha", type=float, default=0.0,
+                      help=f"noise amplitude α [m], {bounds_text(m.Configure, 'noise_amplitude')} (paper: 0.1 cube, 0.05 bunny)")
+    tune.add_argument("--plant", choices=plant_names(), default="paper", help="the plant to tune for (sim/plant.toml)")
+    tune.add_argument("--candidates", type=number(0, integer=True), default=60,
+                      help="candidates the study should hold when done (a resumed search goes on to this total)")
+    tune.add_argument("--cells-per-stratum", type=number(1, integer=True), default=4,
+                      help="cells drawn from each of centre, axes, diagonals, edges and corners")
+    tune.add_argument("--trials-per-cell", type=number(1, integer=True), default=3)
+    tune.add_argument("--duration", type=float, default=10.0, help="runtime T [s] (paper: 10)")
+    tune.add_argument("--seed", type=number(0, integer=True), default=31, help="seed of the search and its sample")
+    tune.add_argument("--final-trials", type=number(0, integer=True), default=10,
+                      help="trials per cell of the final check on the full protocol (paper: 10; 0: no final check)")
+    tune.add_argument("--final-cells", type=number(1, integer=True), default=20,
+                      help="cells per side of the final check's workspace (paper: 20)")
+    tune.add_argument("--final-seed", type=number(0, integer=True), default=2026,
+                      help="seed of the final check (the paper protocol's; never the search's)")
+    tune.add_argument("--resolution", type=int, default=11, help="fabric vertices per side (the fast mode: 11)")
+    tune.add_argument("--timestep", type=float, default=0.002, help="physics step [s] (the fast mode: 0.002)")
+    tune.add_argument("--out", help="directory for study.db, settings.toml, report.json, history.png and final/ "
+                      "(default out/tune/OBJECT_CONTROLLER_alphaA_PLANT)")
+    tune.add_argument("--jobs", type=number(1, integer=True), help="parallel workers (default: every core; ray: every CPU)")
+    tune.add_argument("--executor", choices=["local", "ray"], default="local")
+    tune.add_argument("--ray-address", help="address of a running Ray cluster")
+    tune.add_argument("--json", action="store_true", help="print the report as JSON on stdout (progress stays on stderr)")
+    tune.set_defaults(func=lambda args: cmd_tune(args, tune))
 
     compare = sim_sub.add_parser("compare", help="difference map of two heatmap runs (first minus second)",
                                  description=cmd_compare.__doc__, formatter_class=argparse.ArgumentDefaultsHelpFormatter)

@@ -1,0 +1,207 @@
+"""Tunes a controller's settings for a plant (mantaray sim tune): an Optuna search on a stratified sample of heatmap
+cells, resumable in SQLite (the study machinery of sim/calibrate.py), then the full protocol on another seed.
+
+The search scores a candidate by the targets it misses under both success rules (within epsilon at T, and within
+epsilon at any frame), summed over the sample's trials, which are drawn from the search's own seed: the final check,
+the paper's protocol on its seed 2026, runs trials the search never saw. Its settings are a file that
+`mantaray rig --settings` and the firmware take as they are (host/controller_settings.py).
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mantaray.host.controller_settings import ControllerSettings
+from mantaray.host.session import controller_axes
+from mantaray.protocol import messages as m
+
+from . import calibrate as C
+from . import findings as F
+from .experiment import Experiment, trials
+
+EVERY_PID = "pid.*."          # a knob on every PID the controller runs (x and y alike: the rig is symmetric)
+
+
+@dataclass(frozen=True)
+class Knob:
+    """One searched setting: a key of host/controller_settings.py (or pid.*.NAME) and its range."""
+    key: str
+    low: float
+    high: float
+    scale: str = "linear"     # linear | log
+    choices = None            # (calibrate.suggest's interface: a knob is never categorical)
+
+    def search_bounds(self) -> tuple[float, float]:
+        return self.low, self.high
+
+
+TILT = Knob("configure.tilt_limit", 5.0, 26.565)                 # [deg] at most the geometric limit
+VELOCITY_FILTER = Knob("configure.velocity_filter", 0.0, 0.5)     # [s]
+POSITION_PID = [Knob("pid.*.kp", 3.0, 300.0, "log"), Knob("pid.*.ki", 0.0, 100.0), Knob("pid.*.kd", 0.0, 60.0),
+                Knob("pid.*.integral_limit", 1.0, 26.565)]     # [deg/m], [deg/(m s)], [deg s/m], [deg]
+SPACE = {
+    "manhattan": [TILT, *POSITION_PID],
+    "euclidean": [TILT, *POSITION_PID],
+    "scheduled": [TILT, *POSITION_PID, VELOCITY_FILTER,
+                  Knob("configure_schedule.edge_zone", 0.01, 0.25), Knob("configure_schedule.edge_gain", 0.0, 1.0),
+                  Knob("configure_schedule.edge_tilt", 0.0, 1.0), Knob("configure_schedule.edge_brake", 0.0, 10.0),
+                  Knob("configure_schedule.brake_speed", 0.0, 1.0)],
+    "cascade": [TILT, VELOCITY_FILTER, Knob("configure_cascade.position_gain", 0.3, 30.0, "log"),
+                Knob("configure_cascade.speed_limit", 0.02, 1.0, "log"),
+                Knob("pid.*.kp", 10.0, 2000.0, "log"), Knob("pid.*.ki", 0.0, 500.0), Knob("pid.*.kd", 0.0, 50.0),
+                Knob("pid.*.integral_limit", 1.0, 26.565)],   # [deg s/m], [deg/m], [deg s^2/m], [deg]
+}
+
+
+def settings_of(controller: str, values: dict[str, float]) -> ControllerSettings:
+    """The controller's settings for a candidate: pid.*.NAME set on each of its PIDs."""
+    flat = {}
+    for key, value in values.items():
+        if key.startswith(EVERY_PID):
+            flat.update({f"pid.{axis.name.lower()}.{key[len(EVERY_PID):]}": value for axis in controller_axes(controller)})
+        else:
+            flat[key] = value
+    return ControllerSettings(controller, tuple(flat.items()))
+
+
+def boot_values(controller: str) -> dict[str, float]:
+    """The knobs at the firmware's boot values (the paper's gains for its controllers), clipped into their ranges:
+    the search's first candidate, so it starts from what the controller does untuned."""
+    axis = controller_axes(controller)[0]
+    boot = {"configure.tilt_limit": m.Configure().tilt_limit, "configure.velocity_filter": m.Configure().velocity_filter,
+            **{f"{EVERY_PID}{k}": v for k, v in m.PID_DEFAULTS[axis].items()},
+            **{f"configure_schedule.{s.name}": getattr(m.ConfigureSchedule(), s.name) for s in m.ConfigureSchedule.FIELDS},
+            **{f"configure_cascade.{s.name}": getattr(m.ConfigureCascade(), s.name) for s in m.ConfigureCascade.FIELDS}}
+    return {k.key: float(np.clip(boot[k.key], k.low, k.high)) for k in SPACE[controller]}
+
+
+@dataclass(frozen=True)
+class TuningEvidence:
+    """A controller's settings scored on a stratified sample of cells (findings.STRATA) of one object on one plant."""
+    controller: str = "scheduled"
+    object_name: str = "sphere"
+    alpha_m: float = 0.0                   # [m] the firmware's noise amplitude
+    plant: str = "paper"
+    cells_per_stratum: int = 4             # cells drawn from each of the five strata
+    trials_per_cell: int = 3
+    duration_s: float = 10.0               # [s] T
+    seed: int = 31                         # the sample's and the sampler's; the final check uses another
+    resolution: int = 11                   # the fast mode (docs/results.md)
+    timestep_s: float = 0.002
+    kind: str = "tuning"
+    objective_names: tuple[str, ...] = ("targets missed under both success rules, per trial",)
+    penalty: tuple[float, ...] = (2.0,)    # every target missed twice: what settings that cannot run score
+
+    def experiment(self, settings: ControllerSettings, **changes) -> Experiment:
+        """The sample's experiment with these settings (changes: another design, such as the full protocol)."""
+        design = dict(controller=self.controller, object_name=self.object_name, alpha_m=self.alpha_m,
+                      trials_per_cell=self.trials_per_cell, duration_s=self.duration_s, seed=self.seed,
+                      resolution=self.resolution, timestep_s=self.timestep_s, plant=self.plant,
+                      only_cells=F.stratified_sample(C.CELLS, self.cells_per_stratum, self.seed),
+                      settings=settings.values)
+        return Experiment(**{**design, **changes})
+
+    def score(self, experiment: Experiment, pool) -> tuple[tuple[float, ...], dict]:
+        records = pool.map([(experiment, t) for t in trials(experiment)])
+        rates = {k: float(np.mean([bool(r[k]) for r in records])) for k in ("success", "reached", "fell_off")}
+        return (2.0 - rates["success"] - rates["reached"],), {**rates, "trials": len(records), "passed": 0}
+
+    def evaluate(self, values: dict[str, float], pool) -> tuple[tuple[float, ...], dict]:
+        return self.score(self.experiment(settings_of(self.controller, values)), pool)
+
+    def baseline(self, pool) -> dict:
+        """The paper's Manhattan with its gains on the same sample: what the tuned settings are measured against."""
+        return self.score(self.experiment(ControllerSettings("manhattan"), controller="manhattan"), pool)[1]
+
+    def final_experiment(self, settings: ControllerSettings, trials_per_cell: int, seed: int,
+                         cells: int = C.CELLS) -> Experiment:
+        """The paper's whole protocol (every cell of its 20 x 20) with these settings, on a seed the search did not
+        use."""
+        return self.experiment(settings, only_cells=None, trials_per_cell=trials_per_cell, seed=seed, cells=cells)
+
+
+def final_check(evidence: TuningEvidence, settings: ControllerSettings, trials_per_cell: int, seed: int, pool,
+                path: Path, cells: int = C.CELLS) -> dict:
+    """Run (or continue: path is a resumable results file) the full protocol with the settings; its summary."""
+    from .executors import run
+    from .progress import Progress
+    from .results_file import ResultsFile
+    from .summary import summarize
+
+    protocol = evidence.final_experiment(settings, trials_per_cell, seed, cells)
+    results = ResultsFile.open(path, protocol)
+    todo = results.missing()
+    total = cells ** 2 * trials_per_cell
+    progress = Progress(total, initial=total - len(todo), unit="trial", label="tune: final check")
+    try:
+        run(results, pool.imap([(protocol, t) for t in todo]), lambda record: progress.update(1))
+    finally:
+        progress.close()
+    summary = summarize(results)
+    return {"results": str(path), "seed": seed, "cells": cells, "trials_per_cell": trials_per_cell, **summary.to_json(),
+            "fell_off": round(float(np.nanmean(summary.fell_rates)), 4)}
+
+
+def open_tuning(path: Path, evidence: TuningEvidence):
+    """The study (new, or the one in path if it holds the same search); a new one starts from the boot values."""
+    study = C.open_study(path, evidence, SPACE[evidence.controller], {})
+    if not study.trials:
+        study.enqueue_trial(boot_values(evidence.controller))
+    return study
+
+
+def best_settings(study, evidence: TuningEvidence) -> ControllerSettings | None:
+    best = C.best_trial(study)
+    return None if best is None else settings_of(evidence.controller, best.user_attrs["values"])
+
+
+def history_figure(study, evidence: TuningEvidence, baseline: dict | None, path: Path) -> Path | None:
+    """Each candidate's misses and the best so far, against the paper's Manhattan on the same sample."""
+    done = C.completed(study)
+    if not done:
+        return None
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    numbers = [t.number for t in done]
+    misses = [t.values[0] for t in done]
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.plot(numbers, misses, "o", ms=3, color="0.5", label="candidate")
+    ax.plot(numbers, np.minimum.accumulate(misses), "-", color="C0", label="best so far")
+    if baseline is not None:
+        ax.axhline(2.0 - baseline["success"] - baseline["reached"], color="C3", ls="--",
+                   label="the paper's Manhattan, its gains")
+    ax.set_xlabel("candidate")
+    ax.set_ylabel("targets missed per trial, both rules (0..2)")
+    ax.set_title(f"tuning {evidence.controller}: {evidence.object_name}, α = {evidence.alpha_m:g} m, "
+                 f"{evidence.plant} plant")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def write_report(study, evidence: TuningEvidence, out: Path, baseline: dict | None, final: dict | None = None) -> dict:
+    """OUT/settings.toml (the best settings), report.json and history.png."""
+    best = C.best_trial(study)
+    settings = best_settings(study, evidence)
+    report = {"evidence": dataclasses.asdict(evidence), "candidates": len(C.completed(study)),
+              "baseline_on_the_sample": baseline,
+              "best": None if best is None else {"number": best.number, "misses": best.values[0],
+                                                 **best.user_attrs["details"], "settings": dict(settings.values)},
+              "final_check": final}
+    if settings is not None:
+        (out / "settings.toml").write_text(settings.dumps(
+            f"{evidence.controller} settings tuned by mantaray sim tune for the {evidence.object_name} "
+            f"(α = {evidence.alpha_m:g} m) on the {evidence.plant} plant: candidate #{best.number} of "
+            f"{report['candidates']}\nuse: mantaray rig --settings settings.toml (or sim run / sim heatmap)"))
+    figure = history_figure(study, evidence, baseline, out / "history.png")
+    report["figure"] = None if figure is None else str(figure)
+    (out / "report.json").write_text(json.dumps(report, indent=1) + "\n")
+    return report
