@@ -1,8 +1,9 @@
 """Benchmark: the Uno firmware's timing in simavr (cycle-accurate, 16 MHz), from its probe pins and stack paint.
 
-Run: python3 benchmarks/avr_timing.py [--seconds 60]
+Run: python3 benchmarks/avr_timing.py [--seconds 60] [--controller NAME | --settings FILE]
 Two runs of the same ELF, each for --seconds of simulated time:
-  - bench side, in lock-step with the MuJoCo rig: a Manhattan trial, so every camera frame runs the controller;
+  - bench side, in lock-step with the MuJoCo rig: a trial of the controller (Manhattan, or the one --settings sets
+    up, as mantaray sim tune writes them), so every camera frame runs it;
     the D13 probe's longest pulses are the object_position frames (controller step, plane transform, reply);
   - rig side, with the harness's modelled motors and I2C encoders: the carriages jogged back and forth, so the
     four position loops (D10 probe) read their encoders over I2C and drive their motors.
@@ -18,6 +19,7 @@ import sys
 import time
 from pathlib import Path
 
+from mantaray.host.cli import add_controller_arguments, controller_settings
 from mantaray.host.link import Link, LinkError
 from mantaray.host.simavr import DEFAULT_ELF, SimulatedUno
 from mantaray.host.transport import SerialTransport
@@ -38,7 +40,9 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seconds", type=float, default=60.0, help="simulated seconds of each run")
     parser.add_argument("--out", default="out/bench/avr_timing.json")
+    add_controller_arguments(parser)
     args = parser.parse_args()
+    settings = controller_settings(parser, args)
     build = subprocess.run([sys.executable, str(REPO / "scripts" / "avr_build.py")], capture_output=True, text=True)
     if build.returncode != 0:
         print(build.stderr, file=sys.stderr)
@@ -46,7 +50,8 @@ def main() -> int:
 
     with SimulatedUno(DEFAULT_ELF, bench=True) as uno:
         bridge = Bridge(Link(SerialTransport(uno.path)), Rig())
-        result = bridge.run(TrialSpec((0.08, -0.06), (-0.05, 0.05), duration_s=args.seconds))
+        result = bridge.run(TrialSpec((0.08, -0.06), (-0.05, 0.05), duration_s=args.seconds,
+                                      controller=settings.controller, settings=settings.values))
         bridge.link.close()
     bench = uno.stats
 
@@ -67,11 +72,12 @@ def main() -> int:
     uno.wait(timeout_s=600)
     rig = uno.stats
 
-    report = {"bench": bench, "rig": rig, "trial": result.summary()}
+    report = {"bench": bench, "rig": rig, "trial": result.summary(), "controller": settings.controller,
+              "settings": dict(settings.values)}
     frame, loops = bench["byte_handling"], rig["actuator_loops"]
     worst = max(bench["main_loop_pass"]["max_cycles"], rig["main_loop_pass"]["max_cycles"])
     print(f"simavr, ATmega328P at 16 MHz, {args.seconds:g} s simulated per run")
-    print(f"object_position frame (controller step + reply), longest of {frame['count']} bytes handled: "
+    print(f"object_position frame ({settings.controller} step + reply), longest of {frame['count']} bytes handled: "
           f"{us(frame['max_cycles'])}")
     print(f"four actuator loops (4 I2C reads, 4 PIDs, 4 PWM writes), {loops['count']} runs: "
           f"mean {us(loops['mean_cycles'])}, max {us(loops['max_cycles'])} (period 4,000 us)")

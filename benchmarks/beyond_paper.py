@@ -1,0 +1,146 @@
+"""Beyond the paper: the controllers tuned for the fitted plant, checked on the paper's protocol beside its Manhattan.
+
+Run: python3 benchmarks/beyond_paper.py [--runs sphere_scheduled,sphere_cascade] [--jobs 2] [--collect]
+Each run is `mantaray sim tune` (sim/tune.py) for one object and controller on the `paper` plant into
+out/tune/<run>/: the search on its own sample, then the full protocol (20 x 20 cells, N = 10, T = 10 s, seed 2026,
+to the end of T) with the best settings. The baseline is the paper's Manhattan on the same trials, run by
+`python3 benchmarks/paper_heatmaps.py --plant paper --to-end --runs <object run>` (same seed: trial for trial
+the same starts, targets and noise seeds, so the comparison is paired). Both are resumable, and a run starts
+from what docs/results/tune/<run>/ holds (the study, the final check's trials, the settings), where every session
+writes it back; --collect only writes back what out/ holds (say, from a run still going). With both done, the
+script prints each run's scores under both rules beside the baseline's, the falls, McNemar's test on the paired
+trials, and writes the difference maps to docs/figures/.
+"""
+from __future__ import annotations
+
+import argparse
+import gzip
+import json
+import math
+import os
+import shutil
+import sqlite3
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+COMMITTED = REPO / "docs" / "results" / "tune"
+BASELINES = REPO / "out" / "heatmap"          # where paper_heatmaps.py --plant paper --to-end puts them
+RUNS = {   # name: (object, controller, alpha [m], the baseline run of paper_heatmaps.py)
+    "sphere_scheduled": ("sphere", "scheduled", 0.0, "sphere_manhattan_paper_to_end"),
+    "sphere_cascade": ("sphere", "cascade", 0.0, "sphere_manhattan_paper_to_end"),
+    "cube_scheduled_alpha0.1": ("cube", "scheduled", 0.1, "cube_manhattan_alpha0.1_paper_to_end"),
+    "bunny_scheduled_alpha0.05": ("bunny", "scheduled", 0.05, "bunny_manhattan_alpha0.05_paper_to_end"),
+}
+KEPT = ("settings.toml", "report.json", "history.png")   # beside study.db and the final check's trials
+
+
+def out_dir(run: str) -> Path:
+    obj, controller, alpha, _ = RUNS[run]
+    return REPO / "out" / "tune" / f"{obj}_{controller}_alpha{alpha:g}_paper"
+
+
+def restore(run: str) -> None:
+    """Start from the committed study and final trials when out/ has none."""
+    out, kept = out_dir(run), COMMITTED / run
+    if (out / "study.db").exists() or not (kept / "study.db").exists():
+        return
+    (out / "final").mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(kept / "study.db", out / "study.db")
+    if (kept / "final.jsonl.gz").exists():
+        (out / "final" / "results.jsonl").write_bytes(gzip.decompress((kept / "final.jsonl.gz").read_bytes()))
+    print(f"{run}: continuing from {kept.relative_to(REPO)}", flush=True)
+
+
+def collect(run: str) -> None:
+    """Write what out/ holds back to docs/results/tune/<run>/ (the study copied consistently, even while in use)."""
+    out, kept = out_dir(run), COMMITTED / run
+    if not (out / "study.db").exists():
+        return
+    kept.mkdir(parents=True, exist_ok=True)
+    with sqlite3.connect(out / "study.db") as src, sqlite3.connect(kept / "study.db") as dst:
+        src.backup(dst)
+    final = out / "final" / "results.jsonl"
+    if final.exists():
+        (kept / "final.jsonl.gz").write_bytes(gzip.compress(final.read_bytes(), mtime=0))
+    for name in KEPT:
+        if (out / name).exists():
+            shutil.copyfile(out / name, kept / name)
+    print(f"{run}: kept in {kept.relative_to(REPO)}", flush=True)
+
+
+def mcnemar(a: dict, b: dict, key: str) -> dict:
+    """Paired trials (same cell and k) of two results files: successes only in a, only in b, and McNemar's z."""
+    common = sorted(set(a) & set(b))
+    only_a = sum(bool(a[k][key]) and not bool(b[k][key]) for k in common)
+    only_b = sum(bool(b[k][key]) and not bool(a[k][key]) for k in common)
+    z = (only_a - only_b) / math.sqrt(only_a + only_b) if only_a + only_b else 0.0
+    return {"paired": len(common), "only_tuned": only_a, "only_paper": only_b, "z": round(z, 2)}
+
+
+def compare(run: str) -> dict | None:
+    """Scores, falls and McNemar of a run's final check against its baseline, when both are complete."""
+    from mantaray.sim import results_file as R
+    from mantaray.sim import summary as S
+
+    tuned_path, base_path = out_dir(run) / "final" / "results.jsonl", BASELINES / RUNS[run][3] / "results.jsonl"
+    if not (tuned_path.exists() and base_path.exists()):
+        return None
+    tuned, base = R.ResultsFile.load(tuned_path), R.ResultsFile.load(base_path)
+    if tuned.missing() or base.missing():
+        return None
+    st, sb = S.summarize(tuned), S.summarize(base)
+    out = {"tuned": {"score": round(st.score, 1), "reach_score": round(st.reach_score, 1),
+                     "fell_off": round(float(st.fell_rates.mean()), 3)},
+           "paper_manhattan": {"score": round(sb.score, 1), "reach_score": round(sb.reach_score, 1),
+                               "fell_off": round(float(sb.fell_rates.mean()), 3)},
+           "ratio": {"score": round(st.score / sb.score, 2) if sb.score else None,
+                     "reach_score": round(st.reach_score / sb.reach_score, 2) if sb.reach_score else None},
+           "mcnemar": {rule: mcnemar(tuned.records, base.records, rule) for rule in ("success", "reached")}}
+    for rule, flag in (("", []), ("_reach", ["--reached"])):
+        subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "compare", str(tuned_path), str(base_path),
+                        *flag, "--out", str(REPO / "docs" / "figures" / f"difference_{run}_minus_manhattan{rule}.png")],
+                       cwd=REPO, check=True, stdout=subprocess.DEVNULL)
+    return out
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs", default=",".join(RUNS), help="comma-separated names of: " + ", ".join(RUNS))
+    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--candidates", type=int, default=60, help="candidates each search should hold")
+    parser.add_argument("--collect", action="store_true", help="only write back what out/ holds")
+    args = parser.parse_args()
+    names = args.runs.split(",")
+    unknown = [n for n in names if n not in RUNS]
+    if unknown:
+        parser.error(f"unknown run(s) {', '.join(unknown)}; known: {', '.join(RUNS)}")
+    table = {}
+    for run in names:
+        obj, controller, alpha, _ = RUNS[run]
+        if not args.collect:
+            restore(run)
+            proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "tune", "--controller", controller,
+                                   "--object", obj, "--alpha", str(alpha), "--plant", "paper", "--candidates",
+                                   str(args.candidates), "--jobs", str(args.jobs), "--out", str(out_dir(run))],
+                                  cwd=REPO)
+            collect(run)
+            if proc.returncode != 0:
+                print(f"{run}: tune ended with exit {proc.returncode}; what it did is kept", file=sys.stderr)
+                return proc.returncode
+        else:
+            collect(run)
+        table[run] = compare(run)
+        if table[run] is not None:
+            print(f"{run}: {json.dumps(table[run])}", flush=True)
+    figures = REPO / "docs" / "figures" / "beyond_paper.json"
+    done = {k: v for k, v in table.items() if v is not None}
+    if done:
+        stored = json.loads(figures.read_text()) if figures.exists() else {}
+        figures.write_text(json.dumps({**stored, **done}, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
