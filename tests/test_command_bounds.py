@@ -69,7 +69,8 @@ def wild_configures(draw) -> m.Configure:
         noise_amplitude=f("noise_amplitude", 0.0, 0.25),
         noise_seed=draw(st.integers(0, 2**32 - 1)),
         deadman=draw(st.one_of(st.integers(20, 60000), st.integers(0, 0xFFFF))),
-        telemetry_period=draw(st.one_of(st.just(0), st.integers(5, 200), st.integers(0, 0xFFFF))))
+        telemetry_period=draw(st.one_of(st.just(0), st.integers(5, 200), st.integers(0, 0xFFFF))),
+        velocity_filter=f("velocity_filter", 0.0, 10.0))
 
 
 @st.composite
@@ -82,7 +83,7 @@ def valid_configures(draw) -> m.Configure:
         controller=draw(st.sampled_from(list(m.Controller))), module_x=module_x, module_y=module_y,
         tilt_limit=tilt, tolerance=draw(f32s(0.001, 0.5)), noise_amplitude=draw(f32s(0.0, 0.25)),
         noise_seed=draw(st.integers(0, 2**32 - 1)), deadman=draw(st.integers(20, 60000)),
-        telemetry_period=draw(st.sampled_from([0, 5, 100, 60000])))
+        telemetry_period=draw(st.sampled_from([0, 5, 100, 60000])), velocity_filter=draw(f32s(0.0, 10.0)))
 
 
 def configures() -> st.SearchStrategy[m.Configure]:
@@ -103,8 +104,18 @@ def configure_pids(draw) -> m.ConfigurePid:
                           integral_limit=gain(90.0))
 
 
+@st.composite
+def controller_settings(draw) -> m.Message:
+    """configure_schedule or configure_cascade: each field within its bounds, its extremes included, or anything."""
+    cls = draw(st.sampled_from([m.ConfigureSchedule, m.ConfigureCascade]))
+    return cls(**{spec.name: draw(field_value(spec, st.one_of(f32s(spec.min, spec.max),
+                                                               st.sampled_from([spec.min, spec.max]))))
+                  for spec in cls.FIELDS})
+
+
 OPS = st.one_of(
     st.tuples(st.just("configure"), configures()),
+    st.tuples(st.just("controller_settings"), controller_settings()),
     st.tuples(st.just("configure_pid"), configure_pids()),
     st.tuples(st.just("set_target"), st.tuples(positions(), positions())),
     st.tuples(st.just("start"), st.none()),
@@ -162,6 +173,11 @@ class Model:
         if not self.idle:
             return E.BAD_STATE, m.NO_FIELD
         return self.bounds(m.ConfigurePid, p)
+
+    def controller_settings(self, msg: m.Message) -> tuple[E, int] | None:
+        if not self.idle:
+            return E.BAD_STATE, m.NO_FIELD
+        return self.bounds(type(msg), msg)
 
     def set_target(self, x: float, y: float) -> tuple[E, int] | None:
         x, y = f32(x), f32(y)
@@ -269,6 +285,8 @@ class Rig:
             self.expect(arg, model.configure(arg))
         elif op == "configure_pid":
             self.expect(arg, model.configure_pid(arg))
+        elif op == "controller_settings":
+            self.expect(arg, model.controller_settings(arg))
         elif op == "set_target":
             self.expect(m.SetTarget(*arg), model.set_target(*arg))
         elif op == "start":
@@ -306,7 +324,7 @@ def test_random_command_sequences_keep_every_command_in_range(capi, ops):
 
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow,
                                                                  HealthCheck.function_scoped_fixture])
-@given(config=configures(), pids=st.lists(configure_pids(), max_size=3),
+@given(config=configures(), pids=st.lists(st.one_of(configure_pids(), controller_settings()), max_size=3),
        target=st.tuples(f32s(-0.05, 0.05), f32s(-0.05, 0.05)),
        frames=st.lists(st.tuples(positions(), positions(), st.booleans(), st.integers(1, 200_000)),
                        min_size=1, max_size=40))
@@ -315,7 +333,7 @@ def test_running_controller_keeps_every_command_in_range(capi, config, pids, tar
     rig = Rig(capi)
     rig.run("configure", config)
     for pid in pids:
-        rig.run("configure_pid", pid)
+        rig.run("configure_pid" if isinstance(pid, m.ConfigurePid) else "controller_settings", pid)
     rig.run("set_target", target)
     rig.run("start", None)
     rig.run("positions", frames)
