@@ -206,19 +206,29 @@ class RigSession:
 
         A refused command (CommandRefused) is the user's setup, not the link: it is raised at once. A board that
         does not come back within reconnect_timeout_s, or a setup lost every time, raises BoardLost."""
+        def apply() -> None:
+            self._apply()
+            self._resets_seen = self.link.resets
+
+        def reconnect(exc: Exception) -> None:
+            self.report(f"{why}: the setup did not get through ({exc}); reconnecting to {self.port}")
+            self._reconnect()
+
+        self._retried(apply, "the setup", reconnect)
+
+    def _retried(self, action: Callable[[], object], what: str, between: Callable[[Exception], None]):
+        """action(), tried SETUP_ATTEMPTS times in all; between(exc) runs after each lost try (a nack, CommandRefused,
+        is raised at once); the last lost try raises BoardLost."""
         for attempt in range(1, SETUP_ATTEMPTS + 1):
             try:
-                self._apply()
-                self._resets_seen = self.link.resets
-                return
+                return action()
             except CommandRefused:
                 raise
             except (LinkError, OSError) as exc:
                 if attempt == SETUP_ATTEMPTS:
-                    raise BoardLost(f"{self.port}: the setup did not get through in {SETUP_ATTEMPTS} tries "
+                    raise BoardLost(f"{self.port}: {what} did not get through in {SETUP_ATTEMPTS} tries "
                                     f"(the last: {exc})") from None
-                self.report(f"{why}: the setup did not get through ({exc}); reconnecting to {self.port}")
-                self._reconnect()
+                between(exc)
 
     def _reconnect(self) -> None:
         if self.link is not None:
@@ -250,16 +260,8 @@ class RigSession:
     def command(self, msg) -> m.Message:
         """A command through the session: on a failed link it reconnects, restores and sends it again, SETUP_ATTEMPTS
         times in all; then BoardLost. A nack (CommandRefused) is raised as it is."""
-        for attempt in range(1, SETUP_ATTEMPTS + 1):
-            try:
-                return self.link.command(msg)
-            except CommandRefused:
-                raise
-            except (LinkError, OSError) as exc:
-                if attempt == SETUP_ATTEMPTS:
-                    raise BoardLost(f"{self.port}: {msg.NAME} did not get through in {SETUP_ATTEMPTS} tries "
-                                    f"(the last: {exc})") from None
-                self._recover(f"link failed ({exc})")
+        return self._retried(lambda: self.link.command(msg), msg.NAME,
+                             lambda exc: self._recover(f"link failed ({exc})"))
 
     def set_target(self, x_m: float, y_m: float) -> None:
         self.setup.target = (x_m, y_m)

@@ -341,7 +341,6 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
     from . import parameters as P
     from .logfit import LogEvidence, check_logs
     from .plant import Plant, parse_setting
-    from .progress import Progress
 
     try:
         fixed = dict(parse_setting(text) for text in args.set)
@@ -371,12 +370,7 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
     except C.StudyMismatch as exc:
         print(f"mantaray sim calibrate: {exc}", file=sys.stderr)
         return 2
-    done = len(C.completed(study))
-    if 0 < done < args.candidates:
-        print(f"continuing {out / 'study.db'}: {done} of {args.candidates} candidates already evaluated",
-              file=sys.stderr)
-    progress = Progress(max(args.candidates, done), initial=done, unit="candidate", label="calibrate",
-                        line_every_s=0)
+    progress = _candidates(study, out, args.candidates, "calibrate")
 
     def report_candidate(n: int, total: int, info: dict) -> None:
         if "unstable" in info:
@@ -416,6 +410,17 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
     return 0
 
 
+def _candidates(study, out: Path, candidates: int, label: str):
+    """The progress of a search toward `candidates`, saying so when it continues a study that holds some already."""
+    from . import calibrate as C
+    from .progress import Progress
+
+    done = len(C.completed(study))
+    if 0 < done < candidates:
+        print(f"continuing {out / 'study.db'}: {done} of {candidates} candidates already evaluated", file=sys.stderr)
+    return Progress(max(candidates, done), initial=done, unit="candidate", label=label, line_every_s=0)
+
+
 def _pool(parser: argparse.ArgumentParser, args: argparse.Namespace):
     """The worker pool --executor asks for: this machine's processes (--jobs), or Ray (a cluster at --ray-address)."""
     from .executors import LocalPool, RayPool
@@ -441,7 +446,6 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from . import calibrate as C
     from . import tune as T
     from .experiment import ExperimentMismatch
-    from .progress import Progress
 
     try:
         evidence = T.TuningEvidence(controller=args.controller, object_name=args.object, alpha_m=args.alpha,
@@ -465,11 +469,7 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     except C.StudyMismatch as exc:
         print(f"mantaray sim tune: {exc}", file=sys.stderr)
         return 2
-    done = len(C.completed(study))
-    if 0 < done < args.candidates:
-        print(f"continuing {out / 'study.db'}: {done} of {args.candidates} candidates already evaluated",
-              file=sys.stderr)
-    progress = Progress(max(args.candidates, done), initial=done, unit="candidate", label="tune", line_every_s=0)
+    progress = _candidates(study, out, args.candidates, "tune")
 
     def report_candidate(n: int, total: int, info: dict) -> None:
         note = ("the physics diverged: scored the worst" if "unstable" in info else

@@ -89,7 +89,8 @@ ErrorCode Supervisor::configure_pid(const proto::ConfigurePid& msg, uint8_t& fie
   return ErrorCode::kOk;
 }
 
-ErrorCode Supervisor::configure_schedule(const proto::ConfigureSchedule& msg, uint8_t& field) {
+template <class Message>
+ErrorCode Supervisor::take_in_idle(const Message& msg, uint8_t& field) {
   field = proto::kNoField;
   if (state_ != State::kIdle) return ErrorCode::kBadState;
   const ErrorCode local = proto::validate(msg, field);
@@ -98,13 +99,12 @@ ErrorCode Supervisor::configure_schedule(const proto::ConfigureSchedule& msg, ui
   return ErrorCode::kOk;
 }
 
+ErrorCode Supervisor::configure_schedule(const proto::ConfigureSchedule& msg, uint8_t& field) {
+  return take_in_idle(msg, field);
+}
+
 ErrorCode Supervisor::configure_cascade(const proto::ConfigureCascade& msg, uint8_t& field) {
-  field = proto::kNoField;
-  if (state_ != State::kIdle) return ErrorCode::kBadState;
-  const ErrorCode local = proto::validate(msg, field);
-  if (local != ErrorCode::kOk) return local;
-  take(msg);
-  return ErrorCode::kOk;
+  return take_in_idle(msg, field);
 }
 
 ErrorCode Supervisor::set_target(const proto::SetTarget& msg, uint8_t& field) {

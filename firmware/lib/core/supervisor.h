@@ -55,6 +55,9 @@ class Supervisor {
   void take_configure();  // the controller's share of config_ into control_
   void take(const proto::ConfigureSchedule& msg);
   void take(const proto::ConfigureCascade& msg);
+  // A controller's own settings: taken whole in idle when the schema's checks pass, else refused and nothing changes.
+  template <class Message>
+  proto::ErrorCode take_in_idle(const Message& msg, uint8_t& field);
 
   proto::Configure config_;
   ControllerConfig control_;  // what every controller step reads: kept, not rebuilt on the Uno's small stack
