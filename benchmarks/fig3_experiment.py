@@ -1,6 +1,8 @@
-"""The paper's hardware experiment (Fig. 3) on named plants: seven objects, five random targets each, Manhattan, 60 s.
+"""The paper's hardware experiment (Fig. 3) on named plants: seven objects, five random targets each, 60 s.
 
-Run: python3 benchmarks/fig3_experiment.py [--plants polyester,paper] [--jobs 2] [--seed 3]
+Run: python3 benchmarks/fig3_experiment.py [--plants polyester,paper] [--jobs 2] [--seed 3] [--settings FILE]
+With --settings (a controller's settings, as mantaray sim tune writes them) the same targets run with that
+controller instead of the paper's Manhattan, and the outputs' names end in _<controller>.
 For each plant: every object of Table I from the centre to five targets uniform in [-0.2, 0.2]^2 m with the
 paper's alpha for it (sim/fig3.py), ending at the first frame within eps; prints reached/fell per object and
 finding F6, draws the figure in the style of Fig. 3 (each object's paths with the targets' tolerance circles
@@ -15,6 +17,7 @@ import sys
 import time
 from pathlib import Path
 
+from mantaray.host.cli import controller_settings
 from mantaray.protocol import messages as m
 from mantaray.sim.fig3 import run_fig3
 from mantaray.sim.findings import MODULE_M, fig3_finding
@@ -33,7 +36,11 @@ def main() -> int:
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--figures", default="docs/figures")
     parser.add_argument("--results", default="docs/results")
+    parser.add_argument("--settings", metavar="FILE", help="a controller's settings (default: the paper's Manhattan)")
     args = parser.parse_args()
+    args.controller = None
+    settings = controller_settings(parser, args)
+    suffix = "" if settings.controller == "manhattan" and not settings.values else f"_{settings.controller}"
     plants = args.plants.split(",")
     unknown = [p for p in plants if p not in plant_names()]
     if unknown:
@@ -41,17 +48,18 @@ def main() -> int:
     with LocalPool(args.jobs) as pool:
         for plant in plants:
             t0 = time.perf_counter()
-            records = run_fig3(pool, plant, seed=args.seed)
+            records = run_fig3(pool, plant, seed=args.seed, settings=settings)
             finding = fig3_finding(records)
             runs: dict[str, list[dict]] = {}
             for r in records:
                 runs.setdefault(r["object"], []).append(r)
             figure = fig3_figure(runs, Experiment.tolerance_m, MODULE_M, m.Configure.tilt_limit,
-                                 f"Fig. 3 in simulation, {plant} plant: Manhattan, 60 s, from the centre",
-                                 REPO / args.figures / f"fig3_{plant}.png")
-            out = REPO / args.results / f"fig3_{plant}.json"
+                                 f"Fig. 3 in simulation, {plant} plant: {settings.controller}, 60 s, from the centre",
+                                 REPO / args.figures / f"fig3_{plant}{suffix}.png")
+            out = REPO / args.results / f"fig3_{plant}{suffix}.json"
             out.parent.mkdir(parents=True, exist_ok=True)
-            out.write_text(json.dumps({"plant": plant, "seed": args.seed, "finding": vars(finding),
+            out.write_text(json.dumps({"plant": plant, "seed": args.seed, "controller": settings.controller,
+                                       "settings": dict(settings.values), "finding": vars(finding),
                                        "trials": records}) + "\n")
             print(f"{plant}: F6 {'holds' if finding.holds else 'fails'}: {finding.measured}; "
                   + "; ".join(f"{name} fell {sum(t['fell_off'] for t in trials)}, median time to reach "

@@ -1,4 +1,5 @@
-"""The paper's hardware experiment (Fig. 3) in simulation: each object from the centre to random targets, Manhattan, 60 s.
+"""The paper's hardware experiment (Fig. 3) in simulation: each object from the centre to random targets, 60 s, with
+Manhattan (the paper's) or another controller's settings.
 
 Five trials per object of Table I, each from the centre to a target uniform in [-0.2, 0.2]^2 m, with the
 alpha the paper used for that object; a trial ends when the object first comes within epsilon (the rig's
@@ -9,20 +10,24 @@ from __future__ import annotations
 
 import numpy as np
 
+from mantaray.host.controller_settings import ControllerSettings
+
 from . import findings as F
 from .experiment import Experiment, Trial
 from .model import SimulationUnstable
 from .plant import DEFAULT_PLANT
 
 
-def fig3_jobs(plant_name: str, values: dict, seed: int, resolution: int, timestep_s: float) -> list[tuple]:
-    """One (protocol, trial) per object and k."""
+def fig3_jobs(plant_name: str, values: dict, seed: int, resolution: int, timestep_s: float,
+              settings: ControllerSettings | None = None) -> list[tuple]:
+    """One (protocol, trial) per object and k; the targets depend on the seed alone, whatever the controller."""
+    settings = settings or ControllerSettings("manhattan")
     jobs = []
     for name, alpha_m in F.FIG3_ALPHA_M.items():
-        protocol = Experiment(object_name=name, controller="manhattan", cells=1, trials_per_cell=F.FIG3_TRIALS,
-                            duration_s=F.FIG3_DURATION_S, alpha_m=alpha_m, seed=seed, resolution=resolution,
-                            timestep_s=timestep_s, plant=plant_name, plant_set=tuple(values.items()),
-                            stop_when_reached=True)
+        protocol = Experiment(object_name=name, controller=settings.controller, cells=1,
+                            trials_per_cell=F.FIG3_TRIALS, duration_s=F.FIG3_DURATION_S, alpha_m=alpha_m, seed=seed,
+                            resolution=resolution, timestep_s=timestep_s, plant=plant_name,
+                            plant_set=tuple(values.items()), stop_when_reached=True, settings=settings.values)
         for k in range(F.FIG3_TRIALS):
             rng = np.random.default_rng([seed, sum(map(ord, name)), k])
             target = tuple(float(v) for v in rng.uniform(-F.FIG3_TARGET_HALF_M, F.FIG3_TARGET_HALF_M, 2))
@@ -46,6 +51,6 @@ def run_fig3_trial(runner, job: tuple) -> dict:
 
 
 def run_fig3(pool, plant_name: str = DEFAULT_PLANT, values: dict | None = None, seed: int = 3, resolution: int = 11,
-             timestep_s: float = 0.002) -> list[dict]:
+             timestep_s: float = 0.002, settings: ControllerSettings | None = None) -> list[dict]:
     """Every Fig. 3 trial on the pool's workers, in order."""
-    return pool.map_calls(run_fig3_trial, fig3_jobs(plant_name, values or {}, seed, resolution, timestep_s))
+    return pool.map_calls(run_fig3_trial, fig3_jobs(plant_name, values or {}, seed, resolution, timestep_s, settings))

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from mantaray.host.controller_settings import ControllerSettings
 from mantaray.sim import findings as F
 from mantaray.sim.fig3 import fig3_jobs
 from mantaray.plots import fig3_figure
@@ -18,6 +19,14 @@ def test_every_object_gets_five_targets_in_the_square_with_its_papers_alpha():
     again = fig3_jobs("polyester", {}, seed=3, resolution=11, timestep_s=0.002)
     other = fig3_jobs("polyester", {}, seed=4, resolution=11, timestep_s=0.002)
     assert [t for _, t in jobs] == [t for _, t in again] and [t for _, t in jobs] != [t for _, t in other]
+
+
+def test_another_controller_runs_the_same_targets_with_its_settings():
+    tuned = ControllerSettings("scheduled", (("configure_schedule.edge_tilt", 0.4),))
+    paper = fig3_jobs("polyester", {}, seed=3, resolution=11, timestep_s=0.002)
+    jobs = fig3_jobs("polyester", {}, seed=3, resolution=11, timestep_s=0.002, settings=tuned)
+    assert [t for _, t in jobs] == [t for _, t in paper]                  # paired: the same targets and seeds
+    assert all(p.controller == "scheduled" and p.settings == tuned.values for p, _ in jobs)
 
 
 def test_the_figure_draws_a_column_per_object(tmp_path):
