@@ -10,6 +10,7 @@ import time
 import pytest
 
 from conformance_result import assert_suite_passed
+from mantaray.host.controller_settings import ControllerSettings
 from mantaray.host.link import Link
 from mantaray.host.simavr import DEFAULT_ELF, SimulatedUno
 from mantaray.host.transport import SerialTransport
@@ -110,6 +111,25 @@ def test_a_closed_loop_trial_runs_with_the_avr_binary_in_place_of_the_virtual_mc
     initial = ((start[0] - target[0]) ** 2 + (start[1] - target[1]) ** 2) ** 0.5
     assert result["final_error_m"] < 0.5 * initial                    # the AVR's controller steered it there
     assert uno.stats["byte_handling"]["count"] > 0
+
+
+ACTING_SCHEDULE = ControllerSettings("scheduled", (
+    ("configure_schedule.edge_zone", 0.2), ("configure_schedule.edge_gain", 0.5), ("configure_schedule.edge_tilt", 0.5),
+    ("configure_schedule.edge_brake", 2.0), ("configure_schedule.brake_speed", 0.3)))   # every part of it at work
+
+
+@pytest.mark.parametrize("settings", [ACTING_SCHEDULE, ControllerSettings("cascade")], ids=["scheduled", "cascade"])
+def test_the_controllers_beyond_the_paper_steer_a_closed_loop_trial_in_the_avr_binary(elf, tmp_path, settings):
+    path = tmp_path / "settings.toml"
+    path.write_text(settings.dumps())
+    with SimulatedUno(elf, bench=True) as uno:
+        proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "run", "--port", uno.path, "--duration",
+                               "4", "--settings", str(path), "--json", "--out", str(tmp_path)], cwd=REPO,
+                              capture_output=True, text=True, timeout=300)
+    result = json.loads(proc.stdout)
+    assert proc.returncode == (0 if result["success"] else 1), proc.stderr
+    assert result["controller"] == settings.controller and result["link_clean"] and not result["fell_off"]
+    assert result["time_to_reach_s"] is not None and result["time_to_reach_s"] < 2.0    # [s] steered there
 
 
 def test_positions_as_fast_as_the_link_allows_lose_no_byte_while_the_loops_run(elf):
