@@ -22,27 +22,35 @@ from mantaray.protocol import messages as m
 from . import calibrate as C
 from . import findings as F
 from .experiment import Experiment, trials
+from .plant import Plant
 
 EVERY_PID = "pid.*."          # a knob on every PID the controller runs (x and y alike: the rig is symmetric)
+PID_MAX = {spec.name: spec.max for spec in m.ConfigurePid.FIELDS if spec.name != "axis"}
 
 
 @dataclass(frozen=True)
 class Knob:
-    """One searched setting: a key of host/controller_settings.py (or pid.*.NAME) and its range."""
+    """One searched setting: a key of host/controller_settings.py (or pid.*.NAME) and its range.
+
+    A paper_gain knob is in the paper's units (its kP, kI, kD): the firmware gets it times the plant's reading of
+    them (Plant.gain_scale, 180/pi on a plant that reads them per radian), so the paper's own gains are in range
+    on every plant and the search starts from them."""
     key: str
     low: float
     high: float
     scale: str = "linear"     # linear | log
+    paper_gain: bool = False
     choices = None            # (calibrate.suggest's interface: a knob is never categorical)
 
     def search_bounds(self) -> tuple[float, float]:
         return self.low, self.high
 
 
-TILT = Knob("configure.tilt_limit", 5.0, 26.565)                 # [deg] at most the geometric limit
+TILT = Knob("configure.tilt_limit", 5.0, m.Configure().tilt_limit)   # [deg] at most the geometric limit
 VELOCITY_FILTER = Knob("configure.velocity_filter", 0.0, 0.5)     # [s]
-POSITION_PID = [Knob("pid.*.kp", 3.0, 300.0, "log"), Knob("pid.*.ki", 0.0, 100.0), Knob("pid.*.kd", 0.0, 60.0),
-                Knob("pid.*.integral_limit", 1.0, 26.565)]     # [deg/m], [deg/(m s)], [deg s/m], [deg]
+POSITION_PID = [Knob("pid.*.kp", 3.0, 150.0, "log", paper_gain=True), Knob("pid.*.ki", 0.0, 100.0, paper_gain=True),
+                Knob("pid.*.kd", 0.0, 100.0, paper_gain=True),
+                Knob("pid.*.integral_limit", 1.0, 26.565)]     # the paper's [deg/m], [deg/(m s)], [deg s/m]; [deg]
 SPACE = {
     "manhattan": [TILT, *POSITION_PID],
     "euclidean": [TILT, *POSITION_PID],
@@ -57,10 +65,14 @@ SPACE = {
 }
 
 
-def settings_of(controller: str, values: dict[str, float]) -> ControllerSettings:
-    """The controller's settings for a candidate: pid.*.NAME set on each of its PIDs."""
+def settings_of(controller: str, values: dict[str, float], gain_scale: float = 1.0) -> ControllerSettings:
+    """The controller's settings for a candidate: pid.*.NAME set on each of its PIDs, a paper_gain knob times
+    gain_scale (clipped to the schema's bound)."""
+    paper = {k.key for k in SPACE[controller] if k.paper_gain}
     flat = {}
     for key, value in values.items():
+        if key in paper:
+            value = min(value * gain_scale, PID_MAX[key[len(EVERY_PID):]])
         if key.startswith(EVERY_PID):
             flat.update({f"pid.{axis.name.lower()}.{key[len(EVERY_PID):]}": value for axis in controller_axes(controller)})
         else:
@@ -110,8 +122,12 @@ class TuningEvidence:
         rates = {k: float(np.mean([bool(r[k]) for r in records])) for k in ("success", "reached", "fell_off")}
         return (2.0 - rates["success"] - rates["reached"],), {**rates, "trials": len(records), "passed": 0}
 
+    @property
+    def gain_scale(self) -> float:
+        return Plant(self.plant).gain_scale
+
     def evaluate(self, values: dict[str, float], pool) -> tuple[tuple[float, ...], dict]:
-        return self.score(self.experiment(settings_of(self.controller, values)), pool)
+        return self.score(self.experiment(settings_of(self.controller, values, self.gain_scale)), pool)
 
     def baseline(self, pool) -> dict:
         """The paper's Manhattan with its gains on the same sample: what the tuned settings are measured against."""
@@ -156,7 +172,7 @@ def open_tuning(path: Path, evidence: TuningEvidence):
 
 def best_settings(study, evidence: TuningEvidence) -> ControllerSettings | None:
     best = C.best_trial(study)
-    return None if best is None else settings_of(evidence.controller, best.user_attrs["values"])
+    return None if best is None else settings_of(evidence.controller, best.user_attrs["values"], evidence.gain_scale)
 
 
 def history_figure(study, evidence: TuningEvidence, baseline: dict | None, path: Path) -> Path | None:

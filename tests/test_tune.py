@@ -3,6 +3,7 @@ interruption; the search space against the schema."""
 from __future__ import annotations
 
 import json
+import math
 import signal
 import sqlite3
 import subprocess
@@ -16,6 +17,7 @@ from mantaray.host.session import controller_axes
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
 from mantaray.sim import tune as T
+from mantaray.sim.executors import LocalPool
 
 TINY = ["--controller", "scheduled", "--cells-per-stratum", "1", "--trials-per-cell", "1", "--duration", "1",
         "--final-trials", "1", "--final-cells", "2", "--jobs", "1"]
@@ -35,7 +37,8 @@ def _completed(db) -> int:
 def test_every_knob_is_a_setting_of_its_controller_within_the_schemas_bounds(controller):
     for knob in T.SPACE[controller]:
         for value in (knob.low, knob.high):
-            T.settings_of(controller, {knob.key: value})       # SettingsError if the schema refuses it
+            for scale in (1.0, 180.0 / math.pi):                # a plant reading the paper's gains per radian
+                T.settings_of(controller, {knob.key: value}, scale)   # SettingsError if the schema refuses it
     boot = T.settings_of(controller, T.boot_values(controller))
     assert {k.rsplit(".", 1)[0] for k, _ in boot.values if k.startswith("pid.")} == \
         {f"pid.{a.name.lower()}" for a in controller_axes(controller)}
@@ -82,6 +85,16 @@ def test_a_final_check_on_the_searchs_own_seed_is_refused(tmp_path):
     assert not (tmp_path / "t").exists()
 
 
+def test_the_scheduled_controllers_first_candidate_is_the_papers_manhattan_on_every_plant():
+    """Its boot values (the paper's gains read as the plant reads them, the neutral schedule) score the baseline."""
+    for plant in ("paper", "polyester"):
+        evidence = T.TuningEvidence(controller="scheduled", plant=plant, cells_per_stratum=1, trials_per_cell=1,
+                                    duration_s=2.0, seed=4)
+        with LocalPool(1) as pool:
+            _, first = evidence.evaluate(T.boot_values("scheduled"), pool)
+            assert first == evidence.baseline(pool), plant
+
+
 def test_the_boot_values_are_the_controllers_untuned_settings():
     boot = T.boot_values("manhattan")
-    assert boot["pid.*.kp"] == m.PID_DEFAULTS[m.Axis.X]["kp"] and boot["configure.tilt_limit"] == 26.565
+    assert boot["pid.*.kp"] == m.PID_DEFAULTS[m.Axis.X]["kp"] and boot["configure.tilt_limit"] == m.Configure().tilt_limit
