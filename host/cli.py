@@ -42,6 +42,8 @@ def controller_settings(parser: argparse.ArgumentParser, args: argparse.Namespac
         parser.error(f"--controller {args.controller} contradicts {args.settings}, which sets up the "
                      f"{settings.controller} controller")
     args.controller = settings.controller
+    if getattr(args, "gains", None) is not None and any(k.startswith("pid.") for k, _ in settings.values):
+        parser.error(f"--gains and {args.settings} both set the PIDs' gains: give them in one place")
     return settings
 
 
@@ -219,7 +221,9 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     finally:
         signal.signal(signal.SIGINT, previous)
         try:
-            if session.link is not None:
+            if session.link is not None and outcome == "board lost":
+                session.link.command(m.Stop())       # once: the session's recoveries are spent
+            elif session.link is not None:
                 session.stop()                       # level the surface, controller off
         except LinkError as exc:
             report(f"could not level the surface and stop ({exc}): the firmware's deadman stops it")

@@ -15,18 +15,30 @@ key is a field of protocol/schema.toml, so the file says nothing the firmware do
 from __future__ import annotations
 
 import dataclasses
+import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 from mantaray.protocol import messages as m
+from mantaray.protocol import rig
 from mantaray.protocol.codec import FieldRefused
 
 from .session import controller_axes
 
 CONFIGURE_KEYS = ("tilt_limit", "velocity_filter")   # what a controller's settings may change of configure
 SETTINGS_MESSAGES = {cls.NAME: cls for cls in (m.ConfigureSchedule, m.ConfigureCascade)}
+OWN = {m.Controller.SCHEDULED: ("configure_schedule", "velocity_filter"),   # what only some controllers read
+       m.Controller.CASCADE: ("configure_cascade", "velocity_filter")}
 PID_KEYS = tuple(spec.name for spec in m.ConfigurePid.FIELDS if spec.name != "axis")
+
+
+TILT_SLACK_DEG = 1e-4   # [deg] the firmware's slack on the derived limit (float rounding)
+
+
+def max_tilt_deg(module_x_m: float, module_y_m: float) -> float:
+    """[deg] The steepest tilt configure takes for the module: atan(range / ((m + n) / 2))."""
+    return math.degrees(math.atan(rig.ACTUATOR_RANGE_M / ((module_x_m + module_y_m) / 2)))
 
 
 class SettingsError(ValueError):
@@ -49,15 +61,19 @@ class ControllerSettings:
         if len(set(keys)) != len(keys):
             raise SettingsError(f"a key is given twice: {sorted(k for k in keys if keys.count(k) > 1)[0]}")
         axes = {a.name.lower() for a in controller_axes(self.controller)}
+        own = OWN.get(m.Controller[self.controller.upper()], ())
+        configure_keys = [k for k in CONFIGURE_KEYS if k not in ("velocity_filter",) or k in own]
+        sections = [name for name in SETTINGS_MESSAGES if name in own]
         for key in keys:
             section, _, name = key.rpartition(".")
-            allowed = (section == "configure" and name in CONFIGURE_KEYS) or \
-                (section in SETTINGS_MESSAGES and name in {s.name for s in SETTINGS_MESSAGES[section].FIELDS}) or \
+            allowed = (section == "configure" and name in configure_keys) or \
+                (section in sections and name in {s.name for s in SETTINGS_MESSAGES[section].FIELDS}) or \
                 (section.startswith("pid.") and section[4:] in axes and name in PID_KEYS)
-            if not allowed:
+            if not allowed:     # a key the controller would not read is a mistake, not a setting
                 raise SettingsError(f"{key!r} is no setting of the {self.controller} controller; its settings are "
-                                    f"configure.{{{','.join(CONFIGURE_KEYS)}}}, {', '.join(SETTINGS_MESSAGES)} fields "
-                                    f"and pid.{{{','.join(sorted(axes))}}}.{{{','.join(PID_KEYS)}}}")
+                                    f"configure.{{{','.join(configure_keys)}}}, "
+                                    + "".join(f"{name} fields, " for name in sections)
+                                    + f"pid.{{{','.join(sorted(axes))}}}.{{{','.join(PID_KEYS)}}}")
         pids = [m.ConfigurePid(axis=axis, **fields) for axis, fields in self.gains({}).items()]
         for command in [*self.commands(), *pids]:   # every value within the schema's bounds, before a firmware sees it
             try:
@@ -66,9 +82,13 @@ class ControllerSettings:
                 raise SettingsError(f"{self._key_of(command, refused.field)}: {refused.reason} "
                                     f"(protocol/schema.toml)") from None
         try:
-            self.configure(m.Configure()).check()
+            configure = self.configure(m.Configure()).check()
         except FieldRefused as refused:
             raise SettingsError(f"configure.{refused.field}: {refused.reason} (protocol/schema.toml)") from None
+        steepest = max_tilt_deg(configure.module_x, configure.module_y)
+        if configure.tilt_limit > steepest + TILT_SLACK_DEG:
+            raise SettingsError(f"configure.tilt_limit: {configure.tilt_limit:g} deg is steeper than the module allows "
+                                f"({steepest:.6f} deg = atan(range / ((m + n) / 2)), PROTOCOL.md section 5)")
 
     def _key_of(self, command: m.Message, field: str) -> str:
         if isinstance(command, m.ConfigurePid):

@@ -48,7 +48,7 @@ class Frame:
     deliver: Callable[[], bool] | None = None   # called before it is sent (the simulation's latency); False ends the run
 
 
-STOPPED_REACHED, STOPPED_TIMEOUT, STOPPED_BY_SOURCE = "reached", "timeout", "source"   # why ClosedLoop.run ended
+STOPPED_REACHED, STOPPED_BY_SOURCE = "reached", "source"   # why ClosedLoop.run ended
 
 
 @dataclass
@@ -83,16 +83,15 @@ class ClosedLoop:
         self._record(capture_s, measured_xy_m if visible else None, target_m, telemetry)
         return telemetry
 
-    def run(self, frames: Iterable[Frame], judge: Tolerance, *, until_s: float = math.inf, stop_when_reached: bool,
+    def run(self, frames: Iterable[Frame], judge: Tolerance, *, stop_when_reached: bool,
             on_frame: Callable[[Frame, m.Telemetry | None], None] | None = None) -> str:
         """Drive the loop with a source's frames until a stop rule ends it; returns why (STOPPED_*).
 
-        Each frame, in order: past until_s the run ends (timeout); the tolerance is judged, and once it holds a run
-        with stop_when_reached ends (reached); deliver() runs; the frame is sent (or recorded as dropped); on_frame
-        sees it with its answer. A source that ends (camera stopped, object fell) ends the run by its own reason."""
+        Each frame, in order: the tolerance is judged, and once it holds a run with stop_when_reached ends there
+        (reached: that frame is neither sent nor recorded, as the paper's loop stops at it); deliver() runs; the frame
+        is sent (or recorded as dropped); on_frame sees it with its answer. A source that ends (camera stopped,
+        timeout, object fell) ends the run by its own reason."""
         for frame in frames:
-            if frame.capture_s > until_s:
-                return STOPPED_TIMEOUT
             if frame.judged_xy_m is not None and judge.update(frame.capture_s, frame.judged_xy_m, frame.target_m) \
                     and stop_when_reached:
                 return STOPPED_REACHED

@@ -45,6 +45,7 @@ def controller_axes(controller: str) -> tuple[m.Axis, ...]:
 
 CONTROLLER_AXES = {m.Controller.MANHATTAN: (m.Axis.X, m.Axis.Y), m.Controller.EUCLIDEAN: (m.Axis.RADIAL,),
                    m.Controller.SCHEDULED: (m.Axis.X, m.Axis.Y), m.Controller.CASCADE: (m.Axis.VX, m.Axis.VY)}
+PAPER_AXES = (m.Axis.X, m.Axis.Y, m.Axis.RADIAL)   # the PIDs whose gains the paper gives (a plant may read them per rad)
 
 
 def check_port(port: str) -> None:

@@ -48,6 +48,8 @@ FRAMES = [
     ("emergency_stop, seq wraps to 0", m.EmergencyStop(), 256),
     ("jog actuator 3 to -0.1 m", m.Jog(3, -0.1), 10),
     ("zero actuators 0 and 2 (homing)", m.Zero(0b0101), 9),
+    ("configure_schedule, a schedule that acts", m.ConfigureSchedule(0.08, 0.5, 0.25, 2.0, 0.3), 14),
+    ("configure_cascade", m.ConfigureCascade(4.0, 0.125), 15),
     ("sim_clock 83333 us", m.SimClock(83333), 11),
     ("object_position visible", m.ObjectPosition(513, 1234567, -0.03125, 0.2, m.PositionFlags(0)), 12),
     ("object_position not visible", m.ObjectPosition(514, 1317900, 0.0, 0.0, m.PositionFlags.NOT_VISIBLE), 13),

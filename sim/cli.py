@@ -507,6 +507,9 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         print(json.dumps(report))
     else:
         best, base = report["best"], report["baseline_on_the_sample"]
+        if best is None:                     # every candidate diverged
+            print(f"{report['candidates']} candidates, none that the physics could run; report {out / 'report.json'}")
+            return 1
         line = (f"{report['candidates']} candidates; best #{best['number']}: within ε at T {best['success']:.2f}, "
                 f"reached {best['reached']:.2f}, fell off {best['fell_off']:.2f} on the search's sample (the paper's "
                 f"Manhattan: {base['success']:.2f}, {base['reached']:.2f}, {base['fell_off']:.2f})")
@@ -657,7 +660,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     tune.add_argument("--alpha", type=float, default=0.0,
                       help=f"noise amplitude α [m], {bounds_text(m.Configure, 'noise_amplitude')} (paper: 0.1 cube, 0.05 bunny)")
     tune.add_argument("--plant", choices=plant_names(), default="paper", help="the plant to tune for (sim/plant.toml)")
-    tune.add_argument("--candidates", type=number(0, integer=True), default=60,
+    tune.add_argument("--candidates", type=number(1, integer=True), default=60,
                       help="candidates the study should hold when done (a resumed search goes on to this total)")
     tune.add_argument("--cells-per-stratum", type=number(1, integer=True), default=4,
                       help="cells drawn from each of centre, axes, diagonals, edges and corners")

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mantaray.host.session import controller_axes
+from mantaray.host.session import PAPER_AXES, controller_axes
 from mantaray.protocol import messages as m
 
 from .bridge import Gains, TrialSpec
@@ -146,5 +146,6 @@ def controller_gains(controller: str, gains: tuple[float, float, float, float] |
     out = {}
     for axis in controller_axes(controller):
         kp, ki, kd, limit = gains if gains is not None else m.PID_DEFAULTS[axis].values()
-        out[axis.name.lower()] = Gains(kp * scale, ki * scale, kd * scale, limit)
+        k = scale if axis in PAPER_AXES else 1.0       # the cascade's velocity PIDs are no gains of the paper
+        out[axis.name.lower()] = Gains(kp * k, ki * k, kd * k, limit)
     return out

@@ -50,7 +50,8 @@ TILT = Knob("configure.tilt_limit", 5.0, m.Configure().tilt_limit)   # [deg] at 
 VELOCITY_FILTER = Knob("configure.velocity_filter", 0.0, 0.5)     # [s]
 POSITION_PID = [Knob("pid.*.kp", 3.0, 150.0, "log", paper_gain=True), Knob("pid.*.ki", 0.0, 100.0, paper_gain=True),
                 Knob("pid.*.kd", 0.0, 100.0, paper_gain=True),
-                Knob("pid.*.integral_limit", 1.0, 26.565)]     # the paper's [deg/m], [deg/(m s)], [deg s/m]; [deg]
+                Knob("pid.*.integral_limit", 1.0, m.PID_DEFAULTS[m.Axis.X]["integral_limit"])]
+#                 the paper's [deg/m], [deg/(m s)], [deg s/m]; [deg]
 SPACE = {
     "manhattan": [TILT, *POSITION_PID],
     "euclidean": [TILT, *POSITION_PID],
@@ -61,7 +62,8 @@ SPACE = {
     "cascade": [TILT, VELOCITY_FILTER, Knob("configure_cascade.position_gain", 0.3, 30.0, "log"),
                 Knob("configure_cascade.speed_limit", 0.02, 1.0, "log"),
                 Knob("pid.*.kp", 10.0, 2000.0, "log"), Knob("pid.*.ki", 0.0, 500.0), Knob("pid.*.kd", 0.0, 50.0),
-                Knob("pid.*.integral_limit", 1.0, 26.565)],   # [deg s/m], [deg/m], [deg s^2/m], [deg]
+                Knob("pid.*.integral_limit", 1.0, m.PID_DEFAULTS[m.Axis.VX]["integral_limit"])],
+    #             [deg s/m], [deg/m], [deg s^2/m], [deg]
 }
 
 
@@ -104,6 +106,7 @@ class TuningEvidence:
     seed: int = 31                         # the sample's and the sampler's; the final check uses another
     resolution: int = 11                   # the fast mode (docs/results.md)
     timestep_s: float = 0.002
+    gains_in_paper_units: bool = True      # paper_gain knobs x Plant.gain_scale (part of the study's record)
     kind: str = "tuning"
     objective_names: tuple[str, ...] = ("targets missed under both success rules, per trial",)
     penalty: tuple[float, ...] = (2.0,)    # every target missed twice: what settings that cannot run score

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from mantaray.host.controller_settings import SETTINGS_MESSAGES, ControllerSettings, SettingsError
+from mantaray.host.controller_settings import OWN, SETTINGS_MESSAGES, ControllerSettings, SettingsError
 from mantaray.host.session import Setup, controller_axes
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
@@ -17,9 +17,11 @@ from mantaray.protocol import messages as m
 
 def _keys(controller: str) -> list[tuple[str, float, float]]:
     """(key, low, high) of every setting the controller takes, from the schema's bounds."""
+    own = OWN.get(m.Controller[controller.upper()], ())
     out = [(f"configure.{name}", spec.min, spec.max) for spec in m.Configure.FIELDS
-           for name in ("tilt_limit", "velocity_filter") if spec.name == name]
-    out += [(f"{msg}.{spec.name}", spec.min, spec.max) for msg, cls in SETTINGS_MESSAGES.items() for spec in cls.FIELDS]
+           for name in ("tilt_limit", "velocity_filter") if spec.name == name and (name == "tilt_limit" or name in own)]
+    out += [(f"{msg}.{spec.name}", spec.min, spec.max) for msg, cls in SETTINGS_MESSAGES.items() if msg in own
+            for spec in cls.FIELDS]
     out += [(f"pid.{axis.name.lower()}.{spec.name}", spec.min, spec.max) for axis in controller_axes(controller)
             for spec in m.ConfigurePid.FIELDS if spec.name != "axis"]
     return out
@@ -65,6 +67,10 @@ def test_the_settings_become_commands_that_carry_every_value(s):
     ('controller = "scheduled"\n[configure_schedule]\nedge_gain = "high"', "edge_gain must be a number"),
     ('controller = "scheduled"\n[pid.x]\nkd = -1', "pid.x.kd: -1 deg s/m is outside"),
     ('controller = "scheduled" [', "not TOML"),
+    ('controller = "manhattan"\n[configure_schedule]\nedge_tilt = 0.5', "'configure_schedule.edge_tilt' is no setting"),
+    ('controller = "scheduled"\n[configure_cascade]\nspeed_limit = 0.5', "'configure_cascade.speed_limit' is no set"),
+    ('controller = "euclidean"\n[configure]\nvelocity_filter = 0.1', "'configure.velocity_filter' is no setting"),
+    ('controller = "manhattan"\n[configure]\ntilt_limit = 60', "steeper than the module allows (26.565051 deg"),
 ])
 def test_each_mistake_is_one_clear_error(text, needle):
     with pytest.raises(SettingsError, match=None) as refused:
@@ -81,3 +87,6 @@ def test_the_commands_take_a_settings_file_and_refuse_a_contradicting_controller
     assert ran.returncode == 1 and '"controller": "scheduled"' in ran.stdout, ran.stderr
     refused = subprocess.run([*run, "--controller", "cascade"], cwd=REPO, capture_output=True, text=True, timeout=300)
     assert refused.returncode == 2 and "contradicts" in refused.stderr and "Traceback" not in refused.stderr
+    path.write_text(ControllerSettings("scheduled", (("pid.x.kp", 40.0),)).dumps())
+    twice = subprocess.run([*run, "--gains", "30,0,0"], cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert twice.returncode == 2 and "both set the PIDs' gains" in twice.stderr
