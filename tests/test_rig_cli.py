@@ -12,6 +12,7 @@ import cv2
 import numpy as np
 import pytest
 
+from mantaray.host.controller_settings import ControllerSettings
 from mantaray.host.link import Link
 from mantaray.host.markers import MarkerLayout
 from mantaray.host.transport import SerialTransport
@@ -72,6 +73,25 @@ def test_rig_takes_the_gains_it_is_given(still_video, tmp_path):
     assert proc.returncode == 1, proc.stderr
     telemetry = [r for r in _log(tmp_path) if r["kind"] == "telemetry"]
     assert telemetry and all(r["tilt_zx"] == pytest.approx(20 * (-0.1 - 0.1), abs=0.1) for r in telemetry[1:])
+
+
+def test_rig_takes_a_settings_file_as_the_tuner_writes_it(still_video, tmp_path):
+    """The file's controller and gains reach the firmware: the cascade with kP alone tilts kP times the velocity it
+    asks for, here its speed limit on both axes [deg s/m x m/s]; at the first frame exactly (no velocity known yet),
+    later within what the tracker's jitter makes of the velocity."""
+    settings = tmp_path / "settings.toml"
+    settings.write_text(ControllerSettings("cascade", (("configure_cascade.speed_limit", 0.1), ("pid.vx.kp", 50.0),
+                                                       ("pid.vx.ki", 0.0), ("pid.vy.kp", 50.0),
+                                                       ("pid.vy.ki", 0.0))).dumps())
+    with VirtualMcu(clock="wall") as vmcu:
+        proc = _mantaray("rig", "--port", vmcu.path, "--camera", still_video, "--target=-0.1,0.1", "--settings",
+                         str(settings), "--alpha", "0", "--timeout", "1", "--out", str(tmp_path))
+    assert proc.returncode == 1, proc.stderr                                   # a timeout: the object stands still
+    telemetry = [r for r in _log(tmp_path) if r["kind"] == "telemetry"]
+    first, later = telemetry[0], telemetry[1:]
+    assert (first["tilt_zx"], first["tilt_zy"]) == (pytest.approx(-5.0, abs=0.006), pytest.approx(5.0, abs=0.006))
+    assert later and np.mean([r["tilt_zx"] for r in later]) == pytest.approx(-5.0, abs=0.5)
+    assert np.mean([r["tilt_zy"] for r in later]) == pytest.approx(5.0, abs=0.5)
 
 
 def test_rig_stops_when_the_object_holds_the_target(still_video, tmp_path):
