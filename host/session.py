@@ -173,19 +173,21 @@ class RigSession:
     # ----------------------------------------------------------------------------------- connection
     def open(self) -> RigSession:
         """Connects and sets the board up; raises BoardLost when it cannot (IncompatibleFirmware at once)."""
-        try:
-            self._connect(self.reconnect_timeout_s)
-        except IncompatibleFirmware:
-            raise
-        except (LinkError, OSError) as exc:
-            raise BoardLost(str(exc)) from None   # it names the port
+        self._connect(self.reconnect_timeout_s)
         self._set_up("connected")
         return self
 
     def _connect(self, timeout_s: float) -> None:
+        """Open and identify; a board that does not come back in timeout_s raises BoardLost (IncompatibleFirmware
+        as it is)."""
         first = self.identity is None
-        self.link, self.identity = connect(self.port, reset_wait_s=self.reset_wait_s, timeout_s=timeout_s,
-                                           ack_timeout_s=self.ack_timeout_s, open_transport=self._open_transport)
+        try:
+            self.link, self.identity = connect(self.port, reset_wait_s=self.reset_wait_s, timeout_s=timeout_s,
+                                               ack_timeout_s=self.ack_timeout_s, open_transport=self._open_transport)
+        except IncompatibleFirmware:
+            raise
+        except (LinkError, OSError) as exc:
+            raise BoardLost(str(exc)) from None   # it names the port
         self._resets_seen = self.link.resets
         if first:
             for text in self.link.rig_differences:
@@ -235,12 +237,7 @@ class RigSession:
         if self.link is not None:
             _close_quietly(self.link)
         self.link = None
-        try:
-            self._connect(self.reconnect_timeout_s)
-        except IncompatibleFirmware:
-            raise
-        except (LinkError, OSError) as exc:
-            raise BoardLost(str(exc)) from None   # it names the port
+        self._connect(self.reconnect_timeout_s)
         self.reconnects += 1
 
     def _recover(self, why: str) -> None:
