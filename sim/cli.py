@@ -469,7 +469,7 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     except C.StudyMismatch as exc:
         print(f"mantaray sim tune: {exc}", file=sys.stderr)
         return 2
-    progress = _candidates(study, out, args.candidates, "tune")
+    progress = None
 
     def report_candidate(n: int, total: int, info: dict) -> None:
         note = ("the physics diverged: scored the worst" if "unstable" in info else
@@ -483,8 +483,11 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         with _pool(parser, args) as pool:
             baseline = study.user_attrs.get("baseline")
             if baseline is None:                 # the paper's Manhattan on the same sample, once per study
+                print("tune: first the paper's Manhattan on the search's sample, what each candidate is measured "
+                      "against", file=sys.stderr, flush=True)
                 baseline = evidence.baseline(pool)
                 study.set_user_attr("baseline", baseline)
+            progress = _candidates(study, out, args.candidates, "tune")   # its rate counts candidates only
             C.run_study(study, evidence, T.SPACE[args.controller], {}, args.candidates, pool, report_candidate)
             progress.close()
             best = T.best_settings(study, evidence)
@@ -497,7 +500,8 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
               f"{out / 'final'} to check the new ones)", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        progress.close()
+        if progress is not None:
+            progress.close()
         T.write_report(study, evidence, out, study.user_attrs.get("baseline"))
         print(f"\ninterrupted: {len(C.completed(study))} candidates are in {out / 'study.db'}; the same command "
               f"continues (report so far in {out / 'report.json'})", file=sys.stderr)

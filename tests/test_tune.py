@@ -64,6 +64,8 @@ def test_a_tiny_tuning_run_is_interrupted_then_continued_and_writes_what_the_rig
     again = _tune(*TINY, "--candidates", str(before + 1), "--out", str(out), "--json")
     assert again.returncode == 0, again.stderr
     assert "continuing" in again.stderr
+    # The paper's Manhattan runs on the sample once, before the candidates (their ETA counts them only).
+    assert "first the paper's Manhattan" in err and "first the paper's Manhattan" not in again.stderr
     report = json.loads(again.stdout)
     assert report["candidates"] == before + 1
     assert set(report["baseline_on_the_sample"]) >= {"success", "reached", "fell_off"}      # the paper's Manhattan
