@@ -41,6 +41,8 @@ def main() -> int:
     args.controller = None
     settings = controller_settings(parser, args)
     suffix = "" if settings.controller == "manhattan" and not settings.values else f"_{settings.controller}"
+    tilt_limit_deg = settings.get("configure.tilt_limit")       # [deg] the limit the controller runs with
+    tilt_limit_deg = m.Configure.tilt_limit if tilt_limit_deg is None else tilt_limit_deg
     plants = args.plants.split(",")
     unknown = [p for p in plants if p not in plant_names()]
     if unknown:
@@ -53,7 +55,7 @@ def main() -> int:
             runs: dict[str, list[dict]] = {}
             for r in records:
                 runs.setdefault(r["object"], []).append(r)
-            figure = fig3_figure(runs, Experiment.tolerance_m, MODULE_M, m.Configure.tilt_limit,
+            figure = fig3_figure(runs, Experiment.tolerance_m, MODULE_M, tilt_limit_deg,
                                  f"Fig. 3 in simulation, {plant} plant: {settings.controller}, 60 s, from the centre",
                                  REPO / args.figures / f"fig3_{plant}{suffix}.png")
             out = REPO / args.results / f"fig3_{plant}{suffix}.json"
