@@ -9,7 +9,7 @@ the same starts, targets and noise seeds, so the comparison is paired). Both are
 from what docs/results/tune/<run>/ holds (the study, the final check's trials, the settings), where every session
 writes it back; --collect only writes back what out/ holds (say, from a run still going). With both done, the
 script prints each run's scores under both rules beside the baseline's, the falls, McNemar's test on the paired
-trials, and writes the difference maps to docs/figures/.
+trials, and copies the tuned controller's heatmaps and writes the difference maps to docs/figures/.
 """
 from __future__ import annotations
 
@@ -99,6 +99,9 @@ def compare(run: str) -> dict | None:
                      "reach_score": round(st.reach_score / sb.reach_score, 2) if sb.reach_score else None},
            "mcnemar": {rule: mcnemar(tuned.records, base.records, rule) for rule in ("success", "reached")}}
     for rule, flag in (("", []), ("_reach", ["--reached"])):
+        drawn = tuned_path.parent / f"heatmap{rule}.png"        # the tuned controller's own map (sim tune draws it)
+        if drawn.exists():
+            shutil.copyfile(drawn, REPO / "docs" / "figures" / f"heatmap_{run}{rule}.png")
         subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "compare", str(tuned_path), str(base_path),
                         *flag, "--out", str(REPO / "docs" / "figures" / f"difference_{run}_minus_manhattan{rule}.png")],
                        cwd=REPO, check=True, stdout=subprocess.DEVNULL)

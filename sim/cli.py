@@ -442,7 +442,7 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     The study is OUT/study.db (SQLite): interrupt it and the same command continues; --candidates is the total the
     study should hold. Writes OUT/settings.toml (for mantaray rig --settings, sim run and sim heatmap),
     report.json (both scores, beside the paper's Manhattan on the same sample) and history.png; the final check's
-    trials go to OUT/final/results.jsonl (resumable too)."""
+    trials go to OUT/final/results.jsonl (resumable too), its heatmaps under both rules beside them."""
     from . import calibrate as C
     from . import tune as T
     from .experiment import ExperimentMismatch
@@ -495,6 +495,7 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
                 final_path = out / "final" / "results.jsonl"
                 final = T.final_check(evidence, best, args.final_trials, args.final_seed, pool, final_path,
                                       cells=args.final_cells)
+                final["figures"] = _final_heatmaps(final_path, args)
     except ExperimentMismatch as exc:
         print(f"mantaray sim tune: {exc} (the best settings changed since the final check began: delete "
               f"{out / 'final'} to check the new ones)", file=sys.stderr)
@@ -522,6 +523,18 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
                      f"{final['reach_score']:.1f}, fell off {final['fell_off']:.2f}")
         print(line + f"; settings {out / 'settings.toml'}, report {out / 'report.json'}")
     return 0
+
+
+def _final_heatmaps(path: Path, args: argparse.Namespace) -> list[str]:
+    """The final check's heatmaps under both rules (and cells.csv, summary.json) beside its trials, as sim heatmap
+    draws them."""
+    from .results_file import ResultsFile
+
+    results = ResultsFile.load(path)
+    title = (f"{args.object}, {args.controller} tuned for the {args.plant} plant, α = {args.alpha:g} m, "
+             f"{results.protocol.trials_per_cell} trials/cell, seed {args.final_seed}")
+    summary = _heatmap_outputs(results, path.parent, title)
+    return [summary["figure"], summary["reach_figure"]]
 
 
 def _interruptible() -> None:

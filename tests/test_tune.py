@@ -9,6 +9,7 @@ import sqlite3
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -71,6 +72,8 @@ def test_a_tiny_tuning_run_is_interrupted_then_continued_and_writes_what_the_rig
     assert set(report["baseline_on_the_sample"]) >= {"success", "reached", "fell_off"}      # the paper's Manhattan
     final = report["final_check"]
     assert final["seed"] == 2026 and final["trials"] == 4 and {"score", "reach_score"} <= set(final)
+    assert [Path(f).name for f in final["figures"]] == ["heatmap.png", "heatmap_reach.png"]   # its maps, both rules
+    assert all(Path(f).stat().st_size > 0 for f in final["figures"]) and (out / "final" / "cells.csv").exists()
     settings = ControllerSettings.load(out / "settings.toml")
     assert settings.controller == "scheduled" and dict(settings.values) == report["best"]["settings"]
     assert (out / "history.png").stat().st_size > 0
