@@ -24,6 +24,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from paper_heatmaps import zone_rates   # a sibling script: the same zones as the paper's maps are measured on
+
 REPO = Path(__file__).resolve().parents[1]
 COMMITTED = REPO / "docs" / "results" / "tune"
 BASELINES = REPO / "out" / "heatmap"          # where paper_heatmaps.py --plant paper --to-end puts them
@@ -97,7 +99,8 @@ def compare(run: str) -> dict | None:
                                "fell_off": round(float(sb.fell_rates.mean()), 3)},
            "ratio": {"score": round(st.score / sb.score, 2) if sb.score else None,
                      "reach_score": round(st.reach_score / sb.reach_score, 2) if sb.reach_score else None},
-           "mcnemar": {rule: mcnemar(tuned.records, base.records, rule) for rule in ("success", "reached")}}
+           "mcnemar": {rule: mcnemar(tuned.records, base.records, rule) for rule in ("success", "reached")},
+           "zones": {"tuned": zone_rates(tuned_path)["zones"], "paper_manhattan": zone_rates(base_path)["zones"]}}
     for rule, flag in (("", []), ("_reach", ["--reached"])):
         drawn = tuned_path.parent / f"heatmap{rule}.png"        # the tuned controller's own map (sim tune draws it)
         if drawn.exists():
