@@ -129,7 +129,7 @@ def main() -> int:
             restore(run)
             proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "tune", "--controller", controller,
                                    "--object", obj, "--alpha", str(alpha), "--plant", "paper", "--candidates",
-                                   str(args.candidates), "--jobs", str(args.jobs), "--out", str(out_dir(run))],
+                                   str(args.candidates), "--jobs", str(args.jobs), "--out", str(out_dir(run).relative_to(REPO))],
                                   cwd=REPO)
             collect(run)
             if proc.returncode != 0:
