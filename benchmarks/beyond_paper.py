@@ -81,6 +81,20 @@ def mcnemar(a: dict, b: dict, key: str) -> dict:
     return {"paired": len(common), "only_tuned": only_a, "only_paper": only_b, "z": round(z, 2)}
 
 
+def edge_falls(a: dict, b: dict) -> dict:
+    """In the outer 5 cm band, paired trials of a (tuned) and b (paper): the falls, how many of them had reached ε
+    first (the reach rule counts those as successes), and the trials a keeps on the sheet where b fell."""
+    band = [k for k in sorted(set(a) & set(b)) if max(abs(v) for v in a[k]["target_m"]) > 0.20]
+    kept = [k for k in band if b[k]["fell_off"] and not a[k]["fell_off"]]
+    out = {"trials": len(band), "kept_on_by_tuned": len(kept),
+           "of_those_reached": {"tuned": sum(bool(a[k]["reached"]) for k in kept),
+                                "paper_manhattan": sum(bool(b[k]["reached"]) for k in kept)}}
+    for name, rec in (("tuned", a), ("paper_manhattan", b)):
+        fell = [k for k in band if rec[k]["fell_off"]]
+        out[f"fell_{name}"] = {"trials": len(fell), "reached_first": sum(bool(rec[k]["reached"]) for k in fell)}
+    return out
+
+
 def compare(run: str) -> dict | None:
     """Scores, falls and McNemar of a run's final check against its baseline, when both are complete."""
     from mantaray.sim import results_file as R
@@ -100,7 +114,8 @@ def compare(run: str) -> dict | None:
            "ratio": {"score": round(st.score / sb.score, 2) if sb.score else None,
                      "reach_score": round(st.reach_score / sb.reach_score, 2) if sb.reach_score else None},
            "mcnemar": {rule: mcnemar(tuned.records, base.records, rule) for rule in ("success", "reached")},
-           "zones": {"tuned": zone_rates(tuned_path)["zones"], "paper_manhattan": zone_rates(base_path)["zones"]}}
+           "zones": {"tuned": zone_rates(tuned_path)["zones"], "paper_manhattan": zone_rates(base_path)["zones"]},
+           "outer_band": edge_falls(tuned.records, base.records)}
     for rule, flag in (("", []), ("_reach", ["--reached"])):
         drawn = tuned_path.parent / f"heatmap{rule}.png"        # the tuned controller's own map (sim tune draws it)
         if drawn.exists():
