@@ -29,7 +29,7 @@ from mantaray.protocol import messages as m
 from mantaray.sim.bridge import Bridge, TrialSpec
 from mantaray.sim.experiment import controller_gains
 from mantaray.sim.parameters import plant_names
-from mantaray.sim.plant import DEFAULT_PLANT, Plant
+from mantaray.sim.plant import DEFAULT_PLANT, Plant, plant_for
 
 F_CPU = 16_000_000  # [Hz]
 RX_BUFFER_US = 64 * 10 / 115_200 * 1e6  # [us] 64 bytes of 10 bits at 115200 baud
@@ -43,11 +43,16 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seconds", type=float, default=60.0, help="simulated seconds of each run")
     parser.add_argument("--out", default="out/bench/avr_timing.json")
-    parser.add_argument("--plant", choices=plant_names(), default=DEFAULT_PLANT,
-                        help="the plant of the bench-side trial (sim/plant.toml): the one the settings were tuned for")
+    parser.add_argument("--plant", choices=plant_names(),
+                        help=f"the plant of the bench-side trial (sim/plant.toml) (default: the one --settings was "
+                             f"tuned for, else {DEFAULT_PLANT})")
     add_controller_arguments(parser)
     args = parser.parse_args()
     settings = controller_settings(parser, args)
+    try:
+        args.plant = plant_for(settings, args.plant)
+    except ValueError as exc:
+        parser.error(str(exc))
     plant = Plant(args.plant)
     build = subprocess.run([sys.executable, str(REPO / "scripts" / "avr_build.py")], capture_output=True, text=True)
     if build.returncode != 0:

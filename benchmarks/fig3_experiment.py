@@ -2,11 +2,12 @@
 
 Run: python3 benchmarks/fig3_experiment.py [--plants polyester,paper] [--jobs 2] [--seed 3] [--settings FILE]
 With --settings (a controller's settings, as mantaray sim tune writes them) the same targets run with that
-controller instead of the paper's Manhattan, and the outputs' names end in _<controller>.
+controller instead of the paper's Manhattan, on the plant the file was tuned for, and the outputs' names end in
+_<controller>.
 For each plant: every object of Table I from the centre to five targets uniform in [-0.2, 0.2]^2 m with the
 paper's alpha for it (sim/fig3.py), ending at the first frame within eps; prints reached/fell per object and
 finding F6, draws the figure in the style of Fig. 3 (each object's paths with the targets' tolerance circles
-above the phase plot of the tilts with the +-26.6 deg square) to docs/figures/fig3_<plant>.png and writes
+above the phase plot of the tilts within the square of the controller's tilt limit, the paper's +-26.6 deg) to docs/figures/fig3_<plant>.png and writes
 the trials (paths and tilts included) to docs/results/fig3_<plant>.json.
 """
 from __future__ import annotations
@@ -24,6 +25,7 @@ from mantaray.sim.findings import MODULE_M, fig3_finding
 from mantaray.sim.executors import LocalPool
 from mantaray.sim.experiment import Experiment
 from mantaray.sim.parameters import plant_names
+from mantaray.sim.plant import plant_for
 from mantaray.plots import fig3_figure
 
 REPO = Path(__file__).resolve().parents[1]
@@ -31,7 +33,8 @@ REPO = Path(__file__).resolve().parents[1]
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--plants", default=",".join(plant_names()), help="named plants of sim/plant.toml")
+    parser.add_argument("--plants", help="named plants of sim/plant.toml (default: every one, or the one --settings "
+                                          "was tuned for)")
     parser.add_argument("--seed", type=int, default=3, help="seed of the targets and the noise")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--figures", default="docs/figures")
@@ -41,12 +44,16 @@ def main() -> int:
     args.controller = None
     settings = controller_settings(parser, args)
     suffix = "" if settings.controller == "manhattan" and not settings.values else f"_{settings.controller}"
-    tilt_limit_deg = settings.get("configure.tilt_limit")       # [deg] the limit the controller runs with
-    tilt_limit_deg = m.Configure.tilt_limit if tilt_limit_deg is None else tilt_limit_deg
-    plants = args.plants.split(",")
+    tilt_limit_deg = settings.configure(m.Configure()).tilt_limit       # [deg] the limit the controller runs with
+    plants = args.plants.split(",") if args.plants else [settings.plant] if settings.plant else plant_names()
     unknown = [p for p in plants if p not in plant_names()]
     if unknown:
         parser.error(f"unknown plant(s) {', '.join(unknown)}; the plants are: {', '.join(plant_names())}")
+    try:
+        for plant in plants:
+            plant_for(settings, plant)
+    except ValueError as exc:
+        parser.error(str(exc))
     with LocalPool(args.jobs) as pool:
         for plant in plants:
             t0 = time.perf_counter()

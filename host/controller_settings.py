@@ -5,6 +5,7 @@ The tuner (mantaray sim tune) writes one; `mantaray rig --settings`, `mantaray s
 key is a field of protocol/schema.toml, so the file says nothing the firmware does not check itself:
 
     controller = "scheduled"
+    plant = "paper"         # optional: the simulated plant the values are for (sim commands refuse another)
     [configure]             # only the controller's own fields: tilt_limit, velocity_filter
     tilt_limit = 22.0
     [configure_schedule]    # any field of configure_schedule or configure_cascade
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,6 +35,7 @@ OWN = {m.Controller.SCHEDULED: ("configure_schedule", "velocity_filter"),   # wh
 PID_KEYS = tuple(spec.name for spec in m.ConfigurePid.FIELDS if spec.name != "axis")
 
 
+PLANT_NAME = re.compile(r"[A-Za-z0-9_.-]+")   # a plant's name as sim/plant.toml's [plant.NAME] tables give it
 TILT_SLACK_DEG = 1e-4   # [deg] the firmware's slack on the derived limit (float rounding)
 
 
@@ -48,14 +51,19 @@ class SettingsError(ValueError):
 @dataclass(frozen=True)
 class ControllerSettings:
     """controller and flat (key, value) pairs, kept sorted: "configure.tilt_limit", "configure_schedule.edge_zone",
-    "pid.x.kp"."""
+    "pid.x.kp"; plant, when given, names the simulated plant (sim/plant.toml) the values were tuned for: the gains
+    are the firmware's numbers, which a plant reading the paper's gains per radian needs 180/pi times larger."""
     controller: str = "manhattan"
     values: tuple[tuple[str, float], ...] = ()
+    plant: str | None = None
 
     def __post_init__(self) -> None:
         if self.controller.upper() not in m.Controller.__members__:
             raise SettingsError(f"controller must be one of {', '.join(c.name.lower() for c in m.Controller)}, "
                                 f"got {self.controller!r}")
+        object.__setattr__(self, "controller", self.controller.lower())
+        if self.plant is not None and not PLANT_NAME.fullmatch(self.plant):
+            raise SettingsError(f"plant must be a plant's name (letters, digits, _ . -), got {self.plant!r}")
         keys = [str(k) for k, _ in self.values]
         object.__setattr__(self, "values", tuple(sorted((str(k), float(v)) for k, v in self.values)))  # canonical
         if len(set(keys)) != len(keys):
@@ -98,11 +106,6 @@ class ControllerSettings:
     def get(self, key: str) -> float | None:
         return dict(self.values).get(key)
 
-    def with_values(self, mapping: dict[str, float]) -> ControllerSettings:
-        """These settings with more keys set (or changed)."""
-        merged = dict(self.values) | {k: float(v) for k, v in mapping.items()}
-        return ControllerSettings(self.controller, tuple(merged.items()))
-
     # ------------------------------------------------------------------------------- as commands
     def configure(self, base: m.Configure) -> m.Configure:
         """base with this controller and its configure fields."""
@@ -130,6 +133,8 @@ class ControllerSettings:
         """The TOML the file holds (comment, if given, as its first lines)."""
         lines = [f"# {line}" for line in comment.splitlines()]
         lines.append(f'controller = "{self.controller}"')
+        if self.plant is not None:
+            lines.append(f'plant = "{self.plant}"')
         sections: dict[str, list[tuple[str, float]]] = {}
         for key, value in self.values:
             section, _, name = key.rpartition(".")
@@ -147,6 +152,9 @@ class ControllerSettings:
         controller = data.pop("controller", None)
         if not isinstance(controller, str):
             raise SettingsError(f"{source}: needs controller = \"NAME\"")
+        plant = data.pop("plant", None)
+        if plant is not None and not isinstance(plant, str):
+            raise SettingsError(f"{source}: plant must be a plant's name (letters, digits, _ . -), got {plant!r}")
         values = []
 
         def walk(prefix: str, table: dict) -> None:
@@ -160,7 +168,7 @@ class ControllerSettings:
 
         walk("", data)
         try:
-            return cls(controller, tuple(values))
+            return cls(controller, tuple(values), plant)
         except SettingsError as exc:
             raise SettingsError(f"{source}: {exc}") from None
 
@@ -170,4 +178,6 @@ class ControllerSettings:
             text = Path(path).read_text()
         except OSError as exc:
             raise SettingsError(f"cannot read the settings {path}: {exc.strerror or exc}") from None
+        except UnicodeDecodeError:
+            raise SettingsError(f"{path}: not a settings file (not text)") from None
         return cls.loads(text, str(path))

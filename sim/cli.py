@@ -53,6 +53,7 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from mantaray.plots import path_phase_figure
 
     settings = controller_settings(parser, args)
+    args.plant = _plant(parser, settings, args.plant)
     plant = Plant(args.plant)
     rig = plant.rig(args.object)
     if args.vision:
@@ -104,14 +105,14 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     if progress is not None:
         bar.close()
 
-    summary = result.summary()
+    summary = {**result.summary(), "plant": args.plant}
     spec = result.spec
     outcome = "fell off" if result.fell_off else ("success" if result.success else "not within ε at T")
     summary["figure"] = str(path_phase_figure(
         result.true_xy_m, result.tilt_deg, spec.start_m, [spec.target_m], spec.tolerance_m,
         f"{result.object_name}, {spec.controller}, α = {spec.alpha_m:g} m: {outcome}\n"
         f"final error {result.final_error_m * 100:.1f} cm (ε = {spec.tolerance_m * 100:g} cm)",
-        (rig.frame.size_x_m, rig.frame.size_y_m), m.Configure.tilt_limit, out / f"{stem}.png",
+        (rig.frame.size_x_m, rig.frame.size_y_m), settings.configure(m.Configure()).tilt_limit, out / f"{stem}.png",
         t_s=result.t_s, command_m=result.command_m, range_m=rig.actuators.range_m))
     summary["trajectory"] = str(_save_trajectory(result, out / f"{stem}.npz"))
     if args.video:
@@ -129,7 +130,7 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         # one word per meaning: SUCCESS is within ε at T (the exit status); "reached" is within ε at some frame
         outcome = "FELL OFF" if result.fell_off else ("SUCCESS" if result.success else "NOT WITHIN ε AT T")
         reach = "never reached ε" if result.time_to_reach_s is None else f"reached ε first at {result.time_to_reach_s:.2f} s"
-        print(f"{outcome}: {args.object}, {args.controller}, start {args.start[0]:+.3f},{args.start[1]:+.3f} -> "
+        print(f"{outcome}: {args.object}, {args.controller}, {args.plant} plant, start {args.start[0]:+.3f},{args.start[1]:+.3f} -> "
               f"target {args.target[0]:+.3f},{args.target[1]:+.3f} m; final error {result.final_error_m * 100:.1f} cm "
               f"(ε {args.tolerance * 100:g} cm), {reach}; {result.sim_time_s:.1f} sim s in {result.wall_time_s:.1f} wall s "
               f"({result.sim_time_s / result.wall_time_s:.2f}x, physics {result.physics_share:.0%}); "
@@ -163,6 +164,14 @@ def _save_trajectory(result, path: Path) -> Path:
                         tilt_deg=result.tilt_deg, command_m=result.command_m, state=result.state,
                         start_m=result.spec.start_m, target_m=result.spec.target_m)
     return path
+
+
+def _plant(parser: argparse.ArgumentParser, settings, given: str | None) -> str:
+    from .plant import plant_for
+    try:
+        return plant_for(settings, given)
+    except ValueError as exc:
+        parser.error(str(exc))
 
 
 def _cells(text: str) -> tuple[int, ...]:
@@ -211,6 +220,7 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     from .executors import run, run_local, run_ray
 
     settings = controller_settings(parser, args)
+    args.plant = _plant(parser, settings, args.plant)
     try:
         protocol = Experiment(object_name=args.object, controller=args.controller, cells=args.cells,
                             trials_per_cell=args.trials, tolerance_m=args.tolerance, duration_s=args.duration,
@@ -589,8 +599,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--tolerance", type=float, default=0.02, help=f"ε [m], {bounds_text(m.Configure, 'tolerance')}")
     run.add_argument("--gains", type=parse_gains, metavar="KP,KI,KD[,ILIM]",
                      help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
-    run.add_argument("--plant", choices=plant_names(), default=DEFAULT_PLANT,
-                     help="the simulated plant (sim/plant.toml): its parameters, camera latency and readings")
+    run.add_argument("--plant", choices=plant_names(),
+                     help="the simulated plant (sim/plant.toml): its parameters, camera latency and readings "
+                          f"(default: the one --settings was tuned for, else {DEFAULT_PLANT})")
     run.add_argument("--rate", type=float, help="camera rate [Hz] (default the plant's: the paper's 12)")
     run.add_argument("--latency", type=float, help="camera latency [s], below one frame period (default the plant's)")
     run.add_argument("--noise", type=float, default=0.0, help="camera noise, standard deviation [m] per axis")
@@ -622,7 +633,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     heat.add_argument("--gains", type=parse_gains, metavar="KP,KI,KD[,ILIM]",
                       help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
     heat.add_argument("--seed", type=int, default=2026, help="seed of the whole run: starts, targets and noise")
-    heat.add_argument("--plant", choices=plant_names(), default=DEFAULT_PLANT, help="the simulated plant (sim/plant.toml)")
+    heat.add_argument("--plant", choices=plant_names(),
+                      help=f"the simulated plant (sim/plant.toml) (default: the one --settings was tuned for, else "
+                           f"{DEFAULT_PLANT})")
     heat.add_argument("--stop-when-reached", action="store_true",
                       help="end each trial at its first frame within ε, as the paper's loop does: faster, and the map "
                            "under the paper's stopping rule is the same, but 'ends within ε at T' is then not measured")

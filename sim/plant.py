@@ -11,6 +11,18 @@ from .rig import Rig
 DEFAULT_PLANT = "polyester"     # the physically calibrated rig of sim/README.md
 
 
+def plant_for(settings, given: str | None) -> str:
+    """The plant a command runs settings on: --plant (given), else the one the settings file was tuned for, else the
+    default. A --plant other than the file's is refused (ValueError): the file's gains are that plant's reading."""
+    if given is not None and settings.plant is not None and given != settings.plant:
+        raise ValueError(f"the settings were tuned for the {settings.plant} plant, not {given}: their gains are the "
+                         f"firmware's numbers for that plant (drop --plant, or give --plant {settings.plant})")
+    if settings.plant is not None and settings.plant not in P.plant_names():
+        raise ValueError(f"the settings were tuned for a plant {settings.plant!r} that sim/plant.toml does not "
+                         f"declare; the plants are: {', '.join(P.plant_names())}")
+    return given or settings.plant or DEFAULT_PLANT
+
+
 @dataclass(frozen=True)
 class Plant:
     """A named plant with values set over it; every value is checked against its declared range."""

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -174,8 +175,12 @@ def open_tuning(path: Path, evidence: TuningEvidence):
 
 
 def best_settings(study, evidence: TuningEvidence) -> ControllerSettings | None:
+    """The best candidate's settings, naming the plant they were tuned for (their gains are its reading)."""
     best = C.best_trial(study)
-    return None if best is None else settings_of(evidence.controller, best.user_attrs["values"], evidence.gain_scale)
+    if best is None:
+        return None
+    settings = settings_of(evidence.controller, best.user_attrs["values"], evidence.gain_scale)
+    return dataclasses.replace(settings, plant=evidence.plant)
 
 
 def history_figure(study, evidence: TuningEvidence, baseline: dict | None, path: Path) -> Path | None:
@@ -210,17 +215,24 @@ def write_report(study, evidence: TuningEvidence, out: Path, baseline: dict | No
     """OUT/settings.toml (the best settings), report.json and history.png."""
     best = C.best_trial(study)
     settings = best_settings(study, evidence)
+    def here(path) -> str:       # a path of the report's, from its own folder (which may be copied elsewhere)
+        return os.path.relpath(path, out)
+
     report = {"evidence": dataclasses.asdict(evidence), "candidates": len(C.completed(study)),
               "baseline_on_the_sample": baseline,
               "best": None if best is None else {"number": best.number, "misses": best.values[0],
-                                                 **best.user_attrs["details"], "settings": dict(settings.values)},
-              "final_check": final}
+                                                 **best.user_attrs["details"],
+                                                 "knobs": best.user_attrs["values"],   # SPACE's units: paper_gain ones the paper's
+                                                 "settings": dict(settings.values)},  # the firmware's numbers
+              "final_check": None if final is None else {**final, "results": here(final["results"]),
+                                                         "figures": [here(f) for f in final.get("figures", [])]}}
     if settings is not None:
         (out / "settings.toml").write_text(settings.dumps(
             f"{evidence.controller} settings tuned by mantaray sim tune for the {evidence.object_name} "
             f"(α = {evidence.alpha_m:g} m) on the {evidence.plant} plant: candidate #{best.number} of "
-            f"{report['candidates']}\nuse: mantaray rig --settings settings.toml (or sim run / sim heatmap)"))
+            f"{report['candidates']}\nuse: mantaray rig --settings settings.toml, or mantaray sim run (or sim heatmap) "
+            f"--settings settings.toml, which runs on the plant named here"))
     figure = history_figure(study, evidence, baseline, out / "history.png")
-    report["figure"] = None if figure is None else str(figure)
+    report["figure"] = None if figure is None else here(figure)
     (out / "report.json").write_text(json.dumps(report, indent=1) + "\n")
     return report

@@ -33,7 +33,7 @@ def settings(draw):
     chosen = draw(st.lists(st.sampled_from(_keys(controller)), unique_by=lambda k: k[0], max_size=8))
     values = tuple((key, draw(st.floats(low, min(high, 26.5) if key == "configure.tilt_limit" else high,
                                         allow_nan=False))) for key, low, high in chosen)
-    return ControllerSettings(controller, values)
+    return ControllerSettings(controller, values, draw(st.none() | st.from_regex(r"[A-Za-z0-9_.-]{1,12}", fullmatch=True)))
 
 
 @given(settings())
@@ -71,6 +71,8 @@ def test_the_settings_become_commands_that_carry_every_value(s):
     ('controller = "scheduled"\n[configure_cascade]\nspeed_limit = 0.5', "'configure_cascade.speed_limit' is no set"),
     ('controller = "euclidean"\n[configure]\nvelocity_filter = 0.1', "'configure.velocity_filter' is no setting"),
     ('controller = "manhattan"\n[configure]\ntilt_limit = 60', "steeper than the module allows (26.565051 deg"),
+    ('controller = "manhattan"\nplant = 3', "plant must be a plant's name"),
+    ('controller = "manhattan"\nplant = "my rig"', "plant must be a plant's name"),
 ])
 def test_each_mistake_is_one_clear_error(text, needle):
     with pytest.raises(SettingsError, match=None) as refused:
@@ -90,3 +92,28 @@ def test_the_commands_take_a_settings_file_and_refuse_a_contradicting_controller
     path.write_text(ControllerSettings("scheduled", (("pid.x.kp", 40.0),)).dumps())
     twice = subprocess.run([*run, "--gains", "30,0,0"], cwd=REPO, capture_output=True, text=True, timeout=300)
     assert twice.returncode == 2 and "both set the PIDs' gains" in twice.stderr
+
+
+def test_settings_run_on_the_plant_they_were_tuned_for_and_refuse_another(tmp_path):
+    path = tmp_path / "tuned.toml"
+    path.write_text(ControllerSettings("scheduled", (("pid.x.kp", 1600.0),), plant="paper").dumps())
+    for command in (["run", "--duration", "0.5"], ["heatmap", "--cells", "2", "--trials", "1"]):
+        other = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", *command, "--settings", str(path),
+                                "--plant", "polyester", "--out", str(tmp_path / "out")], cwd=REPO,
+                               capture_output=True, text=True, timeout=300)
+        assert other.returncode == 2 and "tuned for the paper plant, not polyester" in other.stderr, other.stderr
+    ran = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "run", "--settings", str(path), "--duration",
+                          "0.5", "--json", "--out", str(tmp_path / "out")], cwd=REPO, capture_output=True, text=True,
+                         timeout=300)
+    assert ran.returncode == 1 and '"plant": "paper"' in ran.stdout, ran.stderr
+    path.write_text(ControllerSettings("scheduled", plant="nowhere").dumps())
+    unknown = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "run", "--settings", str(path)], cwd=REPO,
+                             capture_output=True, text=True, timeout=300)
+    assert unknown.returncode == 2 and "'nowhere' that sim/plant.toml does not declare" in unknown.stderr
+
+
+def test_a_file_that_is_not_text_is_one_clear_error(tmp_path):
+    path = tmp_path / "tuned.toml"
+    path.write_bytes(b"\xff\xfe\x00 not text")
+    with pytest.raises(SettingsError, match="not a settings file"):
+        ControllerSettings.load(path)
