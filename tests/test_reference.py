@@ -15,7 +15,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import beyond_reference as beyond  # noqa: E402
 import paper_reference as ref  # noqa: E402
 
-from mantaray.host.link import Link  # noqa: E402
+from mantaray.host.link import CommandRefused, Link  # noqa: E402
 from mantaray.host.transport import InProcessTransport  # noqa: E402
 from mantaray.protocol import messages as m  # noqa: E402
 
@@ -260,6 +260,18 @@ class Harness:
         self.steps += 1
         return tel
 
+    def refused_position(self, x: float, y: float) -> None:
+        """A visible measurement no controller may see (NaN, inf, off the module): refused, naming the field, and
+        nothing of it is kept (the next frame's dt, velocity and commands are as if it never came)."""
+        with pytest.raises(CommandRefused) as refused:
+            self.link.position(m.ObjectPosition(frame=(self.frame + 1) & 0xFFFF, capture_time=self.capture_us & 0xFFFFFFFF,
+                                                x=f32(x), y=f32(y)))
+        x_bad = not (math.isfinite(x) and abs(x) <= 0.5)            # the module's half side is 0.5 m here
+        bad = x if x_bad else y
+        assert refused.value.code == (m.ErrorCode.OUT_OF_RANGE if math.isfinite(bad) else m.ErrorCode.NOT_FINITE)
+        names = [spec.name for spec in m.ObjectPosition.FIELDS]
+        assert refused.value.nack.field == names.index("x" if x_bad else "y")
+
     def compare(self, tel: m.Telemetry, want: ref.Step) -> None:
         context = (self.cfg, self.steps, tel, want)
         assert abs(tel.tilt_zx - want.tilt_zx) <= TILT_QUANTUM / 2 + TILT_EPS, context
@@ -295,6 +307,9 @@ def drive(h: Harness, rng, steps: int, allow_long_gaps: bool = False) -> None:
         h.advance(gap)
         if rng.random() < 0.03:
             h.position(math.nan if rng.random() < 0.5 else float(p[0]), float(p[1]), visible=False)
+        elif rng.random() < 0.03:
+            bad = [math.nan, math.inf, -math.inf, 1e30, 0.51][int(rng.integers(5))]
+            h.refused_position(*((bad, float(p[1])) if rng.random() < 0.5 else (float(p[0]), bad)))
         else:
             h.position(float(p[0]), float(p[1]))
 

@@ -2,13 +2,21 @@
 // PIDs -> tilt -> plane -> noisy, clamped actuator commands.
 #include "controller.h"
 
-#include <math.h>  // fabsf, hypotf
+#include <math.h>  // fabsf, hypotf, isfinite
 
 namespace mr {
 
 namespace {
 
 float clamp01(float x) { return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x); }
+
+// The velocity estimate [m/s] after one frame: v low-passed toward the frame difference raw with weight blend. A
+// non-finite result (a NaN or infinite position in this frame or the last) restarts it at rest, so one bad frame
+// cannot hold it at NaN for the rest of the run.
+float filtered_velocity(float v, float raw, float blend) {
+  const float next = v + blend * (raw - v);
+  return isfinite(next) ? next : 0.0f;
+}
 
 // One axis of the position-scheduled Manhattan controller. p [m] is the object's coordinate on the axis, half [m]
 // the module's half side along it, v [m/s] its filtered velocity. Within edge_zone of the edge the object is
@@ -61,8 +69,8 @@ float TiltController::step(const ControllerConfig& config, float target_x, float
   const float last_vy = vy_;
   if (rate_known) {
     const float blend = dt / (config.velocity_filter + dt);
-    vx_ += blend * ((x - prev_x_) / dt - vx_);
-    vy_ += blend * ((y - prev_y_) / dt - vy_);
+    vx_ = filtered_velocity(vx_, (x - prev_x_) / dt, blend);
+    vy_ = filtered_velocity(vy_, (y - prev_y_) / dt, blend);
   } else {
     vx_ = vy_ = 0.0f;
   }

@@ -201,10 +201,12 @@ TEST_CASE("controller: every command within +-kActuatorRangeM for NaN, inf and h
   const float values[] = {0.0f, 0.1f, -0.25f, 1e3f, -1e30f, kMax, -kMax, kInf, -kInf, kNaN};
   const float dts[] = {0.0f, 1e-3f, 0.1f, 1e30f, kInf, kNaN, -1.0f};
   int steps = 0;
-  for (Controller kind : {Controller::kManhattan, Controller::kEuclidean}) {
+  for (Controller kind : {Controller::kManhattan, Controller::kEuclidean, Controller::kScheduled,
+                          Controller::kCascade}) {
     for (float noise : {0.0f, 0.25f}) {
       mr::ControllerConfig cfg = paper(kind, noise);
       cfg.tilt_limit = 89.0f;  // even a limit the supervisor would refuse cannot push a command out of range
+      cfg.schedule = mr::ScheduleConfig{0.2f, 0.3f, 0.5f, 2.0f, 0.1f};  // every part of the schedule at work
       mr::TiltController c;
       c.reset(3);
       for (float tx : values) {
@@ -222,17 +224,21 @@ TEST_CASE("controller: every command within +-kActuatorRangeM for NaN, inf and h
           }
         }
       }
-      // After all that abuse a sane input still gives a sane, finite tilt.
+      // After all that abuse, ending on a NaN position a rate is known for, a sane input still gives a sane,
+      // finite tilt.
       mr::ControllerOutput out{};
+      c.step(cfg, 0.1f, 0.0f, 0.0f, 0.0f, 0.01f, out);
+      c.step(cfg, 0.1f, 0.0f, kNaN, kNaN, 0.01f, out);
+      REQUIRE(commands_ok(out));
       c.step(paper(kind), 0.1f, 0.0f, 0.0f, 0.0f, 0.01f, out);
       c.step(paper(kind), 0.1f, 0.0f, 0.0f, 0.0f, 0.01f, out);
       CHECK(out.tilt_zx == out.tilt_zx);
       CHECK(fabsf(out.tilt_zx) <= 26.565051f);
-      CHECK(out.tilt_zx > 0.0f);
+      CHECK(out.tilt_zx > 0.0f);  // also the cascade's: its velocity estimate is not left at NaN
       CHECK(commands_ok(out));
     }
   }
-  CHECK(steps == 2 * 2 * 10 * 10 * 7 * 2);
+  CHECK(steps == 4 * 2 * 10 * 10 * 7 * 2);
 }
 
 TEST_CASE("controller: with the geometric tilt limit and no noise, commands never need the final clamp") {
