@@ -35,6 +35,7 @@ RUNS = {   # name: (object, controller, alpha [m], the baseline run of paper_hea
     "cube_scheduled_alpha0.1": ("cube", "scheduled", 0.1, "cube_manhattan_alpha0.1_paper_to_end"),
     "bunny_scheduled_alpha0.05": ("bunny", "scheduled", 0.05, "bunny_manhattan_alpha0.05_paper_to_end"),
 }
+PAIRED_APART = ("controller", "settings", "gains")   # what a paired comparison may differ in: the controller only
 KEPT = ("settings.toml", "report.json", "history.png")   # beside study.db and the final check's trials
 
 
@@ -106,6 +107,10 @@ def compare(run: str) -> dict | None:
     tuned, base = R.ResultsFile.load(tuned_path), R.ResultsFile.load(base_path)
     if tuned.missing() or base.missing():
         return None
+    differ = sorted(k for k, v in tuned.protocol.to_json().items()
+                    if k not in PAIRED_APART and base.protocol.to_json()[k] != v)
+    if differ:       # then trial k of a cell is not the same start, target and noise in both: no pairs
+        raise SystemExit(f"{run}: the final check and {base_path} differ in {', '.join(differ)}: not paired trials")
     st, sb = S.summarize(tuned), S.summarize(base)
     out = {"tuned": {"score": round(st.score, 1), "reach_score": round(st.reach_score, 1),
                      "fell_off": round(float(st.fell_rates.mean()), 3)},
@@ -142,14 +147,19 @@ def main() -> int:
         obj, controller, alpha, _ = RUNS[run]
         if not args.collect:
             restore(run)
-            proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "tune", "--controller", controller,
-                                   "--object", obj, "--alpha", str(alpha), "--plant", "paper", "--candidates",
-                                   str(args.candidates), "--jobs", str(args.jobs), "--out", str(out_dir(run).relative_to(REPO))],
-                                  cwd=REPO)
-            collect(run)
-            if proc.returncode != 0:
-                print(f"{run}: tune ended with exit {proc.returncode}; what it did is kept", file=sys.stderr)
-                return proc.returncode
+            proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "tune", "--controller", controller,
+                                     "--object", obj, "--alpha", str(alpha), "--plant", "paper", "--candidates",
+                                     str(args.candidates), "--jobs", str(args.jobs),
+                                     "--out", str(out_dir(run).relative_to(REPO))], cwd=REPO)
+            try:
+                returncode = proc.wait()
+            except KeyboardInterrupt:      # Ctrl-C reaches sim tune too: it ends keeping what it did
+                returncode = proc.wait()
+            finally:
+                collect(run)              # and that is written back
+            if returncode != 0:
+                print(f"{run}: tune ended with exit {returncode}; what it did is kept", file=sys.stderr)
+                return returncode
         else:
             collect(run)
         table[run] = compare(run)

@@ -507,8 +507,8 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
                                       cells=args.final_cells)
                 final["figures"] = _final_heatmaps(final_path, args)
     except ExperimentMismatch as exc:
-        print(f"mantaray sim tune: {exc} (the best settings changed since the final check began: delete "
-              f"{out / 'final'} to check the new ones)", file=sys.stderr)
+        print(f"mantaray sim tune: {exc} (the final check there began with other settings, or with other --final "
+              f"options: give the same ones to continue it, or delete {out / 'final'} to check anew)", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         if progress is not None:

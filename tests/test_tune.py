@@ -78,6 +78,8 @@ def test_a_tiny_tuning_run_is_interrupted_then_continued_and_writes_what_the_rig
     assert settings.controller == "scheduled" and dict(settings.values) == report["best"]["settings"]
     assert settings.plant == "paper" and set(report["best"]["knobs"]) == {k.key for k in T.SPACE["scheduled"]}
     assert (out / "history.png").stat().st_size > 0
+    other = _tune(*TINY, "--candidates", str(before + 1), "--final-seed", "2027", "--out", str(out))
+    assert other.returncode == 2 and "other --final options" in other.stderr and "Traceback" not in other.stderr
     with_it = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "run", "--settings", str(out / "settings.toml"),
                               "--duration", "0.5", "--json", "--out", str(tmp_path / "run")], cwd=REPO,
                              capture_output=True, text=True, timeout=300)
