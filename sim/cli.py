@@ -475,7 +475,7 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     out = _output(parser, writable_dir,
                   args.out or f"out/tune/{args.object}_{args.controller}_alpha{args.alpha:g}_{args.plant}")
     try:
-        study = T.open_tuning(out / "study.db", evidence)
+        study = T.open_tuning(out / "study.db", evidence, args.per_axis)
     except C.StudyMismatch as exc:
         print(f"mantaray sim tune: {exc}", file=sys.stderr)
         return 2
@@ -498,7 +498,8 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
                 baseline = evidence.baseline(pool)
                 study.set_user_attr("baseline", baseline)
             progress = _candidates(study, out, args.candidates, "tune")   # its rate counts candidates only
-            C.run_study(study, evidence, T.SPACE[args.controller], {}, args.candidates, pool, report_candidate)
+            C.run_study(study, evidence, T.knobs(args.controller, args.per_axis), {}, args.candidates, pool,
+                        report_candidate)
             progress.close()
             best = T.best_settings(study, evidence)
             if args.final_trials and best is not None:
@@ -686,6 +687,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                               description=cmd_tune.__doc__, formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     tune.add_argument("--controller", choices=choices(m.Controller), default="scheduled",
                       help="the controller whose settings are searched (sim/tune.py, SPACE, says which)")
+    tune.add_argument("--per-axis", action="store_true",
+                      help="search each PID's gains on its own (x and y apart) instead of one set for all: for a rig "
+                           "that is not symmetric")
     tune.add_argument("--object", choices=sorted(OBJECTS), default="sphere", help="the paper's object (Table I)")
     tune.add_argument("--alpha", type=float, default=0.0,
                       help=f"noise amplitude α [m], {bounds_text(m.Configure, 'noise_amplitude')} (paper: 0.1 cube, 0.05 bunny)")

@@ -68,14 +68,29 @@ SPACE = {
 }
 
 
+def knobs(controller: str, per_axis: bool = False) -> list[Knob]:
+    """The controller's searched settings: SPACE's, or with per_axis each pid.* knob one knob per PID it runs (for a
+    rig that is not symmetric)."""
+    if not per_axis:
+        return SPACE[controller]
+    out = []
+    for knob in SPACE[controller]:
+        if knob.key.startswith(EVERY_PID):
+            name = knob.key[len(EVERY_PID):]
+            out += [dataclasses.replace(knob, key=f"pid.{axis.name.lower()}.{name}") for axis in controller_axes(controller)]
+        else:
+            out.append(knob)
+    return out
+
+
 def settings_of(controller: str, values: dict[str, float], gain_scale: float = 1.0) -> ControllerSettings:
-    """The controller's settings for a candidate: pid.*.NAME set on each of its PIDs, a paper_gain knob times
-    gain_scale (clipped to the schema's bound)."""
-    paper = {k.key for k in SPACE[controller] if k.paper_gain}
+    """The controller's settings for a candidate: pid.*.NAME set on each of its PIDs (pid.AXIS.NAME on that one), a
+    paper_gain knob times gain_scale (clipped to the schema's bound)."""
+    paper = {k.key for k in [*knobs(controller), *knobs(controller, per_axis=True)] if k.paper_gain}
     flat = {}
     for key, value in values.items():
         if key in paper:
-            value = min(value * gain_scale, PID_MAX[key[len(EVERY_PID):]])
+            value = min(value * gain_scale, PID_MAX[key.rsplit(".", 1)[1]])
         if key.startswith(EVERY_PID):
             flat.update({f"pid.{axis.name.lower()}.{key[len(EVERY_PID):]}": value for axis in controller_axes(controller)})
         else:
@@ -83,15 +98,16 @@ def settings_of(controller: str, values: dict[str, float], gain_scale: float = 1
     return ControllerSettings(controller, tuple(flat.items()))
 
 
-def boot_values(controller: str) -> dict[str, float]:
+def boot_values(controller: str, per_axis: bool = False) -> dict[str, float]:
     """The knobs at the firmware's boot values (the paper's gains for its controllers), clipped into their ranges:
     the search's first candidate, so it starts from what the controller does untuned."""
-    axis = controller_axes(controller)[0]
+    axes = controller_axes(controller)
     boot = {"configure.tilt_limit": m.Configure().tilt_limit, "configure.velocity_filter": m.Configure().velocity_filter,
-            **{f"{EVERY_PID}{k}": v for k, v in m.PID_DEFAULTS[axis].items()},
+            **{f"{EVERY_PID}{k}": v for k, v in m.PID_DEFAULTS[axes[0]].items()},
+            **{f"pid.{a.name.lower()}.{k}": v for a in axes for k, v in m.PID_DEFAULTS[a].items()},
             **{f"configure_schedule.{s.name}": getattr(m.ConfigureSchedule(), s.name) for s in m.ConfigureSchedule.FIELDS},
             **{f"configure_cascade.{s.name}": getattr(m.ConfigureCascade(), s.name) for s in m.ConfigureCascade.FIELDS}}
-    return {k.key: float(np.clip(boot[k.key], k.low, k.high)) for k in SPACE[controller]}
+    return {k.key: float(np.clip(boot[k.key], k.low, k.high)) for k in knobs(controller, per_axis)}
 
 
 @dataclass(frozen=True)
@@ -166,11 +182,12 @@ def final_check(evidence: TuningEvidence, settings: ControllerSettings, trials_p
             "fell_off": round(float(np.nanmean(summary.fell_rates)), 4)}
 
 
-def open_tuning(path: Path, evidence: TuningEvidence):
-    """The study (new, or the one in path if it holds the same search); a new one starts from the boot values."""
-    study = C.open_study(path, evidence, SPACE[evidence.controller], {})
+def open_tuning(path: Path, evidence: TuningEvidence, per_axis: bool = False):
+    """The study (new, or the one in path if it holds the same search: the same knobs too); a new one starts from
+    the boot values."""
+    study = C.open_study(path, evidence, knobs(evidence.controller, per_axis), {})
     if not study.trials:
-        study.enqueue_trial(boot_values(evidence.controller))
+        study.enqueue_trial(boot_values(evidence.controller, per_axis))
     return study
 
 

@@ -33,13 +33,15 @@ def _completed(db) -> int:
         return con.execute("SELECT COUNT(*) FROM trials WHERE state = 'COMPLETE'").fetchone()[0]
 
 
+@pytest.mark.parametrize("per_axis", [False, True])
 @pytest.mark.parametrize("controller", list(T.SPACE))
-def test_every_knob_is_a_setting_of_its_controller_within_the_schemas_bounds(controller):
-    for knob in T.SPACE[controller]:
+def test_every_knob_is_a_setting_of_its_controller_within_the_schemas_bounds(controller, per_axis):
+    for knob in T.knobs(controller, per_axis):
         for value in (knob.low, knob.high):
             for scale in (1.0, 180.0 / math.pi):                # a plant reading the paper's gains per radian
                 T.settings_of(controller, {knob.key: value}, scale)   # SettingsError if the schema refuses it
-    boot = T.settings_of(controller, T.boot_values(controller))
+    boot = T.settings_of(controller, T.boot_values(controller, per_axis))
+    assert boot == T.settings_of(controller, T.boot_values(controller))   # per axis or not, the same start
     assert {k.rsplit(".", 1)[0] for k, _ in boot.values if k.startswith("pid.")} == \
         {f"pid.{a.name.lower()}" for a in controller_axes(controller)}
 
@@ -106,3 +108,21 @@ def test_the_scheduled_controllers_first_candidate_is_the_papers_manhattan_on_ev
 def test_the_boot_values_are_the_controllers_untuned_settings():
     boot = T.boot_values("manhattan")
     assert boot["pid.*.kp"] == m.PID_DEFAULTS[m.Axis.X]["kp"] and boot["configure.tilt_limit"] == m.Configure().tilt_limit
+
+
+def test_per_axis_the_pids_get_their_own_gains_scaled_as_the_plant_reads_them():
+    scale = 180.0 / math.pi
+    settings = T.settings_of("scheduled", {"pid.x.kp": 20.0, "pid.y.kp": 40.0, "pid.x.integral_limit": 10.0}, scale)
+    assert settings.get("pid.x.kp") == pytest.approx(20.0 * scale) and settings.get("pid.y.kp") == pytest.approx(40.0 * scale)
+    assert settings.get("pid.x.integral_limit") == 10.0 and settings.get("pid.y.integral_limit") is None   # [deg]: no gain
+
+
+def test_a_per_axis_search_searches_x_and_y_apart_and_is_its_own_study(tmp_path):
+    out = tmp_path / "t"
+    tiny = [*TINY, "--final-trials", "0", "--out", str(out)]
+    run = _tune(*tiny, "--per-axis", "--candidates", "2", "--json")
+    assert run.returncode == 0, run.stderr
+    knobs = json.loads(run.stdout)["best"]["knobs"]
+    assert {"pid.x.kp", "pid.y.kp", "pid.x.kd", "pid.y.kd"} <= set(knobs) and "pid.*.kp" not in knobs
+    shared = _tune(*tiny, "--candidates", "3")           # the same folder without --per-axis: another search
+    assert shared.returncode == 2 and "another configuration (searched differ)" in shared.stderr, shared.stderr
