@@ -117,3 +117,7 @@ def test_a_file_that_is_not_text_is_one_clear_error(tmp_path):
     path.write_bytes(b"\xff\xfe\x00 not text")
     with pytest.raises(SettingsError, match="not a settings file"):
         ControllerSettings.load(path)
+
+
+def test_the_controller_is_named_in_any_case_and_kept_as_the_cli_spells_it():
+    assert ControllerSettings.loads('controller = "Scheduled"').controller == "scheduled"
