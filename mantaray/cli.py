@@ -41,8 +41,8 @@ def cmd_vmcu(args: argparse.Namespace) -> int:
               f"schema 0x{reply.schema_hash:08X} (matches this host), clock {reply.clock.name.lower()}")
         if args.identify_only:
             return 0
-        print("running; Ctrl-C stops it", flush=True)
-        try:
+        try:                      # from the line that says so on, a stop is the normal end (exit 0)
+            print("running; Ctrl-C stops it", flush=True)
             while vmcu.process.poll() is None:
                 time.sleep(0.2)
         except KeyboardInterrupt:
