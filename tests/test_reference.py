@@ -343,6 +343,30 @@ def test_the_scheduled_controller_with_its_default_schedule_steps_as_the_papers_
     drive(h, rng, steps=200)
 
 
+def test_a_schedule_wider_than_half_the_module_limits_each_side_by_its_own_edge():
+    """edge_zone > h: the object just either side of the centre gets the same tilt limits (no jump where the nearest
+    edge changes), each side limited by its own edge's distance, and the firmware agrees with its reference."""
+    rng = np.random.default_rng(91)
+    cfg = random_config(rng, "scheduled")
+    cfg.gains = {axis: ref.Gains(f32(2000.0), 0.0, 0.0, f32(1.0)) for axis in ("x", "y")}  # saturates at the limit
+    zone, edge_tilt = rng.uniform(0.3, 0.6), rng.uniform(0.1, 0.9)
+    cfg.schedule = beyond.Schedule(edge_zone=f32(zone), edge_tilt=f32(edge_tilt))
+    h = Harness(cfg)
+    limits = {}
+    for p in (1e-4, -1e-4):
+        for target in (0.25, -0.25):
+            if limits:
+                h.stop()
+            h.set_target(target, 0.0)
+            h.start()
+            h.advance(100_000)
+            limits[p, target] = abs(h.position(p, 0.0).tilt_zx)
+    for target in (0.25, -0.25):
+        assert limits[1e-4, target] == pytest.approx(limits[-1e-4, target], rel=1e-3), limits
+        w = 1.0 - 0.25 / zone   # at the centre, both edges are 0.25 m away
+        assert limits[1e-4, target] == pytest.approx(cfg.tilt_limit * (1.0 - w * (1.0 - edge_tilt)), rel=1e-3)
+
+
 def test_paper_gains_and_defaults_match():
     """The boot configuration: the paper's gains, the 0.5 m module and the 26.57 deg limit, no noise."""
     for kind in ("manhattan", "euclidean"):
