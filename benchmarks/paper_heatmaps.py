@@ -6,9 +6,9 @@ eps = 0.02 m) on the named plant (sim/plant.toml) into out/heatmap/<run>/ (a pla
 suffixes the run's name with _<plant>); runs are resumable, so an interrupted script continues where it
 stopped, and --trials 3 gives a quick map that a later run with the paper's 10 tops up. A run starts
 from the committed trials (docs/results/<run>.jsonl.gz) when out/ has none, and writes every trial back
-there, so a fresh clone continues the committed runs instead of repeating them. The wall time of every
-session of a run is kept in docs/figures/heatmaps.json, so the total a run took is known even when it
-was split. The figures are copied to docs/figures/ beside the scores, regions and zone rates, and the
+there (also when interrupted; --collect writes back a run still going), so a fresh clone continues the committed
+runs instead of repeating them. The wall time of every session of a run is kept in docs/figures/heatmaps.json, so
+the total a run took is known even when it was split. The figures are copied to docs/figures/ beside the scores, regions and zone rates, and the
 paper's findings F1-F5 (sim/findings.py) on the two sphere maps, under both success rules. A plant that reads
 the paper's success rule as "reached" ends each trial at its first frame within eps (--stop-when-reached), unless
 --to-end runs every trial to T (both success rules measured; the run's name gets _to_end).
@@ -67,6 +67,15 @@ def zone_rates(results_path: Path) -> dict:
     return {"zones": zones, "reach_regions_cells": regions}
 
 
+def keep(results_path: Path, committed: Path) -> int:
+    """Write every trial out/ holds back to docs/results/<run>.jsonl.gz; returns how many it holds."""
+    trials = results_path.read_bytes() if results_path.exists() else b""
+    if trials and (not committed.exists() or gzip.decompress(committed.read_bytes()) != trials):
+        COMMITTED.mkdir(parents=True, exist_ok=True)
+        committed.write_bytes(gzip.compress(trials, mtime=0))
+    return len(trials.splitlines())
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", default=",".join(RUNS), help="comma-separated names of: " + ", ".join(RUNS))
@@ -78,6 +87,8 @@ def main() -> int:
     parser.add_argument("--to-end", action="store_true",
                         help="run every trial to T, also on a plant read with the paper's stopping rule, so that both "
                              "success rules are measured (the baseline of docs/results.md, Beyond the paper)")
+    parser.add_argument("--collect", action="store_true",
+                        help="only write back the trials out/ holds (say, of a run still going) to docs/results/")
     args = parser.parse_args()
     from mantaray.sim.parameters import plant_names
 
@@ -108,23 +119,32 @@ def main() -> int:
         if not results_path.exists() and committed.exists():
             results_path.write_bytes(gzip.decompress(committed.read_bytes()))
             print(f"{name}: continuing from the committed trials in {committed.relative_to(REPO)}", flush=True)
+        if args.collect:
+            keep(results_path, committed)
+            continue
         before = len(results_path.read_bytes().splitlines()) if results_path.exists() else 0
         t0 = time.perf_counter()
-        proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--object", obj,
-                               "--controller", controller, "--alpha", str(alpha), "--trials", str(args.trials), "--jobs", str(args.jobs),
-                               "--plant", args.plant, *stop, "--out", str(out), "--json"], cwd=REPO, stdout=subprocess.PIPE)
+        proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--object", obj,
+                                 "--controller", controller, "--alpha", str(alpha), "--trials", str(args.trials),
+                                 "--jobs", str(args.jobs), "--plant", args.plant, *stop, "--out", str(out), "--json"],
+                                cwd=REPO, stdout=subprocess.PIPE)
+        try:
+            stdout, _ = proc.communicate()
+        except KeyboardInterrupt:        # Ctrl-C reaches sim heatmap too: it ends keeping every finished trial
+            proc.wait()
+            raise
+        finally:                         # and those, with this session's time, are written back
+            if keep(results_path, committed) > before:
+                entry = table.setdefault(name, {})
+                entry["wall_s_sessions"] = [*entry.get("wall_s_sessions", []), round(time.perf_counter() - t0, 1)]
+                table_path.write_text(json.dumps(table, indent=1) + "\n")
         wall = time.perf_counter() - t0
         if proc.returncode != 0:
-            print(f"{name}: heatmap failed (exit {proc.returncode})", file=sys.stderr)
+            print(f"{name}: heatmap ended with exit {proc.returncode}; its trials are kept in "
+                  f"{committed.relative_to(REPO)}", file=sys.stderr)
             return proc.returncode
-        trials = results_path.read_bytes()
-        times = table.get(name, {}).get("wall_s_sessions", [])
-        if len(trials.splitlines()) > before:     # a session that ran trials
-            times = [*times, round(wall, 1)]
-        if not committed.exists() or gzip.decompress(committed.read_bytes()) != trials:
-            COMMITTED.mkdir(parents=True, exist_ok=True)
-            committed.write_bytes(gzip.compress(trials, mtime=0))
-        summary = json.loads(proc.stdout)
+        times = table[name].get("wall_s_sessions", []) if name in table else []
+        summary = json.loads(stdout)
         if not stop:                  # a run that stops at eps has no map of "ends within eps at T"
             shutil.copyfile(out / "heatmap.png", figures / f"heatmap_{name}.png")
         shutil.copyfile(out / "heatmap_reach.png", figures / f"heatmap_{name}_reach.png")
@@ -136,6 +156,8 @@ def main() -> int:
         table_path.write_text(json.dumps(table, indent=1) + "\n")
         print(f"{name}: score {summary['score']:.1f} (reach {summary['reach_score']:.1f}), "
               f"{summary['trials']} trials, this session {wall / 60:.1f} min", flush=True)
+    if args.collect:
+        return 0
     sphere_runs = [REPO / args.out / (run + suffix) / "results.jsonl" for run in ("sphere_euclidean", "sphere_manhattan")]
     if all(path.exists() for path in sphere_runs):
         for rule, rule_suffix in ((["--reached"], "_reach"),) if stop else (([], ""), (["--reached"], "_reach")):
