@@ -1,9 +1,10 @@
 """Independent float64 model of the controllers beyond the paper (PROTOCOL.md, Controllers) to check the C++ against."""
 # Written from PROTOCOL.md's equations, not from the firmware source:
 #   velocity     v <- v + dt / (tau + dt) ((p - p_prev) / dt - v), 0 at start and after a restart
-#   scheduled    w+- = clamp(1 - (h -+ p) / edge_zone, 0, 1), w = max(w+, w-); kP, kI x (1 - w (1 - edge_gain));
-#                kD x (1 + w edge_brake); the tilt toward each edge within tilt_limit (1 - w+- (1 - edge_tilt)); with
-#                brake_speed > 0 the tilt along the motion within x clamp(1 - |v| / brake_speed, 0, 1)
+#   scheduled    w = clamp(1 - (h - |p|) / edge_zone, 0, 1); kP, kI x (1 - w (1 - edge_gain)); kD x (1 + w edge_brake);
+#                the tilt toward the nearest edge within tilt_limit (1 - w (1 - edge_tilt)), toward the other the same
+#                with w' = clamp(1 - (h + |p|) / edge_zone, 0, 1); with brake_speed > 0 the tilt along the motion
+#                within x clamp(1 - |v| / brake_speed, 0, 1)
 #   cascade      v* = clamp(position_gain e, +-speed_limit); tilt = PID(v* - v), its derivative -(v - v_prev) / dt
 # and Manhattan's plane, noise and clamp (paper_reference.py) for both.
 from __future__ import annotations
@@ -75,7 +76,7 @@ class BeyondController:
     def _scheduled(self, axis: str, p: float, half: float, error: float, rate: float, v: float, dt: float) -> float:
         s, g = self.schedule, self.gains[axis]
         w_edge = {side: min(max(1.0 - (half - side * p) / s.edge_zone, 0.0), 1.0) for side in (1, -1)}
-        w = max(w_edge.values())
+        w = max(w_edge.values())   # the nearer edge's
         ease = 1.0 - w * (1.0 - s.edge_gain)
         gains = ref.Gains(g.kp * ease, g.ki * ease, g.kd * (1.0 + w * s.edge_brake), g.integral_limit)
         high, low = (side * self.tilt_limit * (1.0 - w_edge[side] * (1.0 - s.edge_tilt)) for side in (1, -1))

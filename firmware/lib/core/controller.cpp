@@ -20,23 +20,22 @@ float filtered_velocity(float v, float raw, float blend) {
 
 // One axis of the position-scheduled Manhattan controller. p [m] is the object's coordinate on the axis, half [m]
 // the module's half side along it, v [m/s] its filtered velocity. Within edge_zone of the edge the object is
-// nearest to, kp and ki ease toward edge_gain times themselves and kd grows by edge_brake times itself; within
-// edge_zone of each edge the tilt toward that edge is limited toward edge_tilt times the limit (an edge_zone wider
-// than half the module so limits both, each by its own distance, with no jump at the centre). With brake_speed > 0
-// the tilt along the motion fades to 0 as the speed reaches brake_speed (a tilt against it, which brakes, stays
-// free).
+// nearest to, kp and ki ease toward edge_gain times themselves, kd grows by edge_brake times itself and the tilt
+// toward that edge is limited toward edge_tilt times the limit. An edge_zone wider than half the module also
+// limits the tilt toward the other edge by its own distance, so the limits do not jump at the centre. With
+// brake_speed > 0 the tilt along the motion fades to 0 as the speed reaches brake_speed (a tilt against it, which
+// brakes, stays free).
 float scheduled_axis(Pid& pid, const PidGains& gains, const ScheduleConfig& s, float tilt_limit, float half,
                      float p, float error, float error_rate, float v, float dt) {
-  const float zone_start = half - s.edge_zone;  // [m] where the band along each edge begins
-  const float near_high = clamp01((p - zone_start) / s.edge_zone);  // 0 inside, 1 at or past the + edge
-  const float near_low = clamp01((-p - zone_start) / s.edge_zone);  // the same for the - edge
-  const float near_edge = near_high > near_low ? near_high : near_low;
+  const float near_edge = clamp01(1.0f - (half - fabsf(p)) / s.edge_zone);  // 0 inside, 1 at or past the edge
+  const float far_edge = clamp01(1.0f - (half + fabsf(p)) / s.edge_zone);   // the other: 0 unless zone > half
   const float ease = 1.0f - near_edge * (1.0f - s.edge_gain);
   const PidGains scheduled{gains.kp * ease, gains.ki * ease, gains.kd * (1.0f + near_edge * s.edge_brake),
                            gains.integral_limit};
-  // a positive tilt moves the object toward +x (+y)
-  float high = tilt_limit * (1.0f - near_high * (1.0f - s.edge_tilt));
-  float low = -tilt_limit * (1.0f - near_low * (1.0f - s.edge_tilt));
+  const float toward_near = tilt_limit * (1.0f - near_edge * (1.0f - s.edge_tilt));
+  const float toward_far = tilt_limit * (1.0f - far_edge * (1.0f - s.edge_tilt));
+  float high = p > 0.0f ? toward_near : toward_far;  // a positive tilt moves the object toward +x (+y)
+  float low = p > 0.0f ? -toward_far : -toward_near;
   if (s.brake_speed > 0.0f) {
     const float along_motion = clamp01(1.0f - fabsf(v) / s.brake_speed);
     if (v > 0.0f) high *= along_motion;
