@@ -29,19 +29,21 @@ from paper_heatmaps import zone_rates   # a sibling script: the same zones as th
 REPO = Path(__file__).resolve().parents[1]
 COMMITTED = REPO / "docs" / "results" / "tune"
 BASELINES = REPO / "out" / "heatmap"          # where paper_heatmaps.py --plant paper --to-end puts them
-RUNS = {   # name: (object, controller, alpha [m], the baseline run of paper_heatmaps.py)
-    "sphere_scheduled": ("sphere", "scheduled", 0.0, "sphere_manhattan_paper_to_end"),
-    "sphere_cascade": ("sphere", "cascade", 0.0, "sphere_manhattan_paper_to_end"),
-    # the cube and the bunny with the better of the two on the sphere's final checks (docs/results.md)
-    "cube_cascade_alpha0.1": ("cube", "cascade", 0.1, "cube_manhattan_alpha0.1_paper_to_end"),
-    "bunny_cascade_alpha0.05": ("bunny", "cascade", 0.05, "bunny_manhattan_alpha0.05_paper_to_end"),
+SPHERE_CASCADE = COMMITTED / "sphere_cascade" / "settings.toml"
+RUNS = {   # name: (object, controller, alpha [m], the baseline run of paper_heatmaps.py, settings to start from)
+    "sphere_scheduled": ("sphere", "scheduled", 0.0, "sphere_manhattan_paper_to_end", None),
+    "sphere_cascade": ("sphere", "cascade", 0.0, "sphere_manhattan_paper_to_end", None),
+    # the cube and the bunny with the better of the two on the sphere's final checks (docs/results.md), their
+    # searches started from the sphere's best as well as from the boot values
+    "cube_cascade_alpha0.1": ("cube", "cascade", 0.1, "cube_manhattan_alpha0.1_paper_to_end", SPHERE_CASCADE),
+    "bunny_cascade_alpha0.05": ("bunny", "cascade", 0.05, "bunny_manhattan_alpha0.05_paper_to_end", SPHERE_CASCADE),
 }
 PAIRED_APART = ("controller", "settings", "gains")   # what a paired comparison may differ in: the controller only
 KEPT = ("settings.toml", "report.json", "history.png")   # beside study.db and the final check's trials
 
 
 def out_dir(run: str) -> Path:
-    obj, controller, alpha, _ = RUNS[run]
+    obj, controller, alpha, _, _ = RUNS[run]
     return REPO / "out" / "tune" / f"{obj}_{controller}_alpha{alpha:g}_paper"
 
 
@@ -145,12 +147,13 @@ def main() -> int:
         parser.error(f"unknown run(s) {', '.join(unknown)}; known: {', '.join(RUNS)}")
     table = {}
     for run in names:
-        obj, controller, alpha, _ = RUNS[run]
+        obj, controller, alpha, _, start = RUNS[run]
         if not args.collect:
             restore(run)
+            start_from = ["--start-from", str(start.relative_to(REPO))] if start else []
             proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "tune", "--controller", controller,
                                      "--object", obj, "--alpha", str(alpha), "--plant", "paper", "--candidates",
-                                     str(args.candidates), "--jobs", str(args.jobs),
+                                     str(args.candidates), "--jobs", str(args.jobs), *start_from,
                                      "--out", str(out_dir(run).relative_to(REPO))], cwd=REPO)
             try:
                 returncode = proc.wait()

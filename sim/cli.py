@@ -444,6 +444,25 @@ def _pool(parser: argparse.ArgumentParser, args: argparse.Namespace):
     return LocalPool(args.jobs or os.cpu_count() or 1)
 
 
+def _tuning_start(parser: argparse.ArgumentParser, args: argparse.Namespace, evidence) -> dict[str, float]:
+    """--start-from's settings as the search's knobs; a file for another controller or plant is a usage error."""
+    from mantaray.host.controller_settings import ControllerSettings, SettingsError
+
+    from . import tune as T
+
+    try:
+        settings = ControllerSettings.load(args.start_from)
+    except SettingsError as exc:
+        parser.error(str(exc))
+    if settings.controller != args.controller:
+        parser.error(f"--start-from {args.start_from} sets up the {settings.controller} controller, not the "
+                     f"{args.controller} one this search tunes")
+    if settings.plant not in (None, args.plant):
+        parser.error(f"--start-from {args.start_from} holds gains for the {settings.plant} plant, not for "
+                     f"{args.plant}, which reads them otherwise")
+    return T.start_values(settings, args.per_axis, evidence.gain_scale)
+
+
 def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """Tune a controller's settings for a plant: an Optuna search on a stratified sample of heatmap cells, then the
     paper's full protocol with the best settings on another seed (the search never sees those trials).
@@ -472,11 +491,12 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         parser.error("--final-seed must differ from --seed: the final check must not run the trials the search saw")
     if args.ray_address and args.executor != "ray":
         parser.error("--ray-address needs --executor ray")
+    start = _tuning_start(parser, args, evidence) if args.start_from else None
     out = _output(parser, writable_dir,
                   args.out or f"out/tune/{args.object}_{args.controller}_alpha{args.alpha:g}_{args.plant}")
     try:
-        study = T.open_tuning(out / "study.db", evidence, args.per_axis)
-    except C.StudyMismatch as exc:
+        study = T.open_tuning(out / "study.db", evidence, args.per_axis, start)
+    except (C.StudyMismatch, T.StartMismatch) as exc:
         print(f"mantaray sim tune: {exc}", file=sys.stderr)
         return 2
     progress = None
@@ -694,6 +714,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     tune.add_argument("--alpha", type=float, default=0.0,
                       help=f"noise amplitude α [m], {bounds_text(m.Configure, 'noise_amplitude')} (paper: 0.1 cube, 0.05 bunny)")
     tune.add_argument("--plant", choices=plant_names(), default="paper", help="the plant to tune for (sim/plant.toml)")
+    tune.add_argument("--start-from", metavar="FILE",
+                      help="a settings file of the same controller (say, tuned for another object) to try second, "
+                           "after the boot values, so the search starts from what is known; for a new study only")
     tune.add_argument("--candidates", type=number(1, integer=True), default=60,
                       help="candidates the study should hold when done (a resumed search goes on to this total)")
     tune.add_argument("--cells-per-stratum", type=number(1, integer=True), default=4,

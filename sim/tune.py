@@ -110,6 +110,20 @@ def boot_values(controller: str, per_axis: bool = False) -> dict[str, float]:
     return {k.key: float(np.clip(boot[k.key], k.low, k.high)) for k in knobs(controller, per_axis)}
 
 
+def start_values(settings: ControllerSettings, per_axis: bool = False, gain_scale: float = 1.0) -> dict[str, float]:
+    """The knobs that give these settings (settings_of's inverse: a pid.* knob from the first PID, a paper_gain knob
+    divided by gain_scale), a setting the file leaves out at its boot value, each clipped into its range: a
+    candidate to start a search from, such as settings tuned for another object."""
+    boot, given = boot_values(settings.controller, per_axis), dict(settings.values)
+    first = controller_axes(settings.controller)[0].name.lower()
+    out = {}
+    for knob in knobs(settings.controller, per_axis):
+        key = f"pid.{first}.{knob.key[len(EVERY_PID):]}" if knob.key.startswith(EVERY_PID) else knob.key
+        value = given[key] / gain_scale if key in given and knob.paper_gain else given.get(key, boot[knob.key])
+        out[knob.key] = float(np.clip(value, knob.low, knob.high))
+    return out
+
+
 @dataclass(frozen=True)
 class TuningEvidence:
     """A controller's settings scored on a stratified sample of cells (findings.STRATA) of one object on one plant."""
@@ -182,13 +196,23 @@ def final_check(evidence: TuningEvidence, settings: ControllerSettings, trials_p
             "fell_off": round(float(np.nanmean(summary.fell_rates)), 4)}
 
 
-def open_tuning(path: Path, evidence: TuningEvidence, per_axis: bool = False):
+def open_tuning(path: Path, evidence: TuningEvidence, per_axis: bool = False, start: dict[str, float] | None = None):
     """The study (new, or the one in path if it holds the same search: the same knobs too); a new one starts from
-    the boot values."""
+    the boot values, then from start (knob values) when given. StartMismatch if the study began without them."""
     study = C.open_study(path, evidence, knobs(evidence.controller, per_axis), {})
     if not study.trials:
         study.enqueue_trial(boot_values(evidence.controller, per_axis))
+        if start is not None:
+            study.enqueue_trial(start)
+            study.set_user_attr("start_from", start)
+    elif start is not None and study.user_attrs.get("start_from") != start:
+        raise StartMismatch(f"the study in {path} began from other values than these: a start is for a new study "
+                            f"(continue it without one, or give another --out)")
     return study
+
+
+class StartMismatch(ValueError):
+    """A start given for a study that began without it."""
 
 
 def best_settings(study, evidence: TuningEvidence) -> ControllerSettings | None:

@@ -11,6 +11,7 @@ import sys
 import time
 
 import pytest
+from hypothesis import given, strategies as st
 
 from mantaray.host.controller_settings import ControllerSettings
 from mantaray.host.session import controller_axes
@@ -126,3 +127,49 @@ def test_a_per_axis_search_searches_x_and_y_apart_and_is_its_own_study(tmp_path)
     assert {"pid.x.kp", "pid.y.kp", "pid.x.kd", "pid.y.kd"} <= set(knobs) and "pid.*.kp" not in knobs
     shared = _tune(*tiny, "--candidates", "3")           # the same folder without --per-axis: another search
     assert shared.returncode == 2 and "another configuration (searched differ)" in shared.stderr, shared.stderr
+
+
+@pytest.mark.parametrize("per_axis", [False, True])
+@pytest.mark.parametrize("controller", list(T.SPACE))
+def test_a_start_from_settings_gives_back_the_knobs_that_made_them(controller, per_axis):
+    """start_values inverts settings_of for any candidate, on a plant that reads the gains as given or per radian."""
+    space = T.knobs(controller, per_axis)
+
+    @given(st.lists(st.floats(0.0, 1.0), min_size=len(space), max_size=len(space)), st.sampled_from([1.0, 180 / math.pi]))
+    def check(fractions, scale):
+        values = {k.key: k.low + f * (k.high - k.low) for k, f in zip(space, fractions)}
+        settings = T.settings_of(controller, values, scale)
+        back = T.start_values(settings, per_axis, scale)
+        assert back.keys() == values.keys()
+        assert all(back[k] == pytest.approx(v, rel=1e-12, abs=1e-12) for k, v in values.items()), (values, back)
+
+    check()
+
+
+def test_a_start_from_leaves_out_nothing_and_keeps_within_the_ranges():
+    """A file that sets one knob beyond its range: that one clipped, every other at its boot value."""
+    settings = ControllerSettings("cascade", (("configure_cascade.position_gain", 50.0),))
+    start = T.start_values(settings)
+    assert start == {**T.boot_values("cascade"), "configure_cascade.position_gain": 30.0}
+
+
+def test_a_search_started_from_settings_tries_them_second_and_refuses_them_for_a_study_begun_without(tmp_path):
+    evidence = T.TuningEvidence(controller="cascade", cells_per_stratum=1, trials_per_cell=1, duration_s=1.0)
+    start = T.start_values(ControllerSettings("cascade", (("pid.vx.kp", 123.0), ("configure.tilt_limit", 20.0))))
+    study = T.open_tuning(tmp_path / "a.db", evidence, start=start)
+    assert [t.system_attrs["fixed_params"] for t in study.trials] == [T.boot_values("cascade"), start]
+    assert T.open_tuning(tmp_path / "a.db", evidence, start=start).trials == study.trials  # the same start: continues
+    T.open_tuning(tmp_path / "b.db", evidence)
+    with pytest.raises(T.StartMismatch, match="a start is for a new study"):
+        T.open_tuning(tmp_path / "b.db", evidence, start=start)
+
+
+def test_a_start_from_file_for_another_controller_or_plant_is_a_usage_error(tmp_path):
+    for text, says in (('controller = "scheduled"\n', "sets up the scheduled controller"),
+                       ('controller = "cascade"\nplant = "polyester"\n', "gains for the polyester plant"),
+                       ('controller = "cascade"\n[pid.x]\nkp = 1.0\n', "pid.x")):
+        path = tmp_path / "start.toml"
+        path.write_text(text)
+        proc = _tune(*TINY, "--controller", "cascade", "--start-from", str(path), "--out", str(tmp_path / "t"))
+        assert proc.returncode == 2 and says in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+        assert not (tmp_path / "t").exists()
