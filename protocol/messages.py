@@ -311,7 +311,7 @@ class ConfigureSchedule(Message):
 
     edge_zone: float = 0.05  # [m] Width of the band along each edge where the schedule acts, growing linearly to the edge.
     edge_gain: float = 1.0  # kp and ki at the edge the object is nearest to along the axis, relative to the axis's own.
-    edge_tilt: float = 1.0  # Tilt limit toward that edge, at the edge, relative to tilt_limit (the tilt away from it keeps the whole limit).
+    edge_tilt: float = 1.0  # Tilt limit toward an edge, at that edge, relative to tilt_limit (the tilt away from the nearest edge keeps the whole limit unless edge_zone is wider than half the module).
     edge_brake: float = 0.0  # kd at the edge is (1 + edge_brake) times the axis's own.
     brake_speed: float = 0.0  # [m/s] Speed at which the tilt along the object's motion on an axis has faded to 0 (a tilt against it, which brakes, stays free); 0: no such limit.
 

@@ -170,7 +170,7 @@ def random_config(rng, kind: str, deadman: int = 60000) -> RunConfig:
                      telemetry_period=int(rng.choice([0, 0, 5, 40])),
                      gains={"x": gains(), "y": gains(), "radial": gains(), "vx": gains(), "vy": gains()},
                      velocity_filter=f32(rng.choice([0.0, rng.uniform(0.0, 0.5)])),
-                     schedule=beyond.Schedule(*(f32(v) for v in (rng.uniform(0.005, 0.3), rng.uniform(0, 1),
+                     schedule=beyond.Schedule(*(f32(v) for v in (rng.uniform(0.005, 0.6), rng.uniform(0, 1),
                                                                  rng.uniform(0, 1), rng.uniform(0, 20),
                                                                  rng.choice([0.0, rng.uniform(0.01, 2.0)])))),
                      cascade=beyond.Cascade(f32(rng.uniform(0, 20)), f32(rng.uniform(0.001, 1.0))))
@@ -344,27 +344,34 @@ def test_the_scheduled_controller_with_its_default_schedule_steps_as_the_papers_
 
 
 def test_a_schedule_wider_than_half_the_module_limits_each_side_by_its_own_edge():
-    """edge_zone > h: the object just either side of the centre gets the same tilt limits (no jump where the nearest
-    edge changes), each side limited by its own edge's distance, and the firmware agrees with its reference."""
+    """edge_zone > h: the tilt toward each edge is limited by that edge's own distance, so the limits are the same
+    just either side of the centre (no jump where the nearest edge changes), and off the centre they differ as each
+    edge's weight says; the firmware agrees with its reference at every step."""
     rng = np.random.default_rng(91)
     cfg = random_config(rng, "scheduled")
     cfg.gains = {axis: ref.Gains(f32(2000.0), 0.0, 0.0, f32(1.0)) for axis in ("x", "y")}  # saturates at the limit
-    zone, edge_tilt = rng.uniform(0.3, 0.6), rng.uniform(0.1, 0.9)
+    zone, edge_tilt = rng.uniform(0.4, 0.6), rng.uniform(0.1, 0.9)
     cfg.schedule = beyond.Schedule(edge_zone=f32(zone), edge_tilt=f32(edge_tilt))
     h = Harness(cfg)
-    limits = {}
-    for p in (1e-4, -1e-4):
+    tilt = {}
+    for p in (1e-4, -1e-4, 0.1, -0.1):
         for target in (0.25, -0.25):
-            if limits:
+            if tilt:
                 h.stop()
             h.set_target(target, 0.0)
             h.start()
             h.advance(100_000)
-            limits[p, target] = abs(h.position(p, 0.0).tilt_zx)
-    for target in (0.25, -0.25):
-        assert limits[1e-4, target] == pytest.approx(limits[-1e-4, target], rel=1e-3), limits
-        w = 1.0 - 0.25 / zone   # at the centre, both edges are 0.25 m away
-        assert limits[1e-4, target] == pytest.approx(cfg.tilt_limit * (1.0 - w * (1.0 - edge_tilt)), rel=1e-3)
+            tilt[p, target] = h.position(p, 0.0).tilt_zx
+
+    def limit(distance_to_edge: float) -> float:   # [deg] the schedule's limit toward an edge that far away
+        w = min(max(1.0 - distance_to_edge / zone, 0.0), 1.0)
+        return cfg.tilt_limit * (1.0 - w * (1.0 - edge_tilt))
+
+    for p in (1e-4, -1e-4, 0.1, -0.1):
+        assert tilt[p, 0.25] == pytest.approx(limit(0.25 - p), abs=0.01), (p, tilt)      # toward +x
+        assert tilt[p, -0.25] == pytest.approx(-limit(0.25 + p), abs=0.01), (p, tilt)    # toward -x
+    assert abs(tilt[1e-4, 0.25] - tilt[-1e-4, 0.25]) < 0.01 and abs(tilt[1e-4, -0.25] - tilt[-1e-4, -0.25]) < 0.01
+    assert abs(tilt[0.1, 0.25]) < abs(tilt[0.1, -0.25]) - 0.05   # off the centre the nearer edge limits more
 
 
 def test_paper_gains_and_defaults_match():

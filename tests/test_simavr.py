@@ -113,9 +113,7 @@ def test_a_closed_loop_trial_runs_with_the_avr_binary_in_place_of_the_virtual_mc
     assert uno.stats["byte_handling"]["count"] > 0
 
 
-ACTING_SCHEDULE = ControllerSettings("scheduled", (
-    ("configure_schedule.edge_zone", 0.2), ("configure_schedule.edge_gain", 0.5), ("configure_schedule.edge_tilt", 0.5),
-    ("configure_schedule.edge_brake", 2.0), ("configure_schedule.brake_speed", 0.3)))   # every part of it at work
+ACTING_SCHEDULE = ControllerSettings.load(REPO / "docs" / "results" / "avr_timing" / "scheduled_acting.toml")  # all at work
 
 
 @pytest.mark.parametrize("settings", [ACTING_SCHEDULE, ControllerSettings("cascade")], ids=["scheduled", "cascade"])

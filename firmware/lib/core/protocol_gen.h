@@ -362,7 +362,7 @@ struct ConfigureSchedule {
   static constexpr uint8_t kSize = 20;  // [bytes] payload
   float edge_zone;  // [m] Width of the band along each edge where the schedule acts, growing linearly to the edge.
   float edge_gain;  // kp and ki at the edge the object is nearest to along the axis, relative to the axis's own.
-  float edge_tilt;  // Tilt limit toward that edge, at the edge, relative to tilt_limit (the tilt away from it keeps the whole limit).
+  float edge_tilt;  // Tilt limit toward an edge, at that edge, relative to tilt_limit (the tilt away from the nearest edge keeps the whole limit unless edge_zone is wider than half the module).
   float edge_brake;  // kd at the edge is (1 + edge_brake) times the axis's own.
   float brake_speed;  // [m/s] Speed at which the tilt along the object's motion on an axis has faded to 0 (a tilt against it, which brakes, stays free); 0: no such limit.
   static constexpr uint8_t kFieldEdgeZone = 0;

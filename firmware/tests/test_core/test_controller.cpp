@@ -206,7 +206,7 @@ TEST_CASE("controller: every command within +-kActuatorRangeM for NaN, inf and h
     for (float noise : {0.0f, 0.25f}) {
       mr::ControllerConfig cfg = paper(kind, noise);
       cfg.tilt_limit = 89.0f;  // even a limit the supervisor would refuse cannot push a command out of range
-      cfg.schedule = mr::ScheduleConfig{0.2f, 0.3f, 0.5f, 2.0f, 0.1f};  // every part of the schedule at work
+      cfg.schedule = mr::ScheduleConfig{0.3f, 0.3f, 0.5f, 2.0f, 0.1f};  // every part at work, both edges near the centre
       mr::TiltController c;
       c.reset(3);
       for (float tx : values) {
