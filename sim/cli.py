@@ -460,7 +460,14 @@ def _tuning_start(parser: argparse.ArgumentParser, args: argparse.Namespace, evi
     if settings.plant not in (None, args.plant):
         parser.error(f"--start-from {args.start_from} holds gains for the {settings.plant} plant, not for "
                      f"{args.plant}, which reads them otherwise")
-    return T.start_values(settings, args.per_axis, evidence.gain_scale)
+    try:
+        start, clipped = T.start_values(settings, args.per_axis, evidence.gain_scale)
+    except SettingsError as exc:
+        parser.error(f"--start-from {args.start_from}: {exc}")
+    if clipped:
+        print(f"tune: --start-from {args.start_from}: {', '.join(clipped)} lie outside the search's range "
+              f"(sim/tune.py, SPACE), so the search starts from the nearest bound there", file=sys.stderr)
+    return start
 
 
 def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:

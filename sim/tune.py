@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mantaray.host.controller_settings import ControllerSettings
+from mantaray.host.controller_settings import ControllerSettings, SettingsError
 from mantaray.host.session import controller_axes
 from mantaray.protocol import messages as m
 
@@ -98,30 +98,49 @@ def settings_of(controller: str, values: dict[str, float], gain_scale: float = 1
     return ControllerSettings(controller, tuple(flat.items()))
 
 
-def boot_values(controller: str, per_axis: bool = False) -> dict[str, float]:
-    """The knobs at the firmware's boot values (the paper's gains for its controllers), clipped into their ranges:
-    the search's first candidate, so it starts from what the controller does untuned."""
+def firmware_boot(controller: str) -> dict[str, float]:
+    """What the firmware runs each knob's setting at after boot (its numbers: the gains as configure_pid takes them),
+    by knob key, per axis and shared (pid.*. as the first PID's)."""
     axes = controller_axes(controller)
-    boot = {"configure.tilt_limit": m.Configure().tilt_limit, "configure.velocity_filter": m.Configure().velocity_filter,
+    return {"configure.tilt_limit": m.Configure().tilt_limit, "configure.velocity_filter": m.Configure().velocity_filter,
             **{f"{EVERY_PID}{k}": v for k, v in m.PID_DEFAULTS[axes[0]].items()},
             **{f"pid.{a.name.lower()}.{k}": v for a in axes for k, v in m.PID_DEFAULTS[a].items()},
             **{f"configure_schedule.{s.name}": getattr(m.ConfigureSchedule(), s.name) for s in m.ConfigureSchedule.FIELDS},
             **{f"configure_cascade.{s.name}": getattr(m.ConfigureCascade(), s.name) for s in m.ConfigureCascade.FIELDS}}
+
+
+def boot_values(controller: str, per_axis: bool = False) -> dict[str, float]:
+    """The knobs at the firmware's boot values (the paper's gains for its controllers), clipped into their ranges:
+    the search's first candidate, so it starts from what the controller does untuned."""
+    boot = firmware_boot(controller)
     return {k.key: float(np.clip(boot[k.key], k.low, k.high)) for k in knobs(controller, per_axis)}
 
 
-def start_values(settings: ControllerSettings, per_axis: bool = False, gain_scale: float = 1.0) -> dict[str, float]:
-    """The knobs that give these settings (settings_of's inverse: a pid.* knob from the first PID, a paper_gain knob
-    divided by gain_scale), a setting the file leaves out at its boot value, each clipped into its range: a
-    candidate to start a search from, such as settings tuned for another object."""
-    boot, given = boot_values(settings.controller, per_axis), dict(settings.values)
-    first = controller_axes(settings.controller)[0].name.lower()
-    out = {}
+def start_values(settings: ControllerSettings, per_axis: bool = False,
+                 gain_scale: float = 1.0) -> tuple[dict[str, float], list[str]]:
+    """The knobs that set up these settings as the firmware runs them (settings_of's inverse: a paper_gain knob is
+    the firmware's number divided by gain_scale; a setting the file leaves out is the firmware's boot value), each
+    clipped into its range, and the knobs that had to be clipped: a candidate to start a search from, such as
+    settings tuned for another object. Without per_axis a pid.* knob needs the same value on every PID
+    (SettingsError otherwise)."""
+    boot, given = firmware_boot(settings.controller), dict(settings.values)
+    axes = [a.name.lower() for a in controller_axes(settings.controller)]
+    out, clipped = {}, []
     for knob in knobs(settings.controller, per_axis):
-        key = f"pid.{first}.{knob.key[len(EVERY_PID):]}" if knob.key.startswith(EVERY_PID) else knob.key
-        value = given[key] / gain_scale if key in given and knob.paper_gain else given.get(key, boot[knob.key])
+        if knob.key.startswith(EVERY_PID):
+            name = knob.key[len(EVERY_PID):]
+            each = {given.get(f"pid.{a}.{name}", boot[f"pid.{a}.{name}"]) for a in axes}
+            if len(each) > 1:
+                raise SettingsError(f"the PIDs {', '.join(axes)} differ in {name}: a search with one set of gains "
+                                    f"for all cannot start there (search them apart: --per-axis)")
+            value = each.pop()
+        else:
+            value = given.get(knob.key, boot[knob.key])
+        value = value / gain_scale if knob.paper_gain else value
         out[knob.key] = float(np.clip(value, knob.low, knob.high))
-    return out
+        if out[knob.key] != value:
+            clipped.append(knob.key)
+    return out, clipped
 
 
 @dataclass(frozen=True)

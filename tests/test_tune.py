@@ -13,7 +13,7 @@ import time
 import pytest
 from hypothesis import given, strategies as st
 
-from mantaray.host.controller_settings import ControllerSettings
+from mantaray.host.controller_settings import ControllerSettings, SettingsError
 from mantaray.host.session import controller_axes
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
@@ -139,23 +139,37 @@ def test_a_start_from_settings_gives_back_the_knobs_that_made_them(controller, p
     def check(fractions, scale):
         values = {k.key: k.low + f * (k.high - k.low) for k, f in zip(space, fractions)}
         settings = T.settings_of(controller, values, scale)
-        back = T.start_values(settings, per_axis, scale)
-        assert back.keys() == values.keys()
+        back, clipped = T.start_values(settings, per_axis, scale)
+        assert back.keys() == values.keys() and clipped == []
         assert all(back[k] == pytest.approx(v, rel=1e-12, abs=1e-12) for k, v in values.items()), (values, back)
 
     check()
 
 
-def test_a_start_from_leaves_out_nothing_and_keeps_within_the_ranges():
-    """A file that sets one knob beyond its range: that one clipped, every other at its boot value."""
-    settings = ControllerSettings("cascade", (("configure_cascade.position_gain", 50.0),))
-    start = T.start_values(settings)
+def test_a_start_from_runs_what_the_file_runs_and_says_what_it_clips():
+    """A setting the file leaves out is the firmware's boot value (on a plant that reads the gains per radian, the
+    boot gains are far below the paper's as it reads them); one beyond its knob's range is clipped, and named."""
+    start, clipped = T.start_values(ControllerSettings("cascade", (("configure_cascade.position_gain", 50.0),)))
     assert start == {**T.boot_values("cascade"), "configure_cascade.position_gain": 30.0}
+    assert clipped == ["configure_cascade.position_gain"]
+    scale = 180 / math.pi
+    start, clipped = T.start_values(ControllerSettings("scheduled"), gain_scale=scale)
+    assert start["pid.*.ki"] == pytest.approx(m.PID_DEFAULTS[m.Axis.X]["ki"] / scale) and clipped == ["pid.*.kp"]
+    assert T.settings_of("scheduled", start, scale).get("pid.x.ki") == pytest.approx(m.PID_DEFAULTS[m.Axis.X]["ki"])
+
+
+def test_a_start_from_pids_that_differ_needs_a_search_per_axis():
+    apart = ControllerSettings("cascade", (("pid.vx.kp", 123.0),))     # vy keeps its boot kp
+    with pytest.raises(SettingsError, match="differ in kp"):
+        T.start_values(apart)
+    start, _ = T.start_values(apart, per_axis=True)
+    assert start["pid.vx.kp"] == 123.0 and start["pid.vy.kp"] == m.PID_DEFAULTS[m.Axis.VY]["kp"]
 
 
 def test_a_search_started_from_settings_tries_them_second_and_refuses_them_for_a_study_begun_without(tmp_path):
     evidence = T.TuningEvidence(controller="cascade", cells_per_stratum=1, trials_per_cell=1, duration_s=1.0)
-    start = T.start_values(ControllerSettings("cascade", (("pid.vx.kp", 123.0), ("configure.tilt_limit", 20.0))))
+    start, _ = T.start_values(ControllerSettings("cascade", (("pid.vx.kp", 123.0), ("pid.vy.kp", 123.0),
+                                                              ("configure.tilt_limit", 20.0))))
     study = T.open_tuning(tmp_path / "a.db", evidence, start=start)
     assert [t.system_attrs["fixed_params"] for t in study.trials] == [T.boot_values("cascade"), start]
     assert T.open_tuning(tmp_path / "a.db", evidence, start=start).trials == study.trials  # the same start: continues
@@ -167,7 +181,8 @@ def test_a_search_started_from_settings_tries_them_second_and_refuses_them_for_a
 def test_a_start_from_file_for_another_controller_or_plant_is_a_usage_error(tmp_path):
     for text, says in (('controller = "scheduled"\n', "sets up the scheduled controller"),
                        ('controller = "cascade"\nplant = "polyester"\n', "gains for the polyester plant"),
-                       ('controller = "cascade"\n[pid.x]\nkp = 1.0\n', "pid.x")):
+                       ('controller = "cascade"\n[pid.x]\nkp = 1.0\n', "pid.x"),
+                       ('controller = "cascade"\n[pid.vx]\nkp = 1.0\n', "differ in kp")):
         path = tmp_path / "start.toml"
         path.write_text(text)
         proc = _tune(*TINY, "--controller", "cascade", "--start-from", str(path), "--out", str(tmp_path / "t"))
