@@ -24,6 +24,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+from mantaray.sim.results_file import write_whole
 from paper_heatmaps import zone_rates   # a sibling script: the same zones as the paper's maps are measured on
 
 REPO = Path(__file__).resolve().parents[1]
@@ -69,7 +70,7 @@ def collect(run: str) -> None:
         src.backup(dst)
     final = out / "final" / "results.jsonl"
     if final.exists():
-        (kept / "final.jsonl.gz").write_bytes(gzip.compress(final.read_bytes(), mtime=0))
+        write_whole(kept / "final.jsonl.gz", gzip.compress(final.read_bytes(), mtime=0))
     for name in KEPT:
         if (out / name).exists():
             shutil.copyfile(out / name, kept / name)

@@ -8,10 +8,11 @@ stopped, and --trials 3 gives a quick map that a later run with the paper's 10 t
 from the committed trials (docs/results/<run>.jsonl.gz) when out/ has none, and writes every trial back
 there (also when interrupted; --collect writes back a run still going), so a fresh clone continues the committed
 runs instead of repeating them. The wall time of every session of a run is kept in docs/figures/heatmaps.json, so
-the total a run took is known even when it was split. The figures are copied to docs/figures/ beside the scores, regions and zone rates, and the
-paper's findings F1-F5 (sim/findings.py) on the two sphere maps, under both success rules. A plant that reads
-the paper's success rule as "reached" ends each trial at its first frame within eps (--stop-when-reached), unless
---to-end runs every trial to T (both success rules measured; the run's name gets _to_end).
+the total a run took is known even when it was split. The figures are copied to docs/figures/ beside the scores,
+regions and zone rates, and the paper's findings F1-F5 (sim/findings.py) on the two sphere maps, under both success
+rules. A plant that reads the paper's success rule as "reached" ends each trial at its first frame within eps
+(--stop-when-reached), unless --to-end runs every trial to T (both success rules measured; the run's name gets
+_to_end).
 """
 from __future__ import annotations
 
@@ -68,12 +69,15 @@ def zone_rates(results_path: Path) -> dict:
 
 
 def keep(results_path: Path, committed: Path) -> int:
-    """Write every trial out/ holds back to docs/results/<run>.jsonl.gz; returns how many it holds."""
+    """Write every trial out/ holds back to docs/results/<run>.jsonl.gz (whole: an interruption leaves the old file
+    or the new); returns how many trials it holds (the lines after the file's header)."""
+    from mantaray.sim.results_file import write_whole
+
     trials = results_path.read_bytes() if results_path.exists() else b""
     if trials and (not committed.exists() or gzip.decompress(committed.read_bytes()) != trials):
         COMMITTED.mkdir(parents=True, exist_ok=True)
-        committed.write_bytes(gzip.compress(trials, mtime=0))
-    return len(trials.splitlines())
+        write_whole(committed, gzip.compress(trials, mtime=0))
+    return max(len(trials.splitlines()) - 1, 0)
 
 
 def main() -> int:
@@ -113,16 +117,18 @@ def main() -> int:
         obj, controller, alpha = RUNS[run]
         name = run + suffix
         out = REPO / args.out / name
-        out.mkdir(parents=True, exist_ok=True)
         results_path = out / "results.jsonl"
         committed = COMMITTED / f"{name}.jsonl.gz"
-        if not results_path.exists() and committed.exists():
+        if not results_path.exists() and committed.exists() and not args.collect:
             results_path.write_bytes(gzip.decompress(committed.read_bytes()))
             print(f"{name}: continuing from the committed trials in {committed.relative_to(REPO)}", flush=True)
         if args.collect:
-            keep(results_path, committed)
+            held = keep(results_path, committed)
+            print(f"{name}: {held} trials kept in {committed.relative_to(REPO)}" if held else
+                  f"{name}: no trials in {results_path.relative_to(REPO)}", flush=True)
             continue
-        before = len(results_path.read_bytes().splitlines()) if results_path.exists() else 0
+        out.mkdir(parents=True, exist_ok=True)
+        before = max(len(results_path.read_bytes().splitlines()) - 1, 0) if results_path.exists() else 0
         t0 = time.perf_counter()
         proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--object", obj,
                                  "--controller", controller, "--alpha", str(alpha), "--trials", str(args.trials),
@@ -132,7 +138,6 @@ def main() -> int:
             stdout, _ = proc.communicate()
         except KeyboardInterrupt:        # Ctrl-C reaches sim heatmap too: it ends keeping every finished trial
             proc.wait()
-            raise
         finally:                         # and those, with this session's time, are written back
             if keep(results_path, committed) > before:
                 entry = table.setdefault(name, {})
@@ -141,7 +146,7 @@ def main() -> int:
         wall = time.perf_counter() - t0
         if proc.returncode != 0:
             print(f"{name}: heatmap ended with exit {proc.returncode}; its trials are kept in "
-                  f"{committed.relative_to(REPO)}", file=sys.stderr)
+                  f"{committed.relative_to(REPO)}, and the same command continues", file=sys.stderr)
             return proc.returncode
         times = table[name].get("wall_s_sessions", []) if name in table else []
         summary = json.loads(stdout)

@@ -36,7 +36,7 @@ class ResultsFile:
         results = cls(path, protocol)
         if not path.exists() or _cut_header(path.read_bytes()):   # new, or its header was cut off as it was written
             path.parent.mkdir(parents=True, exist_ok=True)
-            _replace(path, json.dumps(_header(protocol)).encode() + b"\n")
+            write_whole(path, json.dumps(_header(protocol)).encode() + b"\n")
             return results
         stored = _read(path)
         now = protocol.plant_model().values
@@ -54,7 +54,7 @@ class ResultsFile:
                 f.write(b"".join(line + b"\n" for line in stored.bad_lines))
         if stored.protocol != protocol or stored.bad_lines or stored.cut:
             # the header names the (possibly grown) run; only the good lines stay
-            _replace(path, json.dumps(_header(protocol)).encode() + b"\n"
+            write_whole(path, json.dumps(_header(protocol)).encode() + b"\n"
                      + b"".join(line + b"\n" for line in stored.good_lines))
         results.records, results.rejected = stored.records, stored.rejected
         return results
@@ -85,7 +85,7 @@ def _cut_header(raw: bytes) -> bool:
     return b"\n" not in raw and (raw.startswith(prefix) or prefix.startswith(raw))
 
 
-def _replace(path: Path, content: bytes) -> None:
+def write_whole(path: Path, content: bytes) -> None:
     """Write the whole file at once: an interruption leaves the old file or the new, never half of one."""
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_bytes(content)
