@@ -18,8 +18,14 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-# The Python package (editable, with test extras).
-if ! python3 -c "import mantaray, pytest, hypothesis, serial, numpy, mujoco, matplotlib, tqdm, imageio, imageio_ffmpeg, ray, cv2, optuna, scikit_build_core" 2>/dev/null ||
+# The Python package (editable, with test extras), from this checkout: another checkout's editable install would
+# answer every import (and its build/ every native artifact), so the tests would run that one instead.
+installed=$(python3 -c "import mantaray.paths as p; print(p.REPO)" 2>/dev/null || true)
+if [ -n "$installed" ] && [ "$installed" != "$(pwd -P)" ]; then
+  echo "setup: the mantaray package installed is the checkout in $installed; installing this one ($(pwd -P)) instead"
+fi
+if [ "$installed" != "$(pwd -P)" ] ||
+   ! python3 -c "import mantaray, pytest, hypothesis, serial, numpy, mujoco, matplotlib, tqdm, imageio, imageio_ffmpeg, ray, cv2, optuna, scikit_build_core" 2>/dev/null ||
    ! python3 -m pip show -q mantaray >/dev/null 2>&1; then
   echo "setup: installing the mantaray Python package"
   python3 -m pip install -q --disable-pip-version-check -e ".[test]"
