@@ -68,16 +68,21 @@ def zone_rates(results_path: Path) -> dict:
     return {"zones": zones, "reach_regions_cells": regions}
 
 
+def trials_in(results_path: Path) -> int:
+    """How many trials a results file holds: its lines after the header."""
+    return max(len(results_path.read_bytes().splitlines()) - 1, 0) if results_path.exists() else 0
+
+
 def keep(results_path: Path, committed: Path) -> int:
     """Write every trial out/ holds back to docs/results/<run>.jsonl.gz (whole: an interruption leaves the old file
-    or the new); returns how many trials it holds (the lines after the file's header)."""
+    or the new); returns how many trials it holds."""
     from mantaray.sim.results_file import write_whole
 
     trials = results_path.read_bytes() if results_path.exists() else b""
     if trials and (not committed.exists() or gzip.decompress(committed.read_bytes()) != trials):
         COMMITTED.mkdir(parents=True, exist_ok=True)
         write_whole(committed, gzip.compress(trials, mtime=0))
-    return max(len(trials.splitlines()) - 1, 0)
+    return trials_in(results_path)
 
 
 def main() -> int:
@@ -128,7 +133,7 @@ def main() -> int:
                   f"{name}: no trials in {results_path.relative_to(REPO)}", flush=True)
             continue
         out.mkdir(parents=True, exist_ok=True)
-        before = max(len(results_path.read_bytes().splitlines()) - 1, 0) if results_path.exists() else 0
+        before = trials_in(results_path)
         t0 = time.perf_counter()
         proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--object", obj,
                                  "--controller", controller, "--alpha", str(alpha), "--trials", str(args.trials),
@@ -139,11 +144,11 @@ def main() -> int:
         except KeyboardInterrupt:        # Ctrl-C reaches sim heatmap too: it ends keeping every finished trial
             proc.wait()
         finally:                         # and those, with this session's time, are written back
+            wall = time.perf_counter() - t0
             if keep(results_path, committed) > before:
                 entry = table.setdefault(name, {})
-                entry["wall_s_sessions"] = [*entry.get("wall_s_sessions", []), round(time.perf_counter() - t0, 1)]
+                entry["wall_s_sessions"] = [*entry.get("wall_s_sessions", []), round(wall, 1)]
                 table_path.write_text(json.dumps(table, indent=1) + "\n")
-        wall = time.perf_counter() - t0
         if proc.returncode != 0:
             print(f"{name}: heatmap ended with exit {proc.returncode}; its trials are kept in "
                   f"{committed.relative_to(REPO)}, and the same command continues", file=sys.stderr)
