@@ -9,7 +9,7 @@ the same starts, targets and noise seeds, so the comparison is paired). Both are
 from what docs/results/tune/<run>/ holds (the study, the final check's trials, the settings), where every session
 writes it back; --collect only writes back what out/ holds (say, from a run still going). With both done, the
 script prints each run's scores under both rules beside the baseline's, the falls, McNemar's test on the paired
-trials, and copies the tuned controller's heatmaps and writes the difference maps to docs/figures/.
+trials (for either rule and for the falls), and copies the tuned controller's heatmaps and writes the difference maps to docs/figures/.
 """
 from __future__ import annotations
 
@@ -78,7 +78,8 @@ def collect(run: str) -> None:
 
 
 def mcnemar(a: dict, b: dict, key: str) -> dict:
-    """Paired trials (same cell and k) of two results files: successes only in a, only in b, and McNemar's z."""
+    """Paired trials (same cell and k) of two results files: those where key (success, reached, or fell_off) holds
+    only in a, only in b, and McNemar's z (positive: more in a)."""
     common = sorted(set(a) & set(b))
     only_a = sum(bool(a[k][key]) and not bool(b[k][key]) for k in common)
     only_b = sum(bool(b[k][key]) and not bool(a[k][key]) for k in common)
@@ -122,7 +123,7 @@ def compare(run: str) -> dict | None:
                                "fell_off": round(float(sb.fell_rates.mean()), 3)},
            "ratio": {"score": round(st.score / sb.score, 2) if sb.score else None,
                      "reach_score": round(st.reach_score / sb.reach_score, 2) if sb.reach_score else None},
-           "mcnemar": {rule: mcnemar(tuned.records, base.records, rule) for rule in ("success", "reached")},
+           "mcnemar": {rule: mcnemar(tuned.records, base.records, rule) for rule in ("success", "reached", "fell_off")},
            "zones": {"tuned": zone_rates(tuned_path)["zones"], "paper_manhattan": zone_rates(base_path)["zones"]},
            "outer_band": edge_falls(tuned.records, base.records)}
     for rule, flag in (("", []), ("_reach", ["--reached"])):
