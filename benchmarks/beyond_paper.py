@@ -9,7 +9,8 @@ the same starts, targets and noise seeds, so the comparison is paired). Both are
 from what docs/results/tune/<run>/ holds (the study, the final check's trials, the settings), where every session
 writes it back; --collect only writes back what out/ holds (say, from a run still going). With both done, the
 script prints each run's scores under both rules beside the baseline's, the falls, McNemar's test on the paired
-trials (for either rule and for the falls), and copies the tuned controller's heatmaps and writes the difference maps to docs/figures/.
+trials (for either rule and for the falls), and copies the tuned controller's heatmaps and writes the difference
+maps to docs/figures/.
 """
 from __future__ import annotations
 

@@ -1,14 +1,16 @@
 """Benchmark: how an object answers a held tilt on each plant, open loop: when it starts to slide, and how far it goes.
 
 Run: python3 benchmarks/static_tilt.py [--plants paper,polyester] [--object cube] [--starts 0,0.1]
-     [--tilts 10,20,26.565,35] [--hold 4]
+     [--tilts 10,20,26.565,35] [--hold 6] [--resolution 11] [--timestep 0.002]
 For each plant, start x [m] (y = 0) and tilt θ [deg]: the object is placed and left to settle, then the four
-corners are commanded at once to the plane of a pure x-tilt θ (a_i = x_i tan θ, PROTOCOL.md §5; clipped to the
-actuators' range, so beyond 26.6° the edges alone set the slope) and held for --hold s of simulated time. No
-controller runs: this separates what the plant lets an object do (its actuators' speed, the sheet's slope, the
-friction) from what a controller asks of it. Prints, per row, the carriages' top speed [m/s], the sheet's slope
-at the end [deg] (measured 12 cm beside the object's row, off its dent), when the object had first moved 2 cm [s
-after the command], how far it moved [cm] and whether it fell off.
+corners are commanded at once to the plane of a pure x-tilt θ (a_i = x_i tan θ, PROTOCOL.md §5; every corner stays
+in range up to atan(range / (m / 2)) = 45°) and held for --hold s of simulated time. No controller runs: this
+separates what the plant lets an object do (its carriages' speed, the sheet's give, the friction) from what a
+controller asks of it. The physics is the trials' fast mode unless --resolution and --timestep say otherwise.
+Prints, per row: when the carriages' own positions first came within 1° of the commanded tilt [s after the
+command] and their tilt at the end [deg]; the object's slide relative to the sheet under it (along x, + =
+downhill; the sheet itself moves as the corners do, carrying the object), when it first exceeded 2 cm and its
+value at the end [cm]; and whether and when it fell off.
 """
 from __future__ import annotations
 
@@ -19,39 +21,58 @@ import sys
 import numpy as np
 
 import mantaray.sim  # noqa: F401  (headless GL before mujoco)
+import mujoco
+from mantaray.sim import experiment as E
 from mantaray.sim import model as M
+from mantaray.sim.mjcf import FABRIC
 from mantaray.sim.objects import OBJECTS
 from mantaray.sim.parameters import plant_names
-from mantaray.sim.plant import Plant
+from mantaray.sim.rig import Rig
 
-MOVED_M = 0.02          # [m] a move this long counts as the object set going (the protocol's ε)
-SLOPE_ROW_M = 0.12      # [m] the slope is measured along y = this, beside the object's dent
-SLOPE_SPAN_M = 0.15     # [m] between x = -this and +this
+SLID_M = 0.02           # [m] a slide this long counts as the object set going (the protocol's ε)
+AT_TILT_DEG = 1.0       # [deg] the carriages count as at the commanded tilt within this
+SHEET_VERTICES = 4      # the sheet under the object: the mean of this many vertices nearest it at placement
+STEP_S = 0.01           # [s] how often the probe looks
 
 
-def sheet_slope_deg(model, data) -> float:
-    """[deg] The sheet's slope along x (+ = lower at +x) between ±SLOPE_SPAN_M on the row y = SLOPE_ROW_M."""
-    rise_m = (M.fabric_height(model, data, -SLOPE_SPAN_M, SLOPE_ROW_M)
-              - M.fabric_height(model, data, SLOPE_SPAN_M, SLOPE_ROW_M))
-    return math.degrees(math.atan(rise_m / (2 * SLOPE_SPAN_M)))
+def carriage_tilt_deg(model, data, size_x_m: float) -> float:
+    """[deg] The x-tilt the carriages' positions make (+ = +x side lower): atan((a1 - a0) / m), PROTOCOL.md §5."""
+    a_m = [data.qpos[model.jnt_qposadr[model.joint(f"lift{i}").id]] for i in (0, 1)]
+    return math.degrees(math.atan((a_m[1] - a_m[0]) / size_x_m))
+
+
+def sheet_vertices(model, data) -> np.ndarray:
+    """[m] The (x, y) of every vertex of the fabric, in the fabric frame."""
+    flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, FABRIC)
+    return data.flexvert_xpos[model.flex_vertadr[flex]:model.flex_vertadr[flex] + model.flex_vertnum[flex], :2]
 
 
 def hold_tilt(model, data, rig, x0_m: float, tilt_deg: float, hold_s: float) -> dict:
-    """Place the object at (x0, 0), command the x-tilt and hold it; what the object did."""
+    """Place the object at (x0, 0), command the x-tilt and hold it; what the carriages and the object did."""
     M.place_object(model, data, x0_m, 0.0, rule=rig.fall)
     t0_s = data.time
     half_x_m = rig.frame.size_x_m / 2
     M.set_commands(model, data, [math.tan(math.radians(tilt_deg)) * (half_x_m if i & 1 else -half_x_m)
                                  for i in range(4)])
-    start = M.object_xy(model, data).copy()
-    set_going_s, fell = None, False
-    while data.time < t0_s + hold_s and not fell:
-        M.step_until(model, data, data.time + 0.01)
-        moved_m = float(np.hypot(*(M.object_xy(model, data) - start)))
-        if set_going_s is None and moved_m > MOVED_M:
-            set_going_s = data.time - t0_s
-        fell = M.fell_off(model, data, rig.fall)
-    return {"slope_deg": sheet_slope_deg(model, data), "set_going_s": set_going_s, "moved_m": moved_m, "fell": fell}
+    under = np.argsort(np.hypot(*(sheet_vertices(model, data) - M.object_xy(model, data)).T))[:SHEET_VERTICES]
+
+    def offset_x_m() -> float:        # the object's x relative to the sheet under it
+        return float(M.object_xy(model, data)[0] - sheet_vertices(model, data)[under, 0].mean())
+
+    start_m = offset_x_m()
+    out = {"at_tilt_s": None, "slid_s": None, "fell_s": None}
+    while data.time < t0_s + hold_s:
+        M.step_until(model, data, data.time + STEP_S)
+        t_s = data.time - t0_s
+        off_deg = abs(carriage_tilt_deg(model, data, rig.frame.size_x_m) - tilt_deg)
+        if out["at_tilt_s"] is None and off_deg < AT_TILT_DEG:
+            out["at_tilt_s"] = t_s
+        if out["slid_s"] is None and offset_x_m() - start_m > SLID_M:
+            out["slid_s"] = t_s
+        if M.fell_off(model, data, rig.fall):
+            out["fell_s"] = t_s
+            break
+    return {**out, "tilt_deg": carriage_tilt_deg(model, data, rig.frame.size_x_m), "slid_m": offset_x_m() - start_m}
 
 
 def floats(text: str) -> list[float]:
@@ -66,34 +87,46 @@ def main() -> int:
     parser.add_argument("--plants", default="paper,polyester", help="comma-separated, of: " + ", ".join(plant_names()))
     parser.add_argument("--object", choices=sorted(OBJECTS), default="cube")
     parser.add_argument("--starts", type=floats, default=[0.0, 0.1], help="start x [m], y = 0; within ±0.2 m")
-    parser.add_argument("--tilts", type=floats, default=[10.0, 20.0, 26.565, 35.0], help="x-tilts θ [deg], 0..60")
-    parser.add_argument("--hold", type=float, default=4.0, help="how long each tilt is held [s, simulated], 0.1..30")
+    parser.add_argument("--tilts", type=floats, default=[10.0, 20.0, 26.565, 35.0],
+                        help="x-tilts θ [deg], 0 up to where a corner leaves its range (45° on the paper's module)")
+    parser.add_argument("--hold", type=float, default=6.0, help="how long each tilt is held [s, simulated], 0.1..30")
+    parser.add_argument("--resolution", type=int, default=E.Experiment.resolution, help="fabric vertices per side")
+    parser.add_argument("--timestep", type=float, default=E.Experiment.timestep_s, help="physics step [s]")
     args = parser.parse_args()
     plants = args.plants.split(",")
-    unknown = [p for p in plants if p not in plant_names()]
+    unknown = [repr(p) for p in plants if p not in plant_names()]
     if unknown:
         parser.error(f"unknown plant(s) {', '.join(unknown)}; known: {', '.join(plant_names())}")
+    rig = Rig()
+    steepest_deg = math.degrees(math.atan(rig.actuators.range_m / (rig.frame.size_x_m / 2)))
     if not all(abs(x) <= 0.2 for x in args.starts):
         parser.error("--starts must be within ±0.2 m, where the object rests on the sheet")
-    if not all(0.0 <= t <= 60.0 for t in args.tilts):
-        parser.error("--tilts must be within 0..60 deg")
+    if not all(0.0 <= t <= steepest_deg for t in args.tilts):
+        parser.error(f"--tilts must be within 0..{steepest_deg:g} deg: steeper, a corner leaves its range")
     if not 0.1 <= args.hold <= 30.0:
         parser.error("--hold must be 0.1..30 s")
     for plant in plants:
-        rig = Plant(plant).rig(args.object)
+        try:
+            rig = E.Experiment(object_name=args.object, plant=plant, resolution=args.resolution,
+                               timestep_s=args.timestep).rig()
+        except ValueError as exc:
+            parser.error(str(exc))
         model, data = M.load(rig)
-        print(f"{plant}: carriages at most {rig.actuators.speed_m_per_s:.3f} m/s", flush=True)
+        print(f"{plant}: carriages at most {rig.actuators.speed_m_per_s:.3f} m/s; fabric {args.resolution} x "
+              f"{args.resolution} at {args.timestep:g} s", flush=True)
         for x0_m in args.starts:
             for tilt_deg in args.tilts:
+                head = f"  {args.object} from x = {x0_m:+.2f} m, tilt {tilt_deg:5.1f} deg:"
                 try:
                     r = hold_tilt(model, data, rig, x0_m, tilt_deg, args.hold)
                 except M.ObjectNotSettled as exc:
-                    print(f"  {args.object} from x = {x0_m:+.2f} m: not placed ({exc})", flush=True)
+                    print(f"{head} not placed ({exc})", flush=True)
                     continue
-                going = f"{r['set_going_s']:.2f} s" if r["set_going_s"] is not None else "never"
-                print(f"  {args.object} from x = {x0_m:+.2f} m, tilt {tilt_deg:5.1f} deg: sheet {r['slope_deg']:5.1f} deg,"
-                      f" moved 2 cm at {going}, {r['moved_m'] * 100:5.1f} cm in all"
-                      f"{', fell off' if r['fell'] else ''}", flush=True)
+                at_tilt = f"at {r['at_tilt_s']:.2f} s" if r["at_tilt_s"] is not None else "never"
+                slid = f"at {r['slid_s']:.2f} s" if r["slid_s"] is not None else "never"
+                fell = f", fell off at {r['fell_s']:.2f} s" if r["fell_s"] is not None else ""
+                print(f"{head} carriages at the tilt {at_tilt} ({r['tilt_deg']:.1f} deg at the end);"
+                      f" slid 2 cm {slid}, {r['slid_m'] * 100:+.1f} cm in all{fell}", flush=True)
     return 0
 
 
