@@ -21,10 +21,8 @@ import sys
 import numpy as np
 
 import mantaray.sim  # noqa: F401  (headless GL before mujoco)
-import mujoco
 from mantaray.sim import experiment as E
 from mantaray.sim import model as M
-from mantaray.sim.mjcf import FABRIC
 from mantaray.sim.objects import OBJECTS
 from mantaray.sim.parameters import plant_names
 from mantaray.sim.rig import Rig
@@ -41,12 +39,6 @@ def carriage_tilt_deg(model, data, size_x_m: float) -> float:
     return math.degrees(math.atan((a_m[1] - a_m[0]) / size_x_m))
 
 
-def sheet_vertices(model, data) -> np.ndarray:
-    """[m] The (x, y) of every vertex of the fabric, in the fabric frame."""
-    flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, FABRIC)
-    return data.flexvert_xpos[model.flex_vertadr[flex]:model.flex_vertadr[flex] + model.flex_vertnum[flex], :2]
-
-
 def hold_tilt(model, data, rig, x0_m: float, tilt_deg: float, hold_s: float) -> dict:
     """Place the object at (x0, 0), command the x-tilt and hold it; what the carriages and the object did."""
     M.place_object(model, data, x0_m, 0.0, rule=rig.fall)
@@ -54,10 +46,10 @@ def hold_tilt(model, data, rig, x0_m: float, tilt_deg: float, hold_s: float) -> 
     half_x_m = rig.frame.size_x_m / 2
     M.set_commands(model, data, [math.tan(math.radians(tilt_deg)) * (half_x_m if i & 1 else -half_x_m)
                                  for i in range(4)])
-    under = np.argsort(np.hypot(*(sheet_vertices(model, data) - M.object_xy(model, data)).T))[:SHEET_VERTICES]
+    under = np.argsort(np.hypot(*(M.fabric_vertices(model, data)[:, :2] - M.object_xy(model, data)).T))[:SHEET_VERTICES]
 
     def offset_x_m() -> float:        # the object's x relative to the sheet under it
-        return float(M.object_xy(model, data)[0] - sheet_vertices(model, data)[under, 0].mean())
+        return float(M.object_xy(model, data)[0] - M.fabric_vertices(model, data)[under, 0].mean())
 
     start_m = offset_x_m()
     out = {"at_tilt_s": None, "slid_s": None, "fell_s": None}

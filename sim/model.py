@@ -93,10 +93,16 @@ def _flex_id(model: mujoco.MjModel) -> int:
     return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, FABRIC)
 
 
+def fabric_vertices(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+    """The fabric's vertices now: (x, y, z) [m, world frame; x, y as the fabric frame's], one row each (a view)."""
+    flex = _flex_id(model)
+    return data.flexvert_xpos[model.flex_vertadr[flex]:model.flex_vertadr[flex] + model.flex_vertnum[flex]]
+
+
 def fabric_height(model: mujoco.MjModel, data: mujoco.MjData, x_m: float, y_m: float) -> float:
     """Height [m, world z] of the fabric's top surface at (x, y): highest triangle above that point."""
     flex = _flex_id(model)
-    v = data.flexvert_xpos[model.flex_vertadr[flex]:model.flex_vertadr[flex] + model.flex_vertnum[flex]]
+    v = fabric_vertices(model, data)
     adr, num = model.flex_elemdataadr[flex], model.flex_elemnum[flex]
     tri = v[model.flex_elem[adr:adr + 3 * num].reshape(-1, 3)]
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
@@ -140,8 +146,7 @@ def fell_off(model: mujoco.MjModel, data: mujoco.MjData, rule: FallRule = FallRu
     half = np.abs(model.body("carriage3").pos[:2])
     x, y = object_xy(model, data)
     z = data.body(OBJECT).xpos[2]
-    flex = _flex_id(model)
-    lowest = data.flexvert_xpos[model.flex_vertadr[flex]:model.flex_vertadr[flex] + model.flex_vertnum[flex], 2].min()
+    lowest = fabric_vertices(model, data)[:, 2].min()
     return bool(abs(x) > half[0] + rule.outside_margin_m or abs(y) > half[1] + rule.outside_margin_m
                 or z < lowest - rule.below_fabric_m or z < rule.floor_z_m)
 
