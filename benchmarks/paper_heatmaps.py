@@ -69,8 +69,13 @@ def zone_rates(results_path: Path) -> dict:
 
 
 def trials_in(results_path: Path) -> int:
-    """How many trials a results file holds: its lines after the header."""
-    return max(len(results_path.read_bytes().splitlines()) - 1, 0) if results_path.exists() else 0
+    """How many trials a results file holds."""
+    return trial_count(results_path.read_bytes()) if results_path.exists() else 0
+
+
+def trial_count(text: bytes) -> int:
+    """How many trials a results file's text holds: its lines after the header."""
+    return max(len(text.splitlines()) - 1, 0)
 
 
 def keep(results_path: Path, committed: Path) -> int:
@@ -82,7 +87,7 @@ def keep(results_path: Path, committed: Path) -> int:
     if trials and (not committed.exists() or gzip.decompress(committed.read_bytes()) != trials):
         COMMITTED.mkdir(parents=True, exist_ok=True)
         write_whole(committed, gzip.compress(trials, mtime=0))
-    return trials_in(results_path)
+    return trial_count(trials)
 
 
 def main() -> int:
