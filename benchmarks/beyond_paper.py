@@ -102,17 +102,33 @@ def edge_falls(a: dict, b: dict) -> dict:
     return out
 
 
+def baseline(run: str) -> Path:
+    """The baseline's trials: out/ holds them where paper_heatmaps.py ran here, else they come from docs/results/."""
+    name = RUNS[run][3]
+    path, committed = BASELINES / name / "results.jsonl", REPO / "docs" / "results" / f"{name}.jsonl.gz"
+    if not path.exists() and committed.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(gzip.decompress(committed.read_bytes()))
+    return path
+
+
 def compare(run: str) -> dict | None:
-    """Scores, falls and McNemar of a run's final check against its baseline, when both are complete."""
+    """Scores, falls and McNemar of a run's final check against its baseline; None, saying why, until both are done."""
     from mantaray.sim import results_file as R
     from mantaray.sim import summary as S
 
-    tuned_path, base_path = out_dir(run) / "final" / "results.jsonl", BASELINES / RUNS[run][3] / "results.jsonl"
-    if not (tuned_path.exists() and base_path.exists()):
-        return None
-    tuned, base = R.ResultsFile.load(tuned_path), R.ResultsFile.load(base_path)
-    if tuned.missing() or base.missing():
-        return None
+    tuned_path, base_path = out_dir(run) / "final" / "results.jsonl", baseline(run)
+    runs_it = {tuned_path: f"python3 benchmarks/beyond_paper.py --runs {run}",
+               base_path: "python3 benchmarks/paper_heatmaps.py --plant paper --to-end --runs "
+                          + RUNS[run][3].removesuffix("_paper_to_end")}
+    loaded = {}
+    for path, command in runs_it.items():
+        loaded[path] = R.ResultsFile.load(path) if path.exists() else None
+        if loaded[path] is None or loaded[path].missing():
+            print(f"{run}: not compared: {path.relative_to(REPO)} is {'missing' if loaded[path] is None else 'incomplete'}"
+                  f" (`{command}` runs it)", file=sys.stderr, flush=True)
+            return None
+    tuned, base = loaded[tuned_path], loaded[base_path]
     differ = sorted(k for k, v in tuned.protocol.to_json().items()
                     if k not in PAIRED_APART and base.protocol.to_json()[k] != v)
     if differ:       # then trial k of a cell is not the same start, target and noise in both: no pairs

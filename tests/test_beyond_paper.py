@@ -1,4 +1,5 @@
 """The paired comparison benchmarks/beyond_paper.py publishes: McNemar's counts and z, and the outer band's falls."""
+import gzip
 import math
 import sys
 
@@ -42,3 +43,21 @@ def test_edge_falls_counts_only_the_outer_band(a, b):
     for name, rec in (("tuned", a), ("paper_manhattan", b)):
         assert out[f"fell_{name}"]["trials"] == sum(rec[k]["fell_off"] for k in band)
         assert out[f"fell_{name}"]["reached_first"] == sum(rec[k]["fell_off"] and rec[k]["reached"] for k in band)
+
+
+def test_the_baseline_comes_from_the_committed_trials_when_out_has_none(tmp_path, monkeypatch):
+    monkeypatch.setattr(B, "BASELINES", tmp_path / "heatmap")
+    run = "bunny_cascade_alpha0.05"
+    committed = REPO / "docs" / "results" / f"{B.RUNS[run][3]}.jsonl.gz"
+    path = B.baseline(run)
+    assert path == tmp_path / "heatmap" / B.RUNS[run][3] / "results.jsonl"
+    assert path.read_bytes() == gzip.decompress(committed.read_bytes())
+
+
+def test_compare_says_which_file_is_missing_and_what_runs_it(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(B, "REPO", tmp_path)
+    monkeypatch.setattr(B, "BASELINES", tmp_path / "out" / "heatmap")
+    assert B.compare("sphere_cascade") is None
+    err = capsys.readouterr().err
+    assert "sphere_cascade: not compared: out/tune/sphere_cascade_alpha0_paper/final/results.jsonl is missing" in err
+    assert "`python3 benchmarks/beyond_paper.py --runs sphere_cascade` runs it" in err
