@@ -26,7 +26,7 @@ import sys
 from pathlib import Path
 
 from mantaray.sim.results_file import write_whole
-from paper_heatmaps import zone_rates   # a sibling script: the same zones as the paper's maps are measured on
+import paper_heatmaps   # a sibling script: the baselines' committed trials, and the zones of the paper's maps
 
 REPO = Path(__file__).resolve().parents[1]
 COMMITTED = REPO / "docs" / "results" / "tune"
@@ -104,11 +104,8 @@ def edge_falls(a: dict, b: dict) -> dict:
 
 def baseline(run: str) -> Path:
     """The baseline's trials: out/ holds them where paper_heatmaps.py ran here, else they come from docs/results/."""
-    name = RUNS[run][3]
-    path, committed = BASELINES / name / "results.jsonl", REPO / "docs" / "results" / f"{name}.jsonl.gz"
-    if not path.exists() and committed.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_bytes(gzip.decompress(committed.read_bytes()))
+    path = BASELINES / RUNS[run][3] / "results.jsonl"
+    paper_heatmaps.restore(path, paper_heatmaps.COMMITTED / f"{RUNS[run][3]}.jsonl.gz")
     return path
 
 
@@ -141,7 +138,8 @@ def compare(run: str) -> dict | None:
            "ratio": {"score": round(st.score / sb.score, 2) if sb.score else None,
                      "reach_score": round(st.reach_score / sb.reach_score, 2) if sb.reach_score else None},
            "mcnemar": {rule: mcnemar(tuned.records, base.records, rule) for rule in ("success", "reached", "fell_off")},
-           "zones": {"tuned": zone_rates(tuned_path)["zones"], "paper_manhattan": zone_rates(base_path)["zones"]},
+           "zones": {"tuned": paper_heatmaps.zone_rates(tuned_path)["zones"],
+                     "paper_manhattan": paper_heatmaps.zone_rates(base_path)["zones"]},
            "outer_band": edge_falls(tuned.records, base.records)}
     for rule, flag in (("", []), ("_reach", ["--reached"])):
         drawn = tuned_path.parent / f"heatmap{rule}.png"        # the tuned controller's own map (sim tune draws it)

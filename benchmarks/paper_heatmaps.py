@@ -78,6 +78,15 @@ def trial_count(text: bytes) -> int:
     return max(len(text.splitlines()) - 1, 0)
 
 
+def restore(results_path: Path, committed: Path) -> bool:
+    """Start a run from its committed trials (docs/results/<run>.jsonl.gz) when out/ has none; whether it did."""
+    if results_path.exists() or not committed.exists():
+        return False
+    results_path.parent.mkdir(parents=True, exist_ok=True)
+    results_path.write_bytes(gzip.decompress(committed.read_bytes()))
+    return True
+
+
 def keep(results_path: Path, committed: Path) -> int:
     """Write every trial out/ holds back to docs/results/<run>.jsonl.gz (whole: an interruption leaves the old file
     or the new); returns how many trials it holds."""
@@ -129,8 +138,7 @@ def main() -> int:
         out = REPO / args.out / name
         results_path = out / "results.jsonl"
         committed = COMMITTED / f"{name}.jsonl.gz"
-        if not results_path.exists() and committed.exists() and not args.collect:
-            results_path.write_bytes(gzip.decompress(committed.read_bytes()))
+        if not args.collect and restore(results_path, committed):
             print(f"{name}: continuing from the committed trials in {committed.relative_to(REPO)}", flush=True)
         if args.collect:
             held = keep(results_path, committed)

@@ -1,4 +1,5 @@
-"""The paired comparison benchmarks/beyond_paper.py publishes: McNemar's counts and z, and the outer band's falls."""
+"""The paired comparison benchmarks/beyond_paper.py publishes (McNemar's counts and z, the outer band's falls), and
+the committed trials it and paper_heatmaps.py start from."""
 import gzip
 import math
 import sys
@@ -11,6 +12,7 @@ from mantaray.paths import REPO
 sys.path.insert(0, str(REPO / "benchmarks"))   # a script, and its sibling paper_heatmaps.py
 
 import beyond_paper as B  # noqa: E402
+import paper_heatmaps  # noqa: E402
 
 FLAGS = ("success", "reached", "fell_off")
 record = st.fixed_dictionaries({"success": st.booleans(), "reached": st.booleans(), "fell_off": st.booleans(),
@@ -61,3 +63,15 @@ def test_compare_says_which_file_is_missing_and_what_runs_it(tmp_path, monkeypat
     err = capsys.readouterr().err
     assert "sphere_cascade: not compared: out/tune/sphere_cascade_alpha0_paper/final/results.jsonl is missing" in err
     assert "`python3 benchmarks/beyond_paper.py --runs sphere_cascade` runs it" in err
+
+
+def test_restore_starts_from_the_committed_trials_once_and_never_over_what_out_holds(tmp_path):
+    committed = tmp_path / "committed.jsonl.gz"
+    committed.write_bytes(gzip.compress(b'{"header": 1}\n{"key": "0:0"}\n'))
+    results = tmp_path / "out" / "run" / "results.jsonl"        # out/ and the run's folder do not exist yet
+    assert paper_heatmaps.restore(results, committed)
+    assert paper_heatmaps.trials_in(results) == 1
+    results.write_bytes(b'{"header": 1}\n{"key": "0:0"}\n{"key": "0:1"}\n')   # the run went on
+    assert not paper_heatmaps.restore(results, committed)
+    assert paper_heatmaps.trials_in(results) == 2
+    assert not paper_heatmaps.restore(tmp_path / "other" / "results.jsonl", tmp_path / "none.jsonl.gz")
