@@ -606,6 +606,87 @@ def _fig3_for(best, args: argparse.Namespace, pool, out: Path) -> dict:
     return {"holds": finding.holds, "measured": finding.measured, "figure": str(figure)}
 
 
+def cmd_fidelity(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """The fidelity gate: does a cheaper physics configuration (the candidate) keep a finer one's trial outcomes?
+
+    It runs one paired sample (a stratified draw of the paper's cells, every controller on each) at the candidate,
+    at the finer fidelity, and at the finer one with every start moved 0.1 mm (the noise floor), and tests each
+    outcome (within ε at T, reached, fell off, time to reach, final error) for a bias and for more flips than the
+    floor. The verdict: the candidate "keeps the finer one's outcomes" or "changes them", with the numbers. Trials
+    go to --trials-dir as they finish, shared by every gate that needs the same run: interrupt it and the same
+    command continues. --runs compares three existing heatmap results files instead."""
+    import shlex
+
+    from . import fidelity as G
+    from .experiment import ExperimentMismatch
+    from .model import SimulationUnstable
+    from .progress import Progress
+
+    try:
+        if args.runs:
+            runs = G.load_runs(*args.runs)
+            candidate, finer = (G.run_fidelity(getattr(runs[0], n)) for n in ("candidate", "finer"))
+            shift_m, sample_text = runs[0].floor.protocol.start_shift_m, f"the runs {', '.join(args.runs)}"
+        else:
+            candidate, finer = G.parse_fidelity(args.candidate), G.parse_fidelity(args.finer)
+            arms = tuple(G.Arm.parse(c) for c in (args.controller or ("manhattan", "euclidean")))
+            sample = G.GateSample(object_name=args.object, plant=args.plant, alpha_m=args.alpha, arms=arms,
+                                  cells_per_stratum=args.cells_per_stratum, trials_per_cell=args.trials_per_cell,
+                                  seed=args.seed, duration_s=args.duration)
+            shift_m = args.shift
+            sample.protocol(arms[0], candidate, shift_m)        # the protocol's own checks, before any work
+            runs = G.open_runs(sample, candidate, finer, Path(args.trials_dir), shift_m)
+            sample_text = (f"{args.object} on the {args.plant} plant, α = {args.alpha:g} m, "
+                           f"{', '.join(a.label for a in arms)}: {len(sample.cells())} cells "
+                           f"({args.cells_per_stratum} from each stratum) x {args.trials_per_cell} trials, seed "
+                           f"{args.seed}, T = {args.duration:g} s")
+    except (ExperimentMismatch, ValueError) as exc:
+        print(f"mantaray sim fidelity: {exc}", file=sys.stderr)
+        return 2
+    if not args.runs:
+        left = G.missing_trials(runs)
+        total = 3 * sum(len(r.finer.protocol.cell_ids()) * r.finer.protocol.trials_per_cell for r in runs)
+        bar = Progress(total, initial=total - left, unit="trial", label="fidelity")
+        _interruptible()
+        try:
+            G.run_missing(runs, _jobs(parser, args.jobs), on_record=lambda record: bar.update(1))
+        except KeyboardInterrupt:
+            bar.close()
+            print(f"\ninterrupted: the finished trials are in {args.trials_dir}; the same command continues",
+                  file=sys.stderr)
+            return 130
+        except SimulationUnstable as exc:
+            bar.close()
+            print(f"mantaray sim fidelity: {exc}; the finished trials are kept in {args.trials_dir}", file=sys.stderr)
+            return 1
+        bar.close()
+    try:
+        report = G.compare(runs)
+    except G.GateMismatch as exc:
+        print(f"mantaray sim fidelity: {exc}", file=sys.stderr)
+        return 2
+    report.update(candidate=candidate.label, finer=finer.label, shift_m=shift_m, sample_text=sample_text,
+                  command=shlex.join(["mantaray", *sys.argv[1:]]))
+    p = runs[0].finer.protocol
+    out = _output(parser, writable_dir, args.out or f"out/fidelity/{p.object_name}_{p.plant}_alpha{p.alpha_m:g}_"
+                  f"{candidate.slug}_vs_{finer.slug}")
+    paths = G.write_report(report, out)
+    if args.json:
+        print(json.dumps(report))
+    elif report["verdict"] is None:
+        print(f"{candidate.label} against {finer.label}: incomplete ({report['pairs']} of {report['expected_pairs']} "
+              f"paired trials); {paths[1]}")
+    else:
+        print(f"{candidate.label} {report['verdict']} of {finer.label} ({report['pairs']} paired trials)"
+              + "".join(f"\n  {c}" for c in report["changed"]) + f"\n{paths[1]}")
+    return 0 if report["verdict"] == G.KEEPS else 1
+
+
+def _jobs(parser: argparse.ArgumentParser, jobs: int | None) -> int:
+    """--jobs as given, else every core."""
+    return jobs or os.cpu_count() or 1
+
+
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Register `sim` and its subcommands on the top-level parser's subparsers."""
     sim = sub.add_parser("sim", help="the MuJoCo rig with the firmware in the loop",
@@ -746,6 +827,35 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     tune.add_argument("--ray-address", help="address of a running Ray cluster")
     tune.add_argument("--json", action="store_true", help="print the report as JSON on stdout (progress stays on stderr)")
     tune.set_defaults(func=lambda args: cmd_tune(args, tune))
+
+    gate = sim_sub.add_parser("fidelity", help="the fidelity gate: does a cheaper physics keep a finer one's outcomes",
+                              description=cmd_fidelity.__doc__, formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    gate.add_argument("--candidate", default="fast", help="the configuration under test: fast, reference, or "
+                      "RESOLUTION:TIMESTEP [vertices per side : s] (like 15:0.002)")
+    gate.add_argument("--finer", default="reference", help="the configuration whose outcomes it must keep")
+    gate.add_argument("--object", choices=sorted(OBJECTS), default="sphere", help="the paper's object (Table I)")
+    gate.add_argument("--plant", choices=plant_names(), default=DEFAULT_PLANT, help="the plant (sim/plant.toml)")
+    gate.add_argument("--alpha", type=float, default=0.0, help=f"noise amplitude α [m], "
+                      f"{bounds_text(m.Configure, 'noise_amplitude')}")
+    gate.add_argument("--controller", action="append", metavar="NAME|FILE",
+                      help="a controller with its boot values, or a settings file (TOML, as mantaray sim tune writes); "
+                           "repeatable (default: manhattan and euclidean)")
+    gate.add_argument("--cells-per-stratum", type=number(1, integer=True), default=8,
+                      help="cells drawn from each of centre, axes, diagonals, edges and corners")
+    gate.add_argument("--trials-per-cell", type=number(1, integer=True), default=5)
+    gate.add_argument("--seed", type=number(0, integer=True), default=77, help="seed of the sample's cells and trials")
+    gate.add_argument("--duration", type=float, default=10.0, help="runtime T [s]; every trial runs to its end")
+    gate.add_argument("--shift", type=float, default=1e-4, help="[m] how far the noise floor's run moves every start")
+    gate.add_argument("--runs", nargs=3, metavar=("CANDIDATE", "FINER", "FLOOR"),
+                      help="compare three existing results files (the floor: the finer run with its starts moved) "
+                           "instead of running the sample")
+    gate.add_argument("--jobs", type=number(1, integer=True), help="parallel workers (default: every core)")
+    gate.add_argument("--trials-dir", default="out/fidelity/trials",
+                      help="where each run keeps its trials (one results file per controller, fidelity and shift)")
+    gate.add_argument("--out", help="directory for report.json and report.md (default "
+                      "out/fidelity/OBJECT_PLANT_alphaA_CANDIDATE_vs_FINER)")
+    gate.add_argument("--json", action="store_true", help="print the report as JSON on stdout (progress stays on stderr)")
+    gate.set_defaults(func=lambda args: cmd_fidelity(args, gate))
 
     compare = sim_sub.add_parser("compare", help="difference map of two heatmap runs (first minus second)",
                                  description=cmd_compare.__doc__, formatter_class=argparse.ArgumentDefaultsHelpFormatter)

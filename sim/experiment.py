@@ -47,6 +47,8 @@ class Experiment:
     plant_set: tuple[tuple[str, float | str], ...] = ()   # ... with these values set over it
     stop_when_reached: bool = False         # end each trial at the first frame within epsilon (the paper's loop)
     settings: tuple[tuple[str, float], ...] = ()   # the controller's own settings (host/controller_settings.py)
+    start_shift_m: float = 0.0              # [m] every start moved this far, each in its own direction drawn from
+                                            # (seed, cell, k): the same trials, perturbed (the fidelity gate's floor)
 
     def __post_init__(self) -> None:
         checks = [
@@ -55,6 +57,7 @@ class Experiment:
             (1 <= self.trials_per_cell <= 1000, f"trials per cell must be 1..1000, got {self.trials_per_cell}"),
             (0 < self.duration_s <= 600, f"runtime T must be in (0, 600] s, got {self.duration_s}"),
             (self.seed >= 0, f"seed must be >= 0, got {self.seed}"),
+            (0 <= self.start_shift_m <= 0.01, f"start shift must be 0..0.01 m, got {self.start_shift_m}"),
             (0 < self.timestep_s <= 0.01, f"timestep must be in (0, 0.01] s, got {self.timestep_s}"),
             (self.gains is None or len(self.gains) == 4,
              f"gains must be four numbers (kp, ki, kd, integral limit), got {self.gains}"),
@@ -114,13 +117,19 @@ def cell_bounds(protocol: Experiment, module_m: tuple[float, float], cell: int) 
 
 
 def make_trial(protocol: Experiment, module_m: tuple[float, float], cell: int, k: int) -> Trial:
-    """Trial k of a cell: target uniform in the cell, start uniform over the workspace, from (seed, cell, k) alone."""
+    """Trial k of a cell: target uniform in the cell, start uniform over the workspace, from (seed, cell, k) alone;
+    the start moved by protocol.start_shift_m (kept on the workspace) in a direction drawn from them too."""
     rng = np.random.default_rng([protocol.seed, cell, k])
     x_lo, x_hi, y_lo, y_hi = cell_bounds(protocol, module_m, cell)
     target = (float(rng.uniform(x_lo, x_hi)), float(rng.uniform(y_lo, y_hi)))
     hx, hy = module_m[0] / 2, module_m[1] / 2
     start = (float(rng.uniform(-hx, hx)), float(rng.uniform(-hy, hy)))
-    return Trial(cell, k, start, target, int(rng.integers(1, 2 ** 31)))
+    seed = int(rng.integers(1, 2 ** 31))
+    if protocol.start_shift_m:      # its own draw, so that every other number of the trial stays as it was
+        angle = np.random.default_rng([protocol.seed, cell, k, 1]).uniform(0.0, 2 * np.pi)
+        start = (float(np.clip(start[0] + protocol.start_shift_m * np.cos(angle), -hx, hx)),
+                 float(np.clip(start[1] + protocol.start_shift_m * np.sin(angle), -hy, hy)))
+    return Trial(cell, k, start, target, seed)
 
 
 def trials(protocol: Experiment) -> list[Trial]:

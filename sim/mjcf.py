@@ -1,6 +1,7 @@
 """MJCF for the rig (the model file, Menagerie-style) and its scene (floor, light, overhead camera, object, markers)."""
 from __future__ import annotations
 
+import hashlib
 import shutil
 from pathlib import Path
 
@@ -278,6 +279,13 @@ def scene_xml(rig: Rig) -> str:
   </keyframe>
 </mujoco>
 """
+
+
+def model_identity(rig: Rig) -> dict[str, str]:
+    """What a trial's physics is: a digest of the MJCF the rig generates (model and scene, every number as written)
+    and the MuJoCo version that steps it. Two runs with the same identity step the same model."""
+    text = (model_xml(rig) + scene_xml(rig)).encode()
+    return {"mjcf_sha1": hashlib.sha1(text).hexdigest()[:16], "mujoco": mujoco.__version__}
 
 
 def write_model(rig: Rig, directory: str | Path) -> Path:

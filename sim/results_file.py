@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .experiment import Experiment, ExperimentMismatch, Trial, trials
+from .mjcf import model_identity
 
 RESULTS_FORMAT = "mantaray-heatmap/1"
 
@@ -49,6 +50,9 @@ class ResultsFile:
             raise ExperimentMismatch(f"{path} holds a run with other options ({', '.join(changed)} differ); "
                                    f"use another --out, the same options to continue it, or more trials or "
                                    f"cells to add to it")
+        model_now = model_identity(protocol.rig())
+        if stored.model != model_now:
+            raise ExperimentMismatch(_other_model(path, stored.model, model_now))
         if stored.bad_lines:                    # kept aside, never lost
             with open(path.with_name(path.name + ".rejected"), "ab") as f:
                 f.write(b"".join(line + b"\n" for line in stored.bad_lines))
@@ -79,6 +83,15 @@ class ResultsFile:
                 f"the line is kept in {self.path.name}.rejected)" for line, why in self.rejected]
 
 
+def _other_model(path: Path, stored: dict | None, now: dict) -> str:
+    """Why a results file written on another model is not continued, and how to start it again."""
+    was = ("a model from before results files recorded theirs" if stored is None else
+           f"model {stored.get('mjcf_sha1')} on MuJoCo {stored.get('mujoco')}")
+    return (f"{path} was written on {was}; this run's is model {now['mjcf_sha1']} on MuJoCo {now['mujoco']} (the MJCF "
+            f"the rig generates, or MuJoCo, changed since): its trials would mix two models. Start it again with "
+            f"another --out, or move {path.name} away; it still opens for figures and comparisons")
+
+
 def _cut_header(raw: bytes) -> bool:
     """Whether a file is all or the start of a results header and nothing more (a run interrupted as it began)."""
     prefix = b'{"format": "' + RESULTS_FORMAT.encode()
@@ -104,8 +117,10 @@ def _extends(stored: Experiment, wanted: Experiment) -> bool:
 
 
 def _header(protocol: Experiment) -> dict:
-    """A results file's first line: the protocol, and the values its plant had (a named plant may be refitted)."""
-    return {"format": RESULTS_FORMAT, "protocol": protocol.to_json(), "plant_values": protocol.plant_model().values}
+    """A results file's first line: the protocol, the values its plant had (a named plant may be refitted) and the
+    model that stepped it (the generated MJCF's digest and MuJoCo's version)."""
+    return {"format": RESULTS_FORMAT, "protocol": protocol.to_json(), "plant_values": protocol.plant_model().values,
+            "model": model_identity(protocol.rig())}
 
 
 RECORD_TYPES = {"key": str, "cell": int, "k": int, "success": bool, "reached": bool, "fell_off": bool,
@@ -135,6 +150,7 @@ class _Contents:
     """What a results file holds, line by line."""
     protocol: Experiment
     plant_values: dict | None
+    model: dict | None             # model_identity() of the run; None in files written before it was recorded
     records: dict[str, dict] = field(default_factory=dict)
     good_lines: list[bytes] = field(default_factory=list)
     bad_lines: list[bytes] = field(default_factory=list)
@@ -158,7 +174,7 @@ def _read(path: Path) -> _Contents:
         protocol = Experiment.from_json(header["protocol"])
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"{path}: its header's protocol is not valid ({exc})") from None
-    out = _Contents(protocol, header.get("plant_values"), cut=lines[-1] != b"")
+    out = _Contents(protocol, header.get("plant_values"), header.get("model"), cut=lines[-1] != b"")
     for number, line in enumerate(lines[1:-1], start=2):   # the last element follows the final newline
         if not line.strip():
             continue

@@ -1,0 +1,85 @@
+"""Paired comparisons of two runs of the same trials: McNemar's exact test on a yes/no outcome, a bootstrap on a number."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+BOOTSTRAP_DRAWS = 4000      # resamples of the paired differences behind each interval
+
+
+def binomial_tail(k: int, n: int) -> float:
+    """P(X >= k) for X ~ Binomial(n, 1/2): the chance of k or more heads in n fair tosses."""
+    if k <= 0:
+        return 1.0
+    return math.fsum(math.comb(n, i) for i in range(k, n + 1)) / 2.0 ** n
+
+
+@dataclass(frozen=True)
+class Discordance:
+    """A yes/no outcome on paired trials: how often it holds in a alone and in b alone, and McNemar's exact test."""
+    pairs: int
+    only_a: int
+    only_b: int
+
+    @property
+    def flips(self) -> int:
+        """Pairs whose outcome differs between the two runs."""
+        return self.only_a + self.only_b
+
+    @property
+    def p_two_sided(self) -> float:
+        """McNemar's exact p: how likely a split of the flips at least this uneven is when neither run is favoured."""
+        if self.flips == 0:
+            return 1.0
+        return min(1.0, 2.0 * binomial_tail(max(self.only_a, self.only_b), self.flips))
+
+    @property
+    def p_more_in_a(self) -> float:
+        """One-sided exact p that the outcome holds more often in a than in b."""
+        return binomial_tail(self.only_a, self.flips)
+
+    def to_json(self) -> dict:
+        return {"pairs": self.pairs, "only_a": self.only_a, "only_b": self.only_b, "flips": self.flips,
+                "p": round(self.p_two_sided, 6)}
+
+
+def discordance(a: Sequence[bool], b: Sequence[bool]) -> Discordance:
+    """The Discordance of one outcome over pairs (a[i], b[i])."""
+    if len(a) != len(b):
+        raise ValueError(f"paired outcomes must be as many in both runs, got {len(a)} and {len(b)}")
+    x, y = np.asarray(a, dtype=bool), np.asarray(b, dtype=bool)
+    return Discordance(len(x), int(np.sum(x & ~y)), int(np.sum(~x & y)))
+
+
+@dataclass(frozen=True)
+class MeanInterval:
+    """The mean of paired differences with a bootstrap percentile interval."""
+    n: int
+    mean: float
+    low: float
+    high: float
+
+    def to_json(self, digits: int = 5) -> dict:
+        return {"n": self.n, "mean": _round(self.mean, digits), "low": _round(self.low, digits),
+                "high": _round(self.high, digits)}
+
+
+def mean_interval(differences: Sequence[float], level: float = 0.95, seed: int = 0) -> MeanInterval:
+    """Mean of the differences and its bootstrap percentile interval at level (NaN with no differences)."""
+    d = np.asarray(differences, dtype=float)
+    if not 0 < level < 1:
+        raise ValueError(f"level must be in (0, 1), got {level}")
+    if d.size == 0:
+        return MeanInterval(0, math.nan, math.nan, math.nan)
+    rng = np.random.default_rng(seed)
+    means = d[rng.integers(0, d.size, size=(BOOTSTRAP_DRAWS, d.size))].mean(axis=1)
+    tail = (1.0 - level) / 2.0
+    return MeanInterval(int(d.size), float(d.mean()), float(np.quantile(means, tail)),
+                        float(np.quantile(means, 1.0 - tail)))
+
+
+def _round(x: float, digits: int) -> float | None:
+    return None if math.isnan(x) else round(x, digits)

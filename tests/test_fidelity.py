@@ -1,0 +1,250 @@
+"""The fidelity gate: its paired tests on drawn outcomes, the runs it refuses to pair, the start shift of its noise
+floor, the model identity that keeps results files apart, and the command end to end on a tiny sample."""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mantaray.sim import experiment as E
+from mantaray.sim import fidelity as G
+from mantaray.sim import paired as P
+from mantaray.sim import results_file as R
+
+MODULE = (0.5, 0.5)
+
+
+# ------------------------------------------------------------------------------------------- paired statistics
+@settings(max_examples=200, deadline=None)
+@given(outcomes=st.lists(st.tuples(st.booleans(), st.booleans()), max_size=60))
+def test_mcnemar_counts_discordant_pairs_and_its_p_is_symmetric_and_a_probability(outcomes):
+    a = [x for x, _ in outcomes]
+    b = [y for _, y in outcomes]
+    d = P.discordance(a, b)
+    assert d.only_a == sum(x and not y for x, y in outcomes) and d.only_b == sum(y and not x for x, y in outcomes)
+    assert d.pairs == len(outcomes)
+    assert 0 < d.p_two_sided <= 1
+    assert P.discordance(b, a).p_two_sided == pytest.approx(d.p_two_sided)   # the test does not favour either run
+    assert d.p_more_in_a + P.discordance(b, a).p_more_in_a >= 1 - 1e-12   # the two one-sided tails cover everything
+
+
+@settings(max_examples=100, deadline=None)
+@given(n=st.integers(1, 80), data=st.data())
+def test_binomial_tail_is_the_sum_of_the_fair_binomial_and_falls_with_k(n, data):
+    k = data.draw(st.integers(0, n))
+    exact = sum(math.comb(n, i) for i in range(k, n + 1)) / 2 ** n
+    assert P.binomial_tail(k, n) == pytest.approx(exact)
+    assert P.binomial_tail(k + 1, n) <= P.binomial_tail(k, n)
+
+
+def test_mcnemar_finds_a_one_sided_split_and_not_an_even_one():
+    assert P.Discordance(100, 20, 2).p_two_sided < 1e-3      # 20 against 2: a bias
+    assert P.Discordance(100, 11, 11).p_two_sided == 1.0
+    assert P.Discordance(100, 0, 0).p_two_sided == 1.0
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), shift=st.floats(-1, 1))
+def test_bootstrap_interval_holds_the_mean_and_covers_a_true_shift(seed, shift):
+    rng = np.random.default_rng(seed)
+    d = shift + rng.normal(0, 0.1, 400)
+    ci = P.mean_interval(d, level=0.999, seed=seed)
+    assert ci.low <= ci.mean <= ci.high
+    assert ci.low <= shift <= ci.high                      # sigma/sqrt(n) = 0.005: a 99.9 % interval misses rarely
+
+
+def test_bootstrap_of_nothing_is_nan_and_a_bad_level_is_refused():
+    assert math.isnan(P.mean_interval([]).mean)
+    with pytest.raises(ValueError, match="level"):
+        P.mean_interval([1.0], level=1.5)
+
+
+# ------------------------------------------------------------------------------------------- the gate's verdict
+def _results(tmp_path: Path, name: str, protocol: E.Experiment, outcomes: list[tuple[bool, bool, bool]]):
+    """A results file of protocol whose trials have the given (success, reached, fell_off), in trial order."""
+    results = R.ResultsFile(tmp_path / f"{name}.jsonl", protocol)
+    for trial, (success, reached, fell) in zip(E.trials(protocol), outcomes):
+        results.records[trial.key] = {"key": trial.key, "cell": trial.cell, "k": trial.k, "success": success,
+                                      "reached": reached, "fell_off": fell, "target_m": list(trial.target_m),
+                                      "time_to_reach_s": 2.0 if reached else None,
+                                      "final_error_m": 0.01 if success else 0.05}
+    return results
+
+
+def _sample_runs(tmp_path, finer_outcomes, candidate_outcomes, floor_outcomes, **changes):
+    sample = G.GateSample(cells_per_stratum=8, trials_per_cell=5, arms=(G.Arm("manhattan", "manhattan"),))
+    arm = sample.arms[0]
+    finer = sample.protocol(arm, G.FIDELITIES["reference"])
+    candidate = dataclasses.replace(sample.protocol(arm, G.FIDELITIES["fast"]), **changes)
+    floor = sample.protocol(arm, G.FIDELITIES["reference"], G.PERTURBATION_M)
+    return [G.Runs("manhattan", _results(tmp_path, "candidate", candidate, candidate_outcomes),
+                   _results(tmp_path, "finer", finer, finer_outcomes),
+                   _results(tmp_path, "floor", floor, floor_outcomes))]
+
+
+def _draw(rng, n, p_reach):
+    reached = rng.random(n) < p_reach
+    fell = ~reached & (rng.random(n) < 0.5)
+    success = reached & (rng.random(n) < 0.5)
+    return list(zip(success, reached, fell))
+
+
+def _flip(outcomes, rng, share):
+    """The outcomes with each trial redrawn with probability share (a perturbation's scatter, no bias)."""
+    redrawn = _draw(rng, len(outcomes), 0.5)
+    return [r if rng.random() < share else o for o, r in zip(outcomes, redrawn)]
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1))
+def test_a_candidate_that_scatters_like_the_floor_keeps_the_outcomes(seed, tmp_path_factory):
+    rng = np.random.default_rng(seed)
+    finer = _draw(rng, 200, 0.5)
+    runs = _sample_runs(tmp_path_factory.mktemp("g"), finer, _flip(finer, rng, 0.1), _flip(finer, rng, 0.1))
+    report = G.compare(runs)
+    assert report["pairs"] == 200 and report["complete"]
+    assert report["verdict"] == G.KEEPS, report["changed"]
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1))
+def test_a_candidate_that_falls_off_more_changes_the_outcomes(seed, tmp_path_factory):
+    rng = np.random.default_rng(seed)
+    finer = _draw(rng, 200, 0.5)
+    candidate = [(False, False, True) if rng.random() < 0.3 else o for o in finer]   # a third more falls
+    runs = _sample_runs(tmp_path_factory.mktemp("g"), finer, candidate, _flip(finer, rng, 0.05))
+    report = G.compare(runs)
+    assert report["verdict"] == G.CHANGES
+    assert any(c.startswith("fell off: a bias") for c in report["changed"])
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1))
+def test_a_candidate_that_scatters_far_more_than_the_floor_changes_the_outcomes_even_without_bias(seed,
+                                                                                              tmp_path_factory):
+    rng = np.random.default_rng(seed)
+    finer = _draw(rng, 200, 0.5)
+    runs = _sample_runs(tmp_path_factory.mktemp("g"), finer, _flip(finer, rng, 0.8), _flip(finer, rng, 0.05))
+    report = G.compare(runs)
+    assert report["verdict"] == G.CHANGES
+    assert any("more flips than the noise floor" in c for c in report["changed"])
+
+
+def test_an_unfinished_sample_has_no_verdict(tmp_path):
+    rng = np.random.default_rng(3)
+    finer = _draw(rng, 200, 0.5)
+    runs = _sample_runs(tmp_path, finer, finer[:150], finer)
+    report = G.compare(runs)
+    assert report["pairs"] == 150 and report["verdict"] is None and not report["complete"]
+
+
+@pytest.mark.parametrize("field, value", [("object_name", "cube"), ("plant", "paper"), ("seed", 5),
+                                          ("controller", "euclidean"), ("duration_s", 5.0)])
+def test_the_gate_refuses_runs_of_other_trials_and_names_the_field(tmp_path, field, value):
+    finer = _draw(np.random.default_rng(0), 200, 0.5)
+    runs = _sample_runs(tmp_path, finer, finer, finer, **{field: value})
+    with pytest.raises(G.GateMismatch, match=field):
+        G.compare(runs)
+
+
+def test_the_gate_refuses_a_floor_that_moved_nothing(tmp_path):
+    finer = _draw(np.random.default_rng(0), 200, 0.5)
+    run = _sample_runs(tmp_path, finer, finer, finer)[0]
+    same = R.ResultsFile(tmp_path / "same.jsonl", run.finer.protocol, dict(run.finer.records))
+    with pytest.raises(G.GateMismatch, match="moves no start"):
+        G.compare([dataclasses.replace(run, floor=same)])
+
+
+# ------------------------------------------------------------------------------------------- fidelities, arms, shift
+def test_fidelities_parse_by_name_or_resolution_and_step_and_refuse_the_rest():
+    assert G.parse_fidelity("fast") == G.Fidelity(11, 0.002)
+    assert G.parse_fidelity("21:0.0005") == G.Fidelity(21, 0.0005)
+    for bad in ("15", "15:x", "14:0.001", "15:0.5", "slow"):
+        with pytest.raises(ValueError):
+            G.parse_fidelity(bad)
+
+
+def test_an_arm_is_a_controller_or_a_settings_file_and_nothing_else(tmp_path):
+    assert G.Arm.parse("Euclidean") == G.Arm("euclidean", "euclidean")
+    tuned = G.Arm.parse(str(Path(__file__).resolve().parents[1] / "docs/results/tune/sphere_cascade/settings.toml"))
+    assert tuned.controller == "cascade" and tuned.settings and tuned.label.startswith("cascade-")
+    with pytest.raises(ValueError, match="neither"):
+        G.Arm.parse(str(tmp_path / "missing.toml"))
+
+
+@settings(max_examples=100, deadline=None)
+@given(seed=st.integers(0, 2 ** 31), cell=st.integers(0, 399), k=st.integers(0, 20),
+       shift=st.floats(1e-6, 0.01))
+def test_a_start_shift_moves_the_start_that_far_and_changes_nothing_else(seed, cell, k, shift):
+    plain = E.Experiment(seed=seed)
+    moved = E.make_trial(dataclasses.replace(plain, start_shift_m=shift), MODULE, cell, k)
+    trial = E.make_trial(plain, MODULE, cell, k)
+    assert (moved.cell, moved.k, moved.target_m, moved.seed) == (trial.cell, trial.k, trial.target_m, trial.seed)
+    distance = math.dist(moved.start_m, trial.start_m)
+    assert distance <= shift + 1e-12
+    assert all(abs(v) <= 0.25 for v in moved.start_m)
+    if all(abs(v) <= 0.25 - shift for v in trial.start_m):          # away from the workspace's edge: the full shift
+        assert distance == pytest.approx(shift)
+
+
+def test_results_files_written_before_the_start_shift_existed_read_as_unshifted():
+    data = E.Experiment().to_json()
+    del data["start_shift_m"]
+    assert E.Experiment.from_json(data) == E.Experiment()
+
+
+# ------------------------------------------------------------------------------------------- model identity
+def test_a_results_file_of_another_model_is_not_continued_and_says_how_to_start_again(tmp_path):
+    protocol = E.Experiment(cells=2, trials_per_cell=1, duration_s=0.5)
+    path = tmp_path / "results.jsonl"
+    R.ResultsFile.open(path, protocol)
+    header, rest = path.read_text().split("\n", 1)
+    stored = json.loads(header)
+    stored["model"]["mjcf_sha1"] = "0" * 16               # as if the generator had changed since
+    path.write_text(json.dumps(stored) + "\n" + rest)
+    with pytest.raises(E.ExperimentMismatch, match="Start it again"):
+        R.ResultsFile.open(path, protocol)
+    del stored["model"]                                   # written before files recorded their model
+    path.write_text(json.dumps(stored) + "\n" + rest)
+    with pytest.raises(E.ExperimentMismatch, match="before results files recorded"):
+        R.ResultsFile.open(path, protocol)
+    assert R.ResultsFile.load(path).protocol == protocol   # still read for figures and comparisons
+
+
+# ------------------------------------------------------------------------------------------- the command
+def _gate(tmp_path, *extra):
+    return subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "fidelity", "--candidate", "5:0.002",
+                           "--finer", "7:0.002", "--cells-per-stratum", "1", "--trials-per-cell", "1",
+                           "--duration", "0.5", "--trials-dir", str(tmp_path / "trials"), "--out",
+                           str(tmp_path / "gate"), "--jobs", "1", *extra], capture_output=True, text=True, timeout=300)
+
+
+def test_the_command_runs_the_three_runs_writes_its_report_and_resumes_without_rerunning(tmp_path):
+    first = _gate(tmp_path, "--controller", "manhattan")
+    assert first.returncode in (0, 1), first.stderr
+    files = sorted((tmp_path / "trials").iterdir())
+    assert [f.name.split("seed77_")[1] for f in files] == ["5x5_2ms.jsonl", "7x7_2ms.jsonl",
+                                                           "7x7_2ms_moved0.1mm.jsonl"]
+    report = json.loads((tmp_path / "gate" / "report.json").read_text())
+    assert report["pairs"] == 5 and report["verdict"] in (G.KEEPS, G.CHANGES)
+    assert "Verdict" in (tmp_path / "gate" / "report.md").read_text()
+    before = {f: f.read_bytes() for f in files}
+    again = _gate(tmp_path, "--controller", "manhattan")
+    assert again.returncode == first.returncode
+    assert {f: f.read_bytes() for f in files} == before          # nothing ran twice
+    assert json.loads((tmp_path / "gate" / "report.json").read_text())["outcomes"] == report["outcomes"]
+
+
+def test_the_command_says_what_is_wrong_with_its_input_in_one_line(tmp_path):
+    for extra, said in ((("--candidate", "14:0.002"), "odd"), (("--controller", "nonsense"), "neither"),
+                        (("--shift", "0.5"), "start shift")):
+        run = _gate(tmp_path, *extra)
+        assert run.returncode == 2 and said in run.stderr and "Traceback" not in run.stderr, run.stderr
