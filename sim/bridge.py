@@ -330,7 +330,8 @@ class Bridge:
             M.step_until(self.model, self.data, trial.t0_sim_s + to_trial_s,
                          None if self.recorder is None else self.recorder.capture)
         except SimulationUnstable:
-            raise SimulationUnstable(f"the physics diverged before trial time {to_trial_s:.3f} s") from None
+            raise SimulationUnstable(f"the physics diverged before trial time {to_trial_s:.3f} s",
+                                     self.rig.stiffest()) from None
         trial.physics_s += time.perf_counter() - t
         if self.viewer is not None:
             self.viewer.sync()

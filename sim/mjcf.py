@@ -149,7 +149,7 @@ def model_xml(rig: Rig) -> str:
               radius="{_v(fab.radius_m)}" mass="{_v(fab.mass_kg)}" rgba="0.25 0.45 0.85 1">
       <contact condim="{c.condim}" friction="{_v(*c.friction)}" solref="{_v(*c.solref)}"
                solimp="{_v(*c.solimp)}" selfcollide="none"/>
-      <edge equality="true" solref="{_v(*fab.edge_solref)}" solimp="{_v(*fab.edge_solimp)}"/>
+      <edge equality="true" solref="{_v(fab.edge_timeconst_s, fab.edge_solref[1])}" solimp="{_v(*fab.edge_solimp)}"/>
       <elasticity young="{_v(fab.young_pa)}" poisson="{_v(fab.poisson)}" thickness="{_v(fab.thickness_m)}"
                   damping="{_v(fab.damping_s)}" elastic2d="bend"/>
     </flexcomp>

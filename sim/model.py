@@ -19,12 +19,13 @@ PARK_OFFSET_M = 0.35           # [m] the object waits on the floor this far beyo
 class SimulationUnstable(RuntimeError):
     """MuJoCo reported a diverging step (NaN or huge accelerations) and reset its state: the physics is not valid."""
 
-    def __init__(self, when: str) -> None:
-        self.when = when
-        super().__init__(f"{when}; the rig's parameters are too stiff for the timestep (see sim/README.md)")
+    def __init__(self, when: str, why: str = "") -> None:
+        self.when, self.why = when, why
+        super().__init__(f"{when}; the rig's parameters are too stiff for the timestep: "
+                         f"{why or 'see sim/README.md'}")
 
     def __reduce__(self):              # across processes (a worker's trial) with its message once
-        return type(self), (self.when,)
+        return type(self), (self.when, self.why)
 
 
 def _object_qpos_adr(model: mujoco.MjModel) -> int:
@@ -53,7 +54,7 @@ def load(rig: Rig, fabric_settle_s: float = 2.0) -> tuple[mujoco.MjModel, mujoco
     for _ in range(round(fabric_settle_s / model.opt.timestep)):
         mujoco.mj_step(model, data)
         if diverged.number:            # MuJoCo restarts a diverged state from zero: nothing after it is valid
-            raise SimulationUnstable("the physics diverged while the bare fabric settled")
+            raise SimulationUnstable("the physics diverged while the bare fabric settled", rig.stiffest())
     key = model.key(REST_KEY).id
     model.key_time[key] = 0.0
     model.key_qpos[key] = data.qpos

@@ -47,6 +47,9 @@ class Actuators:
         return self.motor_speed_rpm / 60.0 * self.pulley_circumference_m
 
 
+STATED_AT_RESOLUTION = 15   # [vertices per side] the mesh at which sim/plant.toml states the edges' time constant
+
+
 @dataclass(frozen=True)
 class Fabric:
     """The polyester sheet: a MuJoCo flexcomp grid (dim 2, full dofs), welded at its four corners to the carriages."""
@@ -74,6 +77,18 @@ class Fabric:
     def spacing_m(self) -> float:
         """Distance [m] between neighbouring vertices."""
         return self.size_m / (self.resolution - 1)
+
+    @property
+    def edge_timeconst_s(self) -> float:
+        """[s] The edges' time constant on this mesh: edge_solref[0] is stated at STATED_AT_RESOLUTION and scaled by
+        STATED_AT_RESOLUTION / resolution, so the sheet's stretch stiffness is the same physical one on every mesh.
+
+        MuJoCo's constraint stiffness is per unit of the constrained mass: an edge of two vertices of mass m, time
+        constant tau and impedance d holds like a spring of d / (1 - d) m / tau^2 [N/m]. A vertex's mass goes as
+        1 / N^2, and a square mesh's tension per unit width under a strain is that spring's stiffness times the
+        strain whatever the edge length, so tau must go as 1 / N for the sheet to stretch alike on every mesh.
+        """
+        return self.edge_solref[0] * STATED_AT_RESOLUTION / self.resolution
 
 
 @dataclass(frozen=True)
@@ -118,7 +133,8 @@ class FallRule:
     below_fabric_m: float = _d("fall.below_fabric_m")       # [m] centre below the fabric's lowest vertex by more
     floor_z_m: float = 0.1                # [m] object centre below this height above the floor
 
-VISION_MODES = ("aruco", "blob")   # the tracker on rendered frames: ArUco marker, or colour blob
+VISION_MODES = ("aruco", "blob")
+MIN_STEPS_PER_TIMECONST = 2     # MuJoCo runs a constraint's time constant at no less than two steps (refsafe)   # the tracker on rendered frames: ArUco marker, or colour blob
 
 
 @dataclass(frozen=True)
@@ -136,6 +152,22 @@ class Rig:
     def with_object(self, name: str) -> Rig:
         """The same rig carrying another of the paper's objects (a key of objects.OBJECTS)."""
         return dataclasses.replace(self, object=OBJECTS[name])
+
+    def time_constants_s(self) -> dict[str, float]:
+        """[s] The constraints' time constants as MuJoCo is given them, by the plant parameter that sets each."""
+        return {"fabric.edge_solref[0]": self.fabric.edge_timeconst_s,
+                "fabric.corner_weld_solref[0]": self.fabric.corner_weld_solref[0],
+                "contact.solref[0]": self.contact.solref[0]}
+
+    def stiffest(self) -> str:
+        """Which parameter makes the stiffest constraint against the step, in words: what to change when the physics
+        diverges (the bending stiffness, fabric.young_pa, is the other)."""
+        key, tau = min(self.time_constants_s().items(), key=lambda kv: kv[1])
+        n, step = self.fabric.resolution, self.solver.timestep_s
+        return (f"the stiffest constraint is {key} (a time constant of {tau * 1000:.3g} ms at {n} x {n} vertices, "
+                f"{tau / step:.3g} steps of {step * 1000:g} ms; MuJoCo runs it at no less than "
+                f"{MIN_STEPS_PER_TIMECONST}), then fabric.young_pa's bending: a smaller step, or a softer value of "
+                f"either, integrates")
 
     def with_vision(self, mode: str) -> Rig:
         """The same rig with the scene markers a tracker mode (VISION_MODES) needs: the corner markers, and for
