@@ -38,7 +38,8 @@ def make_logs(out: Path, n: int, seed: int) -> list[Path]:
     if all(p.exists() for p in paths):
         return paths
     plant = Plant().set(HIDDEN)
-    bridge = Bridge(Link(InProcessTransport(simulated_clock=True)), plant.rig(resolution=11, timestep_s=0.002),
+    bridge = Bridge(Link(InProcessTransport(simulated_clock=True)), plant.rig(resolution=LogEvidence.resolution,
+                                                                        timestep_s=LogEvidence.timestep_s),
                     plant.tracking())
     rng = np.random.default_rng(seed)
     for k, path in enumerate(paths):

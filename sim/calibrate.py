@@ -25,6 +25,7 @@ from . import findings as F
 from . import parameters as P
 from .experiment import Experiment, trials
 from .plant import DEFAULT_PLANT, Plant
+from .rig import DEFAULT_FIDELITY
 
 CELLS = Experiment.cells            # the paper's 20 x 20 grid, on which the strata and the totals are defined
 
@@ -72,8 +73,8 @@ class FindingsEvidence:
     trials_per_cell: int = 3
     duration_s: float = 10.0               # [s] T
     seed: int = 12                         # the search's draw; the heatmaps judged afterwards use another
-    resolution: int = 11                   # the fast mode (docs/results.md)
-    timestep_s: float = 0.002
+    resolution: int = DEFAULT_FIDELITY.resolution   # [vertices per side] (sim/rig.py, FIDELITIES)
+    timestep_s: float = DEFAULT_FIDELITY.timestep_s  # [s]
     kind: str = "findings"
     objective_names: tuple[str, ...] = ("central shortfall (F1)", "corners and shape shortfall (F2-F4)",
                                         "log distance of the totals (F5)")

@@ -218,6 +218,7 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     from .experiment import Experiment, ExperimentMismatch
     from .results_file import ResultsFile
     from .executors import run, run_local, run_ray
+    from .model import SimulationUnstable
 
     settings = controller_settings(parser, args)
     args.plant = _plant(parser, settings, args.plant)
@@ -270,6 +271,11 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
         print(f"\ninterrupted: {len(results.records)} of {total} trials are in {out / 'results.jsonl'}; "
               f"the same command continues the run", file=sys.stderr)
         return 130
+    except SimulationUnstable as exc:
+        bar.close()
+        print(f"mantaray sim heatmap: {exc}; the {len(results.records)} finished trials are kept in "
+              f"{out / 'results.jsonl'}", file=sys.stderr)
+        return 1
     bar.close()
     title = (f"{args.object}, {args.controller}, α = {args.alpha:g} m, ε = {args.tolerance:g} m, T = {args.duration:g} s, "
              f"{protocol.trials_per_cell} trials/cell")
@@ -687,6 +693,16 @@ def _jobs(parser: argparse.ArgumentParser, jobs: int | None) -> int:
     return jobs or os.cpu_count() or 1
 
 
+def _add_fidelity_arguments(parser: argparse.ArgumentParser) -> None:
+    """--resolution and --timestep, defaulting to the named fidelity the searches and maps run in (sim/rig.py)."""
+    from .rig import DEFAULT_FIDELITY, FIDELITIES
+
+    named = ", ".join(f"{name} {f.label}" for name, f in FIDELITIES.items())
+    parser.add_argument("--resolution", type=int, default=DEFAULT_FIDELITY.resolution,
+                        help=f"fabric vertices per side (odd); the named fidelities: {named}")
+    parser.add_argument("--timestep", type=float, default=DEFAULT_FIDELITY.timestep_s, help="physics step [s]")
+
+
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Register `sim` and its subcommands on the top-level parser's subparsers."""
     sim = sub.add_parser("sim", help="the MuJoCo rig with the firmware in the loop",
@@ -748,9 +764,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     heat.add_argument("--stop-when-reached", action="store_true",
                       help="end each trial at its first frame within ε, as the paper's loop does: faster, and the map "
                            "under the paper's stopping rule is the same, but 'ends within ε at T' is then not measured")
-    heat.add_argument("--resolution", type=int, default=11, help="fabric vertices per side (odd); the reference "
-                      "model is 15 at 0.001 s, 4x slower: 11 at 0.002 s keeps its per-cell success (docs/results.md)")
-    heat.add_argument("--timestep", type=float, default=0.002, help="physics step [s] (paper and reference: 0.001)")
+    _add_fidelity_arguments(heat)
     heat.add_argument("--only-cells", type=_cells, metavar="I,J,...", help="run only these cells (index ix + iy*cells)")
     heat.add_argument("--jobs", type=int, help="parallel workers (default: every core; with ray: every CPU of the cluster)")
     heat.add_argument("--executor", choices=["local", "ray"], default="local",
@@ -782,8 +796,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     cal.add_argument("--duration", type=float, default=10.0, help="runtime T [s] (paper: 10)")
     cal.add_argument("--seed", type=int, default=12, help="seed of the search and its trials (the heatmaps judged "
                      "afterwards use another)")
-    cal.add_argument("--resolution", type=int, default=11, help="fabric vertices per side (the fast mode: 11)")
-    cal.add_argument("--timestep", type=float, default=0.002, help="physics step [s] (the fast mode: 0.002)")
+    _add_fidelity_arguments(cal)
     cal.add_argument("--fig3", action="store_true", help="also run the paper's Fig. 3 experiment (F6) on the best")
     cal.add_argument("--jobs", type=int, help="parallel workers (default: every core; with ray: every CPU)")
     cal.add_argument("--executor", choices=["local", "ray"], default="local")
@@ -818,8 +831,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                       help="cells per side of the final check's workspace (paper: 20)")
     tune.add_argument("--final-seed", type=number(0, integer=True), default=2026,
                       help="seed of the final check (the paper protocol's; never the search's)")
-    tune.add_argument("--resolution", type=int, default=11, help="fabric vertices per side (the fast mode: 11)")
-    tune.add_argument("--timestep", type=float, default=0.002, help="physics step [s] (the fast mode: 0.002)")
+    _add_fidelity_arguments(tune)
     tune.add_argument("--out", help="directory for study.db, settings.toml, report.json, history.png and final/ "
                       "(default out/tune/OBJECT_CONTROLLER_alphaA_PLANT)")
     tune.add_argument("--jobs", type=number(1, integer=True), help="parallel workers (default: every core; ray: every CPU)")

@@ -21,7 +21,7 @@ from mantaray.protocol import messages as m
 from .bridge import Gains, TrialSpec
 from .objects import OBJECTS
 from .plant import DEFAULT_PLANT, Plant
-from .rig import Fabric, Rig
+from .rig import DEFAULT_FIDELITY, Fabric, Rig
 
 
 class ExperimentMismatch(ValueError):
@@ -40,8 +40,8 @@ class Experiment:
     alpha_m: float = 0.0                    # [m] noise amplitude
     seed: int = 2026
     gains: tuple[float, float, float, float] | None = None   # (kp, ki, kd, integral limit); None: the paper's
-    resolution: int = 11                    # [vertices per side] of the fabric; 11 at 2 ms is the fast mode that
-    timestep_s: float = 0.002               # [s] keeps per-cell success of the 15 x 15, 1 ms reference (docs/results.md)
+    resolution: int = DEFAULT_FIDELITY.resolution   # [vertices per side] of the fabric (sim/rig.py, FIDELITIES)
+    timestep_s: float = DEFAULT_FIDELITY.timestep_s  # [s] physics step
     only_cells: tuple[int, ...] | None = None   # run just these cell indices (samples, tests); None: all
     plant: str = DEFAULT_PLANT              # the named plant (sim/plant.toml) ...
     plant_set: tuple[tuple[str, float | str], ...] = ()   # ... with these values set over it

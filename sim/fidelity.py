@@ -26,26 +26,9 @@ from .experiment import Experiment
 from .paired import MeanInterval, discordance, mean_interval
 from .plant import DEFAULT_PLANT
 from .results_file import ResultsFile
+from .rig import FIDELITIES, Fidelity
 
 
-@dataclass(frozen=True)
-class Fidelity:
-    """How finely the physics is resolved: fabric vertices per side and the physics step."""
-    resolution: int               # [vertices per side] odd
-    timestep_s: float             # [s]
-
-    @property
-    def label(self) -> str:
-        return f"{self.resolution} × {self.resolution}, {self.timestep_s * 1000:g} ms"
-
-    @property
-    def slug(self) -> str:
-        return f"{self.resolution}x{self.resolution}_{self.timestep_s * 1000:g}ms"
-
-
-# The named fidelities. The reference is the finest configuration whose outcomes the gate has shown converged;
-# the fast mode is what the searches have used (docs/results.md, Fidelity, says what each keeps).
-FIDELITIES = {"fast": Fidelity(11, 0.002), "reference": Fidelity(15, 0.001)}
 PERTURBATION_M = 1e-4      # [m] how far the noise floor's run moves every start
 SIGNIFICANCE = 0.05        # the whole verdict's false-alarm rate, split evenly over its tests
 BINARY = (("success", "within ε at T"), ("reached", "reached"), ("fell_off", "fell off"))

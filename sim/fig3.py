@@ -16,6 +16,7 @@ from . import findings as F
 from .experiment import Experiment, Trial
 from .model import SimulationUnstable
 from .plant import DEFAULT_PLANT
+from .rig import DEFAULT_FIDELITY
 
 
 def fig3_jobs(plant_name: str, values: dict, seed: int, resolution: int, timestep_s: float,
@@ -50,7 +51,7 @@ def run_fig3_trial(runner, job: tuple) -> dict:
             "path_m": np.round(result.true_xy_m, 5).tolist(), "tilt_deg": np.round(result.tilt_deg, 3).tolist()}
 
 
-def run_fig3(pool, plant_name: str = DEFAULT_PLANT, values: dict | None = None, seed: int = 3, resolution: int = 11,
-             timestep_s: float = 0.002, settings: ControllerSettings | None = None) -> list[dict]:
+def run_fig3(pool, plant_name: str = DEFAULT_PLANT, values: dict | None = None, seed: int = 3, resolution: int = DEFAULT_FIDELITY.resolution,
+             timestep_s: float = DEFAULT_FIDELITY.timestep_s, settings: ControllerSettings | None = None) -> list[dict]:
     """Every Fig. 3 trial on the pool's workers, in order."""
     return pool.map_calls(run_fig3_trial, fig3_jobs(plant_name, values or {}, seed, resolution, timestep_s, settings))

@@ -17,6 +17,7 @@ import numpy as np
 from mantaray.host.runlog import LoggedRun, RunLog, RunLogError, read_run_log
 
 from .plant import DEFAULT_PLANT
+from .rig import DEFAULT_FIDELITY
 
 FELL_ERROR_M = 0.25          # [m] the error a frame counts for once the replayed object has fallen off
 
@@ -86,8 +87,8 @@ class LogEvidence:
     object_name: str = "sphere"
     plant: str = DEFAULT_PLANT
     horizon_s: float | None = None       # [s] compare only the first part of each run (None: all of it)
-    resolution: int = 11
-    timestep_s: float = 0.002
+    resolution: int = DEFAULT_FIDELITY.resolution   # [vertices per side] (sim/rig.py, FIDELITIES)
+    timestep_s: float = DEFAULT_FIDELITY.timestep_s  # [s]
     seed: int = 12
     kind: str = "log"
     objective_names: tuple[str, ...] = ("mean trajectory error [m]",)

@@ -202,7 +202,8 @@ def trial_record(trial: Trial, result) -> dict:
             "final_m": [round(float(v), 5) for v in result.final_xy_m], "final_error_m": round(result.final_error_m, 5),
             "success": bool(result.success), "reached": result.time_to_reach_s is not None,
             "time_to_reach_s": result.time_to_reach_s, "fell_off": bool(result.fell_off),
-            "sim_time_s": round(result.sim_time_s, 3), "wall_time_s": round(result.wall_time_s, 3)}
+            "sim_time_s": round(result.sim_time_s, 3), "wall_time_s": round(result.wall_time_s, 3),
+            "physics_wall_s": round(result.physics_wall_s, 3)}
 
 
 def unplaceable_record(trial: Trial, why: str) -> dict:

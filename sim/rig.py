@@ -51,6 +51,29 @@ STATED_AT_RESOLUTION = 15   # [vertices per side] the mesh at which sim/plant.to
 
 
 @dataclass(frozen=True)
+class Fidelity:
+    """How finely the physics is resolved: fabric vertices per side and the physics step."""
+    resolution: int               # [vertices per side] odd
+    timestep_s: float             # [s]
+
+    @property
+    def label(self) -> str:
+        return f"{self.resolution} × {self.resolution}, {self.timestep_s * 1000:g} ms"
+
+    @property
+    def slug(self) -> str:
+        return f"{self.resolution}x{self.resolution}_{self.timestep_s * 1000:g}ms"
+
+
+# The named fidelities, the one place they are written. The reference is the configuration whose outcomes the
+# project's answers are to hold at; the fast mode is what the heatmaps, the calibration and the tuner have run in,
+# and what their commands still default to (DEFAULT_FIDELITY) until the fidelity gate (sim/fidelity.py) proves a
+# reference they can afford (docs/results.md, Fidelity).
+FIDELITIES = {"fast": Fidelity(11, 0.002), "reference": Fidelity(15, 0.001)}
+DEFAULT_FIDELITY = FIDELITIES["fast"]
+
+
+@dataclass(frozen=True)
 class Fabric:
     """The polyester sheet: a MuJoCo flexcomp grid (dim 2, full dofs), welded at its four corners to the carriages."""
     size_m: float = _d("fabric.size_m")          # [m] side of the square sheet (the paper: simulation 0.5, rig 0.6)

@@ -24,6 +24,7 @@ from . import calibrate as C
 from . import findings as F
 from .experiment import Experiment, trials
 from .plant import Plant
+from .rig import DEFAULT_FIDELITY
 
 EVERY_PID = "pid.*."          # a knob on every PID the controller runs (x and y alike: the rig is symmetric)
 PID_MAX = {spec.name: spec.max for spec in m.ConfigurePid.FIELDS if spec.name != "axis"}
@@ -154,8 +155,8 @@ class TuningEvidence:
     trials_per_cell: int = 3
     duration_s: float = 10.0               # [s] T
     seed: int = 31                         # the sample's and the sampler's; the final check uses another
-    resolution: int = 11                   # the fast mode (docs/results.md)
-    timestep_s: float = 0.002
+    resolution: int = DEFAULT_FIDELITY.resolution   # [vertices per side] (sim/rig.py, FIDELITIES)
+    timestep_s: float = DEFAULT_FIDELITY.timestep_s  # [s]
     gains_in_paper_units: bool = True      # paper_gain knobs x Plant.gain_scale (part of the study's record)
     kind: str = "tuning"
     objective_names: tuple[str, ...] = ("targets missed under both success rules, per trial",)

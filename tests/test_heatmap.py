@@ -363,3 +363,15 @@ def test_a_results_file_of_a_plant_whose_values_changed_is_not_continued(tmp_pat
     path.write_text(json.dumps(header) + "\n")
     with pytest.raises(E.ExperimentMismatch, match="fabric.size_m differ"):
         R.ResultsFile.open(path, SMALL)
+
+
+def test_a_physics_that_cannot_be_integrated_ends_the_run_in_one_line_naming_the_parameter(tmp_path):
+    """A 10 ms step on a 21 x 21 sheet diverges while the sheet settles: the command says which constraint is too
+    stiff for the step, keeps the results file, and prints no traceback."""
+    out = tmp_path / "unstable"
+    run = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--cells", "1", "--trials", "1",
+                          "--duration", "0.5", "--resolution", "21", "--timestep", "0.01", "--jobs", "1",
+                          "--out", str(out)], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 1
+    assert "fabric.edge_solref[0]" in run.stderr and "Traceback" not in run.stderr, run.stderr
+    assert (out / "results.jsonl").exists()
