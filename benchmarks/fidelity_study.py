@@ -1,0 +1,128 @@
+"""The convergence study: the fidelity gate on each mesh and step against a finer one, for two plants; its table.
+
+Run: python3 benchmarks/fidelity_study.py [--gates paper_15x15_2ms,...] [--jobs 2] [--collect]
+Each gate is `mantaray sim fidelity` (sim/fidelity.py) on the sphere, to the end of T, with its default sample
+(40 cells, 8 from each stratum, 5 trials each, seed 77) for two controllers: on the `paper` plant the paper's
+Manhattan and the cascade tuned for it (docs/results/tune/sphere_cascade/settings.toml), on the polyester plant
+the paper's Manhattan and Euclidean. Gates that share a run share its trials (out/fidelity/trials/). The trials are
+committed gzipped in docs/results/fidelity/trials/ and the script starts from them, so on a fresh clone it only
+rewrites the reports; every run resumes where it stopped (a 21 x 21 run takes hours on 2 cores). --collect only
+writes back what out/ holds (from a gate still running, say). The reports go to docs/results/fidelity/<gate>/ and
+the table of every verdict to docs/results/fidelity/convergence.md.
+"""
+from __future__ import annotations
+
+import argparse
+import gzip
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from mantaray.sim.results_file import write_whole
+
+REPO = Path(__file__).resolve().parents[1]
+COMMITTED = REPO / "docs" / "results" / "fidelity"
+TRIALS = REPO / "out" / "fidelity" / "trials"
+CASCADE = "docs/results/tune/sphere_cascade/settings.toml"
+ARMS = {"paper": ("manhattan", CASCADE), "polyester": ("manhattan", "euclidean")}
+GATES = {   # name: (plant, candidate, finer), in the order they run
+    "paper_15x15_2ms": ("paper", "15:0.002", "15:0.001"),
+    "paper_11x11_2ms": ("paper", "11:0.002", "15:0.001"),
+    "paper_11x11_1ms": ("paper", "11:0.001", "15:0.001"),
+    "polyester_15x15_2ms": ("polyester", "15:0.002", "15:0.001"),
+    "polyester_11x11_2ms": ("polyester", "11:0.002", "15:0.001"),
+    "polyester_11x11_1ms": ("polyester", "11:0.001", "15:0.001"),
+    "paper_15x15_1ms_vs_21x21": ("paper", "15:0.001", "21:0.001"),
+}
+
+
+def command(name: str, jobs: int | None) -> list[str]:
+    plant, candidate, finer = GATES[name]
+    arms = [a for arm in ARMS[plant] for a in ("--controller", arm)]
+    return ["mantaray", "sim", "fidelity", "--candidate", candidate, "--finer", finer, "--plant", plant, *arms,
+            "--trials-dir", str(TRIALS.relative_to(REPO)), "--out", f"out/fidelity/{name}",
+            *(["--jobs", str(jobs)] if jobs else [])]
+
+
+def restore() -> None:
+    """Start from the committed trials where out/ has none (or fewer) of a run."""
+    for kept in sorted((COMMITTED / "trials").glob("*.jsonl.gz")):
+        path = TRIALS / kept.name.removesuffix(".gz")
+        data = gzip.decompress(kept.read_bytes())
+        if not path.exists() or path.read_bytes().count(b"\n") < data.count(b"\n"):
+            path.parent.mkdir(parents=True, exist_ok=True)
+            write_whole(path, data)
+
+
+def collect(name: str) -> None:
+    """Write a gate's report and every trial of out/ back to docs/results/fidelity/."""
+    (COMMITTED / "trials").mkdir(parents=True, exist_ok=True)
+    for path in sorted(TRIALS.glob("*.jsonl")):
+        write_whole(COMMITTED / "trials" / (path.name + ".gz"), gzip.compress(path.read_bytes(), mtime=0))
+    out = REPO / "out" / "fidelity" / name
+    for report in ("report.json", "report.md"):
+        if (out / report).exists():
+            (COMMITTED / name).mkdir(parents=True, exist_ok=True)
+            (COMMITTED / name / report).write_bytes((out / report).read_bytes())
+
+
+def table() -> str:
+    """Every committed gate's verdict and its numbers, one row each."""
+    rows = ["# The fidelity gate on each mesh and step (the sphere, to the end of T)", "",
+            "Written by `python3 benchmarks/fidelity_study.py`; each gate's report, with the command that reproduces "
+            "it, is in its folder here. Rates over the pooled sample of both controllers: candidate / finer. Flips: "
+            "trials whose outcome differs from the finer run's, for the candidate / for the finer run with every start "
+            "moved 0.1 mm (the noise floor).", "",
+            "| plant | candidate | finer | paired trials | reached | fell off | within ε at T | flips reached | "
+            "flips fell | flips within ε | verdict |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for name, (plant, _, _) in GATES.items():
+        path = COMMITTED / name / "report.json"
+        if not path.exists():
+            continue
+        r = json.loads(path.read_text())
+        o = r["outcomes"]
+
+        def rates(key: str) -> str:
+            return f"{o[key]['rate']['candidate']:.3f} / {o[key]['rate']['finer']:.3f}"
+
+        def flips(key: str) -> str:
+            return f"{o[key]['candidate_vs_finer']['flips']} / {o[key]['floor_vs_finer']['flips']}"
+
+        verdict = r["verdict"] or f"incomplete ({r['pairs']} of {r['expected_pairs']})"
+        rows.append(f"| {plant} | {r['candidate']} | {r['finer']} | {r['pairs']} | {rates('reached')} | "
+                    f"{rates('fell_off')} | {rates('success')} | {flips('reached')} | {flips('fell_off')} | "
+                    f"{flips('success')} | [{verdict}]({name}/report.md) |")
+    return "\n".join(rows) + "\n"
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--gates", default=",".join(GATES), help=f"comma-separated, of: {', '.join(GATES)}")
+    parser.add_argument("--jobs", type=int, help="parallel workers (default: every core)")
+    parser.add_argument("--collect", action="store_true", help="only write back what out/ holds, run nothing")
+    args = parser.parse_args()
+    names = [n.strip() for n in args.gates.split(",") if n.strip()]
+    unknown = [n for n in names if n not in GATES]
+    if unknown:
+        parser.error(f"unknown gates {', '.join(unknown)}; the gates are {', '.join(GATES)}")
+    restore()
+    for name in names:
+        if not args.collect:
+            print(f"{name}: {' '.join(command(name, args.jobs))}", flush=True)
+            try:
+                code = subprocess.run(command(name, args.jobs), cwd=REPO).returncode
+            except KeyboardInterrupt:     # the gate keeps every finished trial; write them back before stopping
+                collect(name)
+                print(f"\ninterrupted: {name}'s trials are kept; the same command continues", file=sys.stderr)
+                return 130
+            if code not in (0, 1):        # 0: keeps, 1: changes; anything else went wrong
+                print(f"{name}: the gate ended with exit {code}", file=sys.stderr)
+        collect(name)
+    (COMMITTED / "convergence.md").write_text(table())
+    print(f"table: {(COMMITTED / 'convergence.md').relative_to(REPO)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
