@@ -165,15 +165,23 @@ def completed(study) -> list:
     return [t for t in study.get_trials(deepcopy=False) if t.state == optuna.trial.TrialState.COMPLETE]
 
 
+def finished(study) -> list:
+    """Candidates scored in full or stopped early by the pruner: what a search's --candidates counts."""
+    import optuna
+    return [t for t in study.get_trials(deepcopy=False)
+            if t.state in (optuna.trial.TrialState.COMPLETE, optuna.trial.TrialState.PRUNED)]
+
+
 def run_study(study, evidence, keys: list[P.Parameter], fixed: dict, candidates: int, pool,
               progress: Callable[[int, int, dict], None] | None = None) -> None:
-    """Evaluate candidates until the study holds `candidates` completed ones. An interruption fails the candidate
-    in flight and queues its values again, so the next run evaluates it first."""
+    """Evaluate candidates until the study holds `candidates` finished ones (completed, or pruned where the evidence
+    scores in rungs: evidence.prune). An interruption fails the candidate in flight and queues its values again, so
+    the next run evaluates it first."""
     import optuna
 
     from .model import SimulationUnstable
 
-    while len(completed(study)) < candidates:
+    while len(finished(study)) < candidates:
         trial = study.ask()
         values = dict(fixed)
         try:
@@ -184,7 +192,15 @@ def run_study(study, evidence, keys: list[P.Parameter], fixed: dict, candidates:
             raise
         t0 = time.perf_counter()
         try:
-            objectives, details = evidence.evaluate(values, pool)
+            objectives, details = (evidence.evaluate_in_rungs(values, pool, trial) if getattr(evidence, "prune", False)
+                                   else evidence.evaluate(values, pool))
+        except optuna.TrialPruned:
+            trial.set_user_attr("values", values)
+            trial.set_user_attr("wall_s", round(time.perf_counter() - t0, 1))
+            study.tell(trial, state=optuna.trial.TrialState.PRUNED)
+            if progress is not None:
+                progress(len(finished(study)), candidates, {"pruned": True, **trial.user_attrs["details"]})
+            continue
         except KeyboardInterrupt:
             study.tell(trial, state=optuna.trial.TrialState.FAIL)
             _queue_again(study, trial.params)
@@ -203,7 +219,7 @@ def run_study(study, evidence, keys: list[P.Parameter], fixed: dict, candidates:
         trial.set_user_attr("wall_s", round(time.perf_counter() - t0, 1))
         study.tell(trial, list(objectives))
         if progress is not None:
-            progress(len(completed(study)), candidates, {"objectives": objectives, **details})
+            progress(len(finished(study)), candidates, {"objectives": objectives, **details})
 
 
 def best_trial(study):

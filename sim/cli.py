@@ -431,7 +431,7 @@ def _candidates(study, out: Path, candidates: int, label: str):
     from . import calibrate as C
     from .progress import Progress
 
-    done = len(C.completed(study))
+    done = len(C.finished(study))
     if 0 < done < candidates:
         print(f"continuing {out / 'study.db'}: {done} of {candidates} candidates already evaluated", file=sys.stderr)
     return Progress(max(candidates, done), initial=done, unit="candidate", label=label, line_every_s=0)
@@ -493,7 +493,7 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         evidence = T.TuningEvidence(controller=args.controller, object_name=args.object, alpha_m=args.alpha,
                                     plant=args.plant, cells_per_stratum=args.cells_per_stratum,
                                     trials_per_cell=args.trials_per_cell, duration_s=args.duration, seed=args.seed,
-                                    resolution=args.resolution, timestep_s=args.timestep)
+                                    resolution=args.resolution, timestep_s=args.timestep, prune=args.prune)
         evidence.experiment(T.settings_of(args.controller, T.boot_values(args.controller)))   # refuses bad sizes now
         if args.final_trials:
             evidence.final_experiment(T.settings_of(args.controller, {}), args.final_trials, args.final_seed,
@@ -516,6 +516,8 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
     def report_candidate(n: int, total: int, info: dict) -> None:
         note = ("the physics diverged: scored the worst" if "unstable" in info else
+                f"stopped after {info['trials']} trials (within ε at T {info['success']:.2f}, reached "
+                f"{info['reached']:.2f})" if info.get("pruned") else
                 f"misses {info['objectives'][0]:.3f} (within ε at T {info['success']:.2f}, reached "
                 f"{info['reached']:.2f}, fell off {info['fell_off']:.2f})")
         progress.update(1, note=note)
@@ -548,7 +550,7 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if progress is not None:
             progress.close()
         T.write_report(study, evidence, out, study.user_attrs.get("baseline"))
-        print(f"\ninterrupted: {len(C.completed(study))} candidates are in {out / 'study.db'}; the same command "
+        print(f"\ninterrupted: {len(C.finished(study))} candidates are in {out / 'study.db'}; the same command "
               f"continues (report so far in {out / 'report.json'})", file=sys.stderr)
         return 130
     report = T.write_report(study, evidence, out, baseline, final)
@@ -823,6 +825,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     tune.add_argument("--cells-per-stratum", type=number(1, integer=True), default=4,
                       help="cells drawn from each of centre, axes, diagonals, edges and corners")
     tune.add_argument("--trials-per-cell", type=number(1, integer=True), default=3)
+    tune.add_argument("--prune", action="store_true",
+                      help="score each candidate a rung of the sample at a time (1, 2, 4 ... cells per stratum, the same "
+                           "for every candidate) and stop one whose misses are not among the better half at a rung "
+                           "(Optuna's successive halving): more candidates for the same trials; --candidates then "
+                           "counts the stopped ones too")
     tune.add_argument("--duration", type=float, default=10.0, help="runtime T [s] (paper: 10)")
     tune.add_argument("--seed", type=number(0, integer=True), default=31, help="seed of the search and its sample")
     tune.add_argument("--final-trials", type=number(0, integer=True), default=10,

@@ -76,14 +76,18 @@ def strata_cells(cells: int) -> dict[str, list[int]]:
     return out
 
 
-def stratified_sample(cells: int, per_stratum: int, seed: int) -> tuple[int, ...]:
-    """per_stratum cells drawn without replacement from each stratum (all of a smaller one), from the seed alone."""
+def stratified_draw(cells: int, per_stratum: int, seed: int) -> dict[str, list[int]]:
+    """per_stratum cells drawn without replacement from each stratum (all of a smaller one), from the seed alone, in
+    the order drawn: the first k of each stratum are a smaller sample of the same kind, nested in the larger."""
     rng = np.random.default_rng([seed, cells, per_stratum])
-    chosen = []
-    for name in STRATA:
-        pool = strata_cells(cells)[name]
-        chosen += sorted(int(c) for c in rng.choice(pool, size=min(per_stratum, len(pool)), replace=False))
-    return tuple(chosen)
+    strata = strata_cells(cells)
+    return {name: [int(c) for c in rng.choice(strata[name], size=min(per_stratum, len(strata[name])), replace=False)]
+            for name in STRATA}
+
+
+def stratified_sample(cells: int, per_stratum: int, seed: int, first: int | None = None) -> tuple[int, ...]:
+    """stratified_draw's cells, each stratum's sorted; with first, only the first that many drawn of each stratum."""
+    return tuple(c for drawn in stratified_draw(cells, per_stratum, seed).values() for c in sorted(drawn[:first]))
 
 
 # ------------------------------------------------------------------------------------------- per controller

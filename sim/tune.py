@@ -158,6 +158,7 @@ class TuningEvidence:
     resolution: int = DEFAULT_FIDELITY.resolution   # [vertices per side] (sim/rig.py, FIDELITIES)
     timestep_s: float = DEFAULT_FIDELITY.timestep_s  # [s]
     gains_in_paper_units: bool = True      # paper_gain knobs x Plant.gain_scale (part of the study's record)
+    prune: bool = False                    # score in rungs of the sample and stop a hopeless candidate early
     kind: str = "tuning"
     objective_names: tuple[str, ...] = ("targets missed under both success rules, per trial",)
     penalty: tuple[float, ...] = (2.0,)    # every target missed twice: what settings that cannot run score
@@ -172,9 +173,43 @@ class TuningEvidence:
         return Experiment(**{**design, **changes})
 
     def score(self, experiment: Experiment, pool) -> tuple[tuple[float, ...], dict]:
-        records = pool.map([(experiment, t) for t in trials(experiment)])
-        rates = {k: float(np.mean([bool(r[k]) for r in records])) for k in ("success", "reached", "fell_off")}
-        return (2.0 - rates["success"] - rates["reached"],), {**rates, "trials": len(records), "passed": 0}
+        return _score(pool.map([(experiment, t) for t in trials(experiment)]))
+
+    def rungs(self) -> list[int]:
+        """Cells per stratum at each rung of a pruned search: 1, 2, 4, ... up to the whole sample's."""
+        out = [1]
+        while out[-1] < self.cells_per_stratum:
+            out.append(min(2 * out[-1], self.cells_per_stratum))
+        return out
+
+    def pruner(self):
+        """Successive halving over the rungs: at each, a candidate goes on only if its misses so far are among the
+        better half of the candidates' at that rung (their first rung's trials are the smallest resource)."""
+        import optuna
+
+        first = len(F.STRATA) * self.trials_per_cell       # trials of the first rung (a smaller stratum: fewer)
+        return optuna.pruners.SuccessiveHalvingPruner(min_resource=first, reduction_factor=2,
+                                                      min_early_stopping_rate=0)
+
+    def evaluate_in_rungs(self, values: dict[str, float], pool, trial) -> tuple[tuple[float, ...], dict]:
+        """evaluate() a rung at a time: after each, report the misses so far to the study's pruner, which may stop
+        the candidate (optuna.TrialPruned, with the details so far in trial.user_attrs["details"]). Every candidate
+        runs the same nested cells, so candidates stay paired at every rung."""
+        import optuna
+
+        experiment = self.experiment(settings_of(self.controller, values, self.gain_scale))
+        records, done = [], set()
+        for k in self.rungs():
+            cells = F.stratified_sample(C.CELLS, self.cells_per_stratum, self.seed, first=k)
+            todo = [t for t in trials(experiment) if t.cell in cells and t.cell not in done]
+            records += pool.map([(experiment, t) for t in todo])
+            done |= set(cells)
+            objectives, details = _score(records)
+            trial.report(objectives[0], step=len(records))
+            if k < self.cells_per_stratum and trial.should_prune():
+                trial.set_user_attr("details", details)
+                raise optuna.TrialPruned(f"misses {objectives[0]:.3f} after {len(records)} trials")
+        return objectives, details
 
     @property
     def gain_scale(self) -> float:
@@ -220,6 +255,8 @@ def open_tuning(path: Path, evidence: TuningEvidence, per_axis: bool = False, st
     """The study (new, or the one in path if it holds the same search: the same knobs too); a new one starts from
     the boot values, then from start (knob values) when given. StartMismatch if the study began without them."""
     study = C.open_study(path, evidence, knobs(evidence.controller, per_axis), {})
+    if evidence.prune:
+        study.pruner = evidence.pruner()
     if not study.trials:
         study.enqueue_trial(boot_values(evidence.controller, per_axis))
         if start is not None:
@@ -229,6 +266,12 @@ def open_tuning(path: Path, evidence: TuningEvidence, per_axis: bool = False, st
         raise StartMismatch(f"the study in {path} began from other values than these: a start is for a new study "
                             f"(continue it without one, or give another --out)")
     return study
+
+
+def _score(records: list[dict]) -> tuple[tuple[float, ...], dict]:
+    """Targets missed under both success rules per trial, and the rates behind it."""
+    rates = {k: float(np.mean([bool(r[k]) for r in records])) for k in ("success", "reached", "fell_off")}
+    return (2.0 - rates["success"] - rates["reached"],), {**rates, "trials": len(records), "passed": 0}
 
 
 class StartMismatch(ValueError):
@@ -280,6 +323,8 @@ def write_report(study, evidence: TuningEvidence, out: Path, baseline: dict | No
         return os.path.relpath(path, out)
 
     report = {"evidence": dataclasses.asdict(evidence), "candidates": len(C.completed(study)),
+              "pruned": len(C.finished(study)) - len(C.completed(study)),
+              "trials_run": sum(t.user_attrs.get("details", {}).get("trials", 0) for t in C.finished(study)),
               "baseline_on_the_sample": baseline,
               "best": None if best is None else {"number": best.number, "misses": best.values[0],
                                                  **best.user_attrs["details"],

@@ -188,3 +188,56 @@ def test_a_start_from_file_for_another_controller_or_plant_is_a_usage_error(tmp_
         proc = _tune(*TINY, "--controller", "cascade", "--start-from", str(path), "--out", str(tmp_path / "t"))
         assert proc.returncode == 2 and says in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
         assert not (tmp_path / "t").exists()
+
+
+# ------------------------------------------------------------------------------------------- pruned searches
+class _ByGain:
+    """A pool that scores trials by the candidate's kp alone, with no physics: a trial succeeds (and reaches) when kp
+    is near 30 deg/m, most of the time, and rarely otherwise, drawn from the trial's seed; it counts what it ran."""
+
+    def __init__(self) -> None:
+        self.trials = 0
+
+    def map(self, jobs):
+        out = []
+        for experiment, trial in jobs:
+            kp = dict(experiment.settings)["pid.x.kp"]
+            good = abs(math.log(kp / 30.0)) < 0.4
+            luck = (trial.seed % 100) / 100
+            won = luck < (0.8 if good else 0.1)
+            out.append({"success": won, "reached": won, "fell_off": not won})
+        self.trials += len(jobs)
+        return out
+
+
+def test_the_rungs_are_nested_stratified_samples_that_end_at_the_whole_sample():
+    from mantaray.sim import findings as F
+
+    evidence = T.TuningEvidence(cells_per_stratum=6, seed=31)
+    assert evidence.rungs() == [1, 2, 4, 6]
+    previous: set[int] = set()
+    for k in evidence.rungs():
+        cells = set(F.stratified_sample(20, 6, 31, first=k))
+        assert previous <= cells and len(cells) == k * len(F.STRATA)
+        previous = cells
+    assert previous == set(F.stratified_sample(20, 6, 31))
+
+
+def test_a_pruned_search_stops_hopeless_candidates_early_and_keeps_the_good_one(tmp_path):
+    from mantaray.sim import calibrate as C
+
+    evidence = T.TuningEvidence(controller="manhattan", plant="polyester", cells_per_stratum=4, trials_per_cell=3,
+                                prune=True)
+    study = T.open_tuning(tmp_path / "study.db", evidence)
+    pool = _ByGain()
+    C.run_study(study, evidence, T.knobs("manhattan"), {}, 30, pool)
+    full = 4 * 5 * 3                                          # the whole sample's trials
+    finished, completed = C.finished(study), C.completed(study)
+    assert len(finished) == 30 and 0 < len(completed) < 30       # some stopped, and --candidates counts them
+    pruned = [t for t in finished if t not in completed]
+    assert all(t.user_attrs["details"]["trials"] < full for t in pruned)
+    assert pool.trials == sum(t.user_attrs["details"]["trials"] for t in finished) < 30 * full
+    best = C.best_trial(study)
+    assert abs(math.log(best.user_attrs["values"]["pid.*.kp"] / 30.0)) < 0.4   # the good region's candidate
+    report = T.write_report(study, evidence, tmp_path, None)
+    assert report["pruned"] == len(pruned) and report["trials_run"] == pool.trials
