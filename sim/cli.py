@@ -485,10 +485,14 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     study should hold. Writes OUT/settings.toml (for mantaray rig --settings, sim run and sim heatmap),
     report.json (both scores, beside the paper's Manhattan on the same sample) and history.png; the final check's
     trials go to OUT/final/results.jsonl (resumable too), its heatmaps under both rules beside them."""
+    import dataclasses
+
     from . import calibrate as C
     from . import tune as T
     from .experiment import ExperimentMismatch
+    from .progress import Progress
 
+    at = _fidelity(parser, args.confirm_at) if args.confirm else None
     try:
         evidence = T.TuningEvidence(controller=args.controller, object_name=args.object, alpha_m=args.alpha,
                                     plant=args.plant, cells_per_stratum=args.cells_per_stratum,
@@ -523,7 +527,7 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         progress.update(1, note=note)
 
     _interruptible()
-    final = None
+    final = confirmation = None
     try:
         with _pool(parser, args) as pool:
             baseline = study.user_attrs.get("baseline")
@@ -536,10 +540,20 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             C.run_study(study, evidence, T.knobs(args.controller, args.per_axis), {}, args.candidates, pool,
                         report_candidate)
             progress.close()
+            checked = evidence
+            if at is not None:
+                print(f"tune: the {args.confirm} best candidates again at {at.label}", file=sys.stderr, flush=True)
+                bar = Progress(min(args.confirm, len(C.completed(study))), unit="candidate", label="tune: confirm",
+                               line_every_s=0)
+                confirmation = T.confirm(study, evidence, at, args.confirm, pool,
+                                         lambda number, score: bar.update(1, note=f"#{number}: misses "
+                                                                                  f"{score['misses']:.3f}"))
+                bar.close()
+                checked = dataclasses.replace(evidence, resolution=at.resolution, timestep_s=at.timestep_s)
             best = T.best_settings(study, evidence)
             if args.final_trials and best is not None:
                 final_path = out / "final" / "results.jsonl"
-                final = T.final_check(evidence, best, args.final_trials, args.final_seed, pool, final_path,
+                final = T.final_check(checked, best, args.final_trials, args.final_seed, pool, final_path,
                                       cells=args.final_cells)
                 final["figures"] = _final_heatmaps(final_path, args)
     except ExperimentMismatch as exc:
@@ -553,7 +567,7 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         print(f"\ninterrupted: {len(C.finished(study))} candidates are in {out / 'study.db'}; the same command "
               f"continues (report so far in {out / 'report.json'})", file=sys.stderr)
         return 130
-    report = T.write_report(study, evidence, out, baseline, final)
+    report = T.write_report(study, evidence, out, baseline, final, confirmation)
     if args.json:
         print(json.dumps(report))
     else:
@@ -688,6 +702,15 @@ def cmd_fidelity(args: argparse.Namespace, parser: argparse.ArgumentParser) -> i
         print(f"{candidate.label} {report['verdict']} of {finer.label} ({report['pairs']} paired trials)"
               + "".join(f"\n  {c}" for c in report["changed"]) + f"\n{paths[1]}")
     return 0 if report["verdict"] == G.KEEPS else 1
+
+
+def _fidelity(parser: argparse.ArgumentParser, text: str):
+    """A fidelity argument (fast, reference, RESOLUTION:TIMESTEP); a bad one is a usage error."""
+    from .fidelity import parse_fidelity
+    try:
+        return parse_fidelity(text)
+    except ValueError as exc:
+        parser.error(str(exc))
 
 
 def _jobs(parser: argparse.ArgumentParser, jobs: int | None) -> int:
@@ -825,6 +848,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     tune.add_argument("--cells-per-stratum", type=number(1, integer=True), default=4,
                       help="cells drawn from each of centre, axes, diagonals, edges and corners")
     tune.add_argument("--trials-per-cell", type=number(1, integer=True), default=3)
+    tune.add_argument("--confirm", type=number(0, integer=True), default=0, metavar="K",
+                      help="after the search, score its K best candidates again on the same sample at --confirm-at, "
+                           "and take the best there: a search screened at a cheaper fidelity answers at the finer one "
+                           "(the report gives the rank correlation of the two scores; 0: no confirmation)")
+    tune.add_argument("--confirm-at", default="reference", metavar="FIDELITY",
+                      help="the fidelity of the confirmation and of the final check: fast, reference or "
+                           "RESOLUTION:TIMESTEP")
     tune.add_argument("--prune", action="store_true",
                       help="score each candidate a rung of the sample at a time (1, 2, 4 ... cells per stratum, the same "
                            "for every candidate) and stop one whose misses are not among the better half at a rung "

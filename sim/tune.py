@@ -24,7 +24,7 @@ from . import calibrate as C
 from . import findings as F
 from .experiment import Experiment, trials
 from .plant import Plant
-from .rig import DEFAULT_FIDELITY
+from .rig import DEFAULT_FIDELITY, Fidelity
 
 EVERY_PID = "pid.*."          # a knob on every PID the controller runs (x and y alike: the rig is symmetric)
 PID_MAX = {spec.name: spec.max for spec in m.ConfigurePid.FIELDS if spec.name != "axis"}
@@ -279,12 +279,58 @@ class StartMismatch(ValueError):
 
 
 def best_settings(study, evidence: TuningEvidence) -> ControllerSettings | None:
-    """The best candidate's settings, naming the plant they were tuned for (their gains are its reading)."""
-    best = C.best_trial(study)
+    """The best candidate's settings (the best confirmed one, where the search's best were confirmed at a finer
+    fidelity), naming the plant they were tuned for (their gains are its reading)."""
+    best = confirmed_best(study) or C.best_trial(study)
     if best is None:
         return None
     settings = settings_of(evidence.controller, best.user_attrs["values"], evidence.gain_scale)
     return dataclasses.replace(settings, plant=evidence.plant)
+
+
+CONFIRMED = "confirmed"      # the study's user attribute: {fidelity slug: {candidate number: its score there}}, one
+                             # fidelity per study
+
+
+def confirm(study, evidence: TuningEvidence, at: Fidelity, k: int, pool, progress=None) -> dict:
+    """Score the search's k best candidates again, on the same sample at the fidelity `at` (the reference, when the
+    search screened at a cheaper one): the best there is the search's answer, and the rank correlation of the two
+    scores over those candidates says whether the cheaper fidelity ranks them as `at` does. Resumable: each score
+    is kept in the study as it comes."""
+    finer = dataclasses.replace(evidence, resolution=at.resolution, timestep_s=at.timestep_s, prune=False)
+    ranked = sorted((t for t in C.completed(study) if t.user_attrs["details"]["passed"] >= 0),
+                    key=lambda t: t.values[0])[:k]
+    kept = study.user_attrs.get(CONFIRMED, {})
+    if kept and at.slug not in kept:
+        raise ValueError(f"this study's best candidates were confirmed at {', '.join(kept)}, not {at.slug}: confirm "
+                         f"at that fidelity, or search anew (another --out)")
+    scores = kept.get(at.slug, {})
+    for t in ranked:
+        if str(t.number) not in scores:
+            objectives, details = finer.evaluate(t.user_attrs["values"], pool)
+            scores[str(t.number)] = {"misses": objectives[0], **details}
+            study.set_user_attr(CONFIRMED, {**kept, at.slug: scores})
+        if progress is not None:
+            progress(t.number, scores[str(t.number)])
+    screened = [t.values[0] for t in ranked]
+    there = [scores[str(t.number)]["misses"] for t in ranked]
+    best = ranked[int(np.argmin(there))] if ranked else None
+    return {"fidelity": at.label, "slug": at.slug, "candidates": len(ranked),
+            "rank_correlation": F.rank_correlation(np.array(screened), np.array(there)) if len(ranked) > 1 else None,
+            "best": None if best is None else {"number": best.number, "screened_misses": best.values[0],
+                                               **scores[str(best.number)]},
+            "scores": {str(t.number): {"screened": t.values[0], "confirmed": scores[str(t.number)]["misses"]}
+                       for t in ranked}}
+
+
+def confirmed_best(study):
+    """The candidate with the fewest misses among those confirmed at a finer fidelity (None: none confirmed)."""
+    kept = study.user_attrs.get(CONFIRMED, {})
+    if not kept:
+        return None
+    (scores,) = kept.values()                 # confirm() keeps one fidelity's
+    number = min(scores, key=lambda n: scores[n]["misses"])
+    return next(t for t in C.completed(study) if t.number == int(number))
 
 
 def history_figure(study, evidence: TuningEvidence, baseline: dict | None, path: Path) -> Path | None:
@@ -315,9 +361,10 @@ def history_figure(study, evidence: TuningEvidence, baseline: dict | None, path:
     return path
 
 
-def write_report(study, evidence: TuningEvidence, out: Path, baseline: dict | None, final: dict | None = None) -> dict:
+def write_report(study, evidence: TuningEvidence, out: Path, baseline: dict | None, final: dict | None = None,
+                 confirmation: dict | None = None) -> dict:
     """OUT/settings.toml (the best settings), report.json and history.png."""
-    best = C.best_trial(study)
+    best = confirmed_best(study) or C.best_trial(study)
     settings = best_settings(study, evidence)
     def here(path) -> str:       # a path of the report's, from its own folder (which may be copied elsewhere)
         return os.path.relpath(path, out)
@@ -330,6 +377,7 @@ def write_report(study, evidence: TuningEvidence, out: Path, baseline: dict | No
                                                  **best.user_attrs["details"],
                                                  "knobs": best.user_attrs["values"],   # SPACE's units: paper_gain ones the paper's
                                                  "settings": dict(settings.values)},  # the firmware's numbers
+              "confirmation": confirmation,
               "final_check": None if final is None else {**final, "results": here(final["results"]),
                                                          "figures": [here(f) for f in final.get("figures", [])]}}
     if settings is not None:

@@ -241,3 +241,55 @@ def test_a_pruned_search_stops_hopeless_candidates_early_and_keeps_the_good_one(
     assert abs(math.log(best.user_attrs["values"]["pid.*.kp"] / 30.0)) < 0.4   # the good region's candidate
     report = T.write_report(study, evidence, tmp_path, None)
     assert report["pruned"] == len(pruned) and report["trials_run"] == pool.trials
+
+
+class _ByGainAndMesh(_ByGain):
+    """As _ByGain, but on a 15 x 15 mesh the good gain is 45 deg/m: a cheaper fidelity that ranks candidates wrongly."""
+
+    def map(self, jobs):
+        out = []
+        for experiment, trial in jobs:
+            kp = dict(experiment.settings)["pid.x.kp"]
+            good = abs(math.log(kp / (45.0 if experiment.resolution == 15 else 30.0))) < 0.4
+            won = (trial.seed % 100) / 100 < (0.8 if good else 0.1)
+            out.append({"success": won, "reached": won, "fell_off": not won})
+        self.trials += len(jobs)
+        return out
+
+
+def test_confirming_the_best_candidates_at_a_finer_fidelity_takes_the_best_there_and_resumes(tmp_path):
+    from mantaray.sim import calibrate as C
+    from mantaray.sim.rig import Fidelity
+
+    evidence = T.TuningEvidence(controller="manhattan", plant="polyester", cells_per_stratum=1, trials_per_cell=4)
+    study = T.open_tuning(tmp_path / "study.db", evidence)
+    pool = _ByGainAndMesh()
+    C.run_study(study, evidence, T.knobs("manhattan"), {}, 16, pool)
+    finer = Fidelity(15, 0.001)
+    confirmation = T.confirm(study, evidence, finer, 6, pool)
+    assert confirmation["candidates"] == 6 and len(confirmation["scores"]) == 6
+    scores = confirmation["scores"]
+    best = confirmation["best"]["number"]
+    assert scores[str(best)]["confirmed"] == min(v["confirmed"] for v in scores.values())
+    assert T.confirmed_best(study).number == best                       # the answer is the finer fidelity's
+    assert -1 <= confirmation["rank_correlation"] <= 1 or math.isnan(confirmation["rank_correlation"])
+    ran = pool.trials
+    assert T.confirm(study, evidence, finer, 6, pool)["scores"] == scores and pool.trials == ran   # kept, not rerun
+    with pytest.raises(ValueError, match="confirmed at"):
+        T.confirm(study, evidence, Fidelity(21, 0.001), 6, pool)
+    settings = T.best_settings(study, evidence)
+    assert dict(settings.values)["pid.x.kp"] == pytest.approx(
+        T.settings_of("manhattan", T.confirmed_best(study).user_attrs["values"]).get("pid.x.kp"))
+
+
+def test_the_command_confirms_at_the_finer_fidelity_and_runs_its_final_check_there(tmp_path):
+    out = tmp_path / "tune"
+    run = _tune(*TINY, "--candidates", "2", "--confirm", "2", "--confirm-at", "7:0.002", "--resolution", "5",
+                "--out", str(out))
+    assert run.returncode == 0, run.stderr
+    report = json.loads((out / "report.json").read_text())
+    assert report["confirmation"]["candidates"] == 2 and report["confirmation"]["fidelity"] == "7 × 7, 2 ms"
+    header = json.loads((out / "final" / "results.jsonl").read_text().split("\n", 1)[0])
+    assert header["protocol"]["resolution"] == 7                        # every final number at the finer fidelity
+    bad = _tune(*TINY, "--confirm", "2", "--confirm-at", "8:0.002", "--out", str(tmp_path / "bad"))
+    assert bad.returncode == 2 and "odd" in bad.stderr and "Traceback" not in bad.stderr
