@@ -25,6 +25,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+from mantaray.sim.paired import discordance
 from mantaray.sim.results_file import write_whole
 import paper_heatmaps   # a sibling script: the baselines' committed trials, and the zones of the paper's maps
 
@@ -82,10 +83,9 @@ def mcnemar(a: dict, b: dict, key: str) -> dict:
     """Paired trials (same cell and k) of two results files: those where key (success, reached, or fell_off) holds
     only in a, only in b, and McNemar's z (positive: more in a)."""
     common = sorted(set(a) & set(b))
-    only_a = sum(bool(a[k][key]) and not bool(b[k][key]) for k in common)
-    only_b = sum(bool(b[k][key]) and not bool(a[k][key]) for k in common)
-    z = (only_a - only_b) / math.sqrt(only_a + only_b) if only_a + only_b else 0.0
-    return {"paired": len(common), "only_tuned": only_a, "only_paper": only_b, "z": round(z, 2)}
+    d = discordance([bool(a[k][key]) for k in common], [bool(b[k][key]) for k in common])
+    z = (d.only_a - d.only_b) / math.sqrt(d.flips) if d.flips else 0.0
+    return {"paired": d.pairs, "only_tuned": d.only_a, "only_paper": d.only_b, "z": round(z, 2)}
 
 
 def edge_falls(a: dict, b: dict) -> dict:
