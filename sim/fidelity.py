@@ -63,6 +63,7 @@ class Arm:
     label: str
     controller: str
     settings: tuple[tuple[str, float], ...] = ()
+    plant: str | None = None        # the plant a settings file was tuned for (its gains are that plant's reading)
 
     @classmethod
     def parse(cls, text: str) -> Arm:
@@ -77,7 +78,7 @@ class Arm:
                              f"a settings file; {text!r} is neither")
         settings = ControllerSettings.load(text)      # a SettingsError (a ValueError) says what is wrong with it
         digest = hashlib.sha1(repr(settings.values).encode()).hexdigest()[:6]
-        return cls(f"{settings.controller}-{digest}", settings.controller, settings.values)
+        return cls(f"{settings.controller}-{digest}", settings.controller, settings.values, settings.plant)
 
 
 @dataclass(frozen=True)
@@ -91,6 +92,14 @@ class GateSample:
     trials_per_cell: int = 5
     seed: int = 77                        # a draw no search or heatmap of docs/results.md uses
     duration_s: float = 10.0              # [s] T: to its end, so every outcome is measured
+
+    def __post_init__(self) -> None:
+        for arm in self.arms:
+            if arm.plant is not None and arm.plant != self.plant:
+                raise ValueError(f"the {arm.label} settings were tuned for the {arm.plant} plant, not {self.plant}: "
+                                 f"their gains are the firmware's numbers for that plant")
+        if len({arm.label for arm in self.arms}) != len(self.arms):
+            raise ValueError(f"each controller once, got {', '.join(arm.label for arm in self.arms)}")
 
     def cells(self) -> tuple[int, ...]:
         return F.stratified_sample(Experiment.cells, self.cells_per_stratum, self.seed)

@@ -178,6 +178,10 @@ def test_an_arm_is_a_controller_or_a_settings_file_and_nothing_else(tmp_path):
     assert tuned.controller == "cascade" and tuned.settings and tuned.label.startswith("cascade-")
     with pytest.raises(ValueError, match="neither"):
         G.Arm.parse(str(tmp_path / "missing.toml"))
+    with pytest.raises(ValueError, match="tuned for the paper plant"):
+        G.GateSample(plant="polyester", arms=(tuned,))
+    with pytest.raises(ValueError, match="each controller once"):
+        G.GateSample(arms=(G.Arm.parse("manhattan"), G.Arm.parse("manhattan")))
 
 
 @settings(max_examples=100, deadline=None)
