@@ -99,7 +99,13 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if args.video:
             from .video import Recorder
             bridge.recorder = Recorder(bridge.model, fps=args.video_fps)
-        result = bridge.run(spec, progress=progress)
+        try:
+            result = bridge.run(spec, progress=progress)
+        except ValueError as exc:           # model.fabric_height: the sheet sags inside its corners there
+            if "not over the fabric" not in str(exc):
+                raise
+            parser.error(f"--start {args.start[0]:g},{args.start[1]:g} is not over the hanging sheet (it sags in from "
+                         f"the frame at its corners): start further in")
         if viewer is not None:
             viewer.close()
     if progress is not None:

@@ -7,6 +7,7 @@ trials already there and adds the rest (a quick N = 3 map first, topped up to th
 from __future__ import annotations
 
 import dataclasses
+import gzip
 import json
 import os
 from dataclasses import dataclass, field
@@ -39,6 +40,11 @@ class ResultsFile:
             path.parent.mkdir(parents=True, exist_ok=True)
             write_whole(path, json.dumps(_header(protocol)).encode() + b"\n")
             return results
+        with open(path, "rb") as f:
+            gzipped = f.read(len(GZIP_MAGIC)) == GZIP_MAGIC
+        if gzipped:
+            raise ValueError(f"{path} is gzipped: it opens for figures and comparisons as it is; to continue its run, "
+                             f"gunzip it first (or start from its uncompressed copy)")
         stored = _read(path)
         now = protocol.plant_model().values
         if stored.plant_values is not None and stored.plant_values != now:
@@ -158,8 +164,16 @@ class _Contents:
     cut: bool = False            # the last line was cut off (an interruption mid-write)
 
 
+GZIP_MAGIC = b"\x1f\x8b"      # how a gzipped file begins (the committed runs in docs/results/ are)
+
+
 def _read(path: Path) -> _Contents:
     raw = path.read_bytes()
+    if raw.startswith(GZIP_MAGIC):
+        try:
+            raw = gzip.decompress(raw)
+        except (OSError, EOFError) as exc:
+            raise ValueError(f"{path} is a damaged gzip file ({exc})") from None
     if _cut_header(raw):
         raise ValueError(f"{path} holds no complete header line (a run interrupted as it began); rerun the same "
                          f"heatmap command to start it afresh")
@@ -170,6 +184,9 @@ def _read(path: Path) -> _Contents:
         raise ValueError(f"{path} is not a heatmap results file (its first line is not JSON)") from None
     if not isinstance(header, dict) or header.get("format") != RESULTS_FORMAT:
         raise ValueError(f"{path} is not a heatmap results file ({RESULTS_FORMAT})")
+    if "protocol" not in header:
+        raise ValueError(f"{path}: its header line names no protocol (the experiment its trials belong to), so its "
+                         f"trials cannot be placed; was it edited by hand?")
     try:
         protocol = Experiment.from_json(header["protocol"])
     except (KeyError, TypeError, ValueError) as exc:

@@ -375,3 +375,26 @@ def test_a_physics_that_cannot_be_integrated_ends_the_run_in_one_line_naming_the
     assert run.returncode == 1
     assert "fabric.edge_solref[0]" in run.stderr and "Traceback" not in run.stderr, run.stderr
     assert (out / "results.jsonl").exists()
+
+
+def test_a_gzipped_results_file_opens_for_comparison_but_is_not_continued(tmp_path):
+    import gzip
+
+    protocol = E.Experiment(cells=2, trials_per_cell=1, duration_s=0.5)
+    plain = tmp_path / "results.jsonl"
+    R.ResultsFile.open(plain, protocol)
+    packed = tmp_path / "results.jsonl.gz"
+    packed.write_bytes(gzip.compress(plain.read_bytes()))
+    assert R.ResultsFile.load(packed).protocol == protocol
+    with pytest.raises(ValueError, match="gunzip it first"):
+        R.ResultsFile.open(packed, protocol)
+    run = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "compare", str(packed), str(plain), "--out",
+                          str(tmp_path / "d.png")], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0 and "Traceback" not in run.stderr, run.stderr
+
+
+def test_a_results_header_without_its_protocol_says_so(tmp_path):
+    path = tmp_path / "results.jsonl"
+    path.write_text(json.dumps({"format": R.RESULTS_FORMAT}) + "\n")
+    with pytest.raises(ValueError, match="names no protocol"):
+        R.ResultsFile.load(path)

@@ -293,3 +293,9 @@ def test_physics_diverging_mid_trial_is_refused_at_the_step_it_happens():
     with pytest.raises(SimulationUnstable, match="diverged before trial time"):
         bridge.run(TrialSpec((0.0, 0.0), (0.05, 0.0), duration_s=1.0))
     assert warnings_per_step[-1] == 1 and warnings_per_step.count(1) == 1   # stopped on the first diverged step
+
+
+def test_sim_run_from_a_corner_the_sheet_does_not_reach_is_a_usage_error_not_a_traceback(tmp_path):
+    run = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "run", "--start", "0.25,0.25", "--duration",
+                          "0.5", "--out", str(tmp_path)], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2 and "not over the hanging sheet" in run.stderr and "Traceback" not in run.stderr
