@@ -51,14 +51,16 @@ def test_mcnemar_finds_a_one_sided_split_and_not_an_even_one():
     assert P.Discordance(100, 0, 0).p_two_sided == 1.0
 
 
-@settings(max_examples=30, deadline=None)
-@given(seed=st.integers(0, 2 ** 32 - 1), shift=st.floats(-1, 1))
-def test_bootstrap_interval_holds_the_mean_and_covers_a_true_shift(seed, shift):
-    rng = np.random.default_rng(seed)
-    d = shift + rng.normal(0, 0.1, 400)
-    ci = P.mean_interval(d, level=0.999, seed=seed)
-    assert ci.low <= ci.mean <= ci.high
-    assert ci.low <= shift <= ci.high                      # sigma/sqrt(n) = 0.005: a 99.9 % interval misses rarely
+def test_bootstrap_interval_holds_the_mean_and_covers_a_true_shift_as_often_as_its_level_says():
+    rng = np.random.default_rng(7)
+    missed = 0
+    for _ in range(100):
+        shift = rng.uniform(-1, 1)
+        d = shift + rng.normal(0, 0.1, 400)
+        ci = P.mean_interval(d, level=0.95, seed=int(rng.integers(1 << 31)))
+        assert ci.low <= ci.mean <= ci.high
+        missed += not ci.low <= shift <= ci.high
+    assert missed <= 12                                   # 5 expected of 100 at a 95 % level
 
 
 def test_bootstrap_of_nothing_is_nan_and_a_bad_level_is_refused():
@@ -103,39 +105,39 @@ def _flip(outcomes, rng, share):
     return [r if rng.random() < share else o for o, r in zip(outcomes, redrawn)]
 
 
-@settings(max_examples=10, deadline=None)
-@given(seed=st.integers(0, 2 ** 32 - 1))
-def test_a_candidate_that_scatters_like_the_floor_keeps_the_outcomes(seed, tmp_path_factory):
-    rng = np.random.default_rng(seed)
-    finer = _draw(rng, 200, 0.5)
-    runs = _sample_runs(tmp_path_factory.mktemp("g"), finer, _flip(finer, rng, 0.1), _flip(finer, rng, 0.1))
-    report = G.compare(runs)
-    assert report["pairs"] == 200 and report["complete"]
-    assert report["verdict"] == G.KEEPS, report["changed"]
+SEEDS = [int(s) for s in np.random.default_rng(2026).integers(0, 2 ** 32, 60)]   # the drawn samples below
 
 
-@settings(max_examples=10, deadline=None)
-@given(seed=st.integers(0, 2 ** 32 - 1))
-def test_a_candidate_that_falls_off_more_changes_the_outcomes(seed, tmp_path_factory):
-    rng = np.random.default_rng(seed)
-    finer = _draw(rng, 200, 0.5)
-    candidate = [(False, False, True) if rng.random() < 0.3 else o for o in finer]   # a third more falls
-    runs = _sample_runs(tmp_path_factory.mktemp("g"), finer, candidate, _flip(finer, rng, 0.05))
-    report = G.compare(runs)
-    assert report["verdict"] == G.CHANGES
-    assert any(c.startswith("fell off: a bias") for c in report["changed"])
+def test_a_candidate_that_scatters_like_the_floor_keeps_the_outcomes_but_for_the_stated_false_alarms(tmp_path):
+    """The verdict is a 5 % test: over 60 drawn samples whose candidate is the floor's equal, it may say "changes"
+    in a few (3 expected), never in many."""
+    changed = 0
+    for seed in SEEDS:
+        rng = np.random.default_rng(seed)
+        finer = _draw(rng, 200, 0.5)
+        report = G.compare(_sample_runs(tmp_path, finer, _flip(finer, rng, 0.1), _flip(finer, rng, 0.1)))
+        assert report["pairs"] == 200 and report["complete"]
+        changed += report["verdict"] == G.CHANGES
+    assert changed <= 6
 
 
-@settings(max_examples=10, deadline=None)
-@given(seed=st.integers(0, 2 ** 32 - 1))
-def test_a_candidate_that_scatters_far_more_than_the_floor_changes_the_outcomes_even_without_bias(seed,
-                                                                                              tmp_path_factory):
-    rng = np.random.default_rng(seed)
-    finer = _draw(rng, 200, 0.5)
-    runs = _sample_runs(tmp_path_factory.mktemp("g"), finer, _flip(finer, rng, 0.8), _flip(finer, rng, 0.05))
-    report = G.compare(runs)
-    assert report["verdict"] == G.CHANGES
-    assert any("more flips than the noise floor" in c for c in report["changed"])
+def test_a_candidate_that_falls_off_more_changes_the_outcomes(tmp_path):
+    for seed in SEEDS[:20]:
+        rng = np.random.default_rng(seed)
+        finer = _draw(rng, 200, 0.5)
+        candidate = [(False, False, True) if rng.random() < 0.3 else o for o in finer]   # a third more falls
+        report = G.compare(_sample_runs(tmp_path, finer, candidate, _flip(finer, rng, 0.05)))
+        assert report["verdict"] == G.CHANGES
+        assert any(c.startswith("fell off: a bias") for c in report["changed"])
+
+
+def test_a_candidate_that_scatters_far_more_than_the_floor_changes_the_outcomes_even_without_bias(tmp_path):
+    for seed in SEEDS[:20]:
+        rng = np.random.default_rng(seed)
+        finer = _draw(rng, 200, 0.5)
+        report = G.compare(_sample_runs(tmp_path, finer, _flip(finer, rng, 0.8), _flip(finer, rng, 0.05)))
+        assert report["verdict"] == G.CHANGES
+        assert any("more flips than the noise floor" in c for c in report["changed"])
 
 
 def test_an_unfinished_sample_has_no_verdict(tmp_path):
