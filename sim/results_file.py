@@ -212,6 +212,9 @@ def _read(path: Path) -> _Contents:
     return out
 
 
+WALL_CLOCK_FIELDS = ("wall_time_s", "physics_wall_s")   # a record's fields that depend on the machine, not the trial
+
+
 def trial_record(trial: Trial, result) -> dict:
     """The results-file line of a finished trial (result: a bridge.TrialResult)."""
     return {"key": trial.key, "cell": trial.cell, "k": trial.k, "seed": trial.seed,
@@ -228,4 +231,4 @@ def unplaceable_record(trial: Trial, why: str) -> dict:
     return {"key": trial.key, "cell": trial.cell, "k": trial.k, "seed": trial.seed,
             "start_m": list(trial.start_m), "target_m": list(trial.target_m), "final_m": [None, None],
             "final_error_m": None, "success": False, "reached": False, "time_to_reach_s": None,
-            "fell_off": True, "sim_time_s": 0.0, "wall_time_s": 0.0, "unplaceable": why}
+            "fell_off": True, "sim_time_s": 0.0, "wall_time_s": 0.0, "physics_wall_s": 0.0, "unplaceable": why}
