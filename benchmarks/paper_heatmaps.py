@@ -1,9 +1,12 @@
 """The paper's full simulation protocol (Fig. 2) with our stack: five heatmap runs, their difference map, the figures.
 
 Run: python3 benchmarks/paper_heatmaps.py [--runs sphere_manhattan,sphere_euclidean] [--jobs 2] [--plant paper]
+     [--fidelity reference]
 Each run is `mantaray sim heatmap` with the paper's protocol (20 x 20 cells, 10 trials, T = 10 s,
-eps = 0.02 m) on the named plant (sim/plant.toml) into out/heatmap/<run>/ (a plant other than polyester
-suffixes the run's name with _<plant>); runs are resumable, so an interrupted script continues where it
+eps = 0.02 m) on the named plant (sim/plant.toml) at the named fidelity (sim/rig.py, FIDELITIES; default the
+reference) into out/heatmap/<run>/ (a plant other than polyester suffixes the run's name with _<plant>, a fidelity
+other than the fast mode, which the committed runs of docs/results.md were made in, with its mesh and step, such as
+_15x15_1ms); runs are resumable, so an interrupted script continues where it
 stopped, and --trials 3 gives a quick map that a later run with the paper's 10 tops up. A run starts
 from the committed trials (docs/results/<run>.jsonl.gz) when out/ has none, and writes every trial back
 there (also when interrupted; --collect writes back a run still going), so a fresh clone continues the committed
@@ -28,8 +31,10 @@ from pathlib import Path
 
 import numpy as np
 
+from mantaray.sim.fidelity import parse_fidelity
 from mantaray.sim.findings import CENTRAL_HALF_M, CORNER_FROM_M
 from mantaray.sim.plant import DEFAULT_PLANT, Plant
+from mantaray.sim.rig import FIDELITIES
 
 REPO = Path(__file__).resolve().parents[1]
 COMMITTED = REPO / "docs" / "results"   # every trial of each run, <run>.jsonl.gz
@@ -112,7 +117,13 @@ def main() -> int:
                              "success rules are measured (the baseline of docs/results.md, Beyond the paper)")
     parser.add_argument("--collect", action="store_true",
                         help="only write back the trials out/ holds (say, of a run still going) to docs/results/")
+    parser.add_argument("--fidelity", default="reference",
+                        help="fast, reference or RESOLUTION:TIMESTEP: the physics the runs are made at")
     args = parser.parse_args()
+    try:
+        fidelity = parse_fidelity(args.fidelity)
+    except ValueError as exc:
+        parser.error(str(exc))
     from mantaray.sim.parameters import plant_names
 
     if args.plant not in plant_names():
@@ -123,6 +134,8 @@ def main() -> int:
     stop = ["--stop-when-reached"] if Plant(args.plant).success_rule == "reached" and not args.to_end else []
     if stop == [] and Plant(args.plant).success_rule == "reached":
         suffix += "_to_end"
+    if fidelity != FIDELITIES["fast"]:
+        suffix += f"_{fidelity.slug}"
     names = args.runs.split(",")
     unknown = [n for n in names if n not in RUNS]
     if unknown:
@@ -150,7 +163,9 @@ def main() -> int:
         t0 = time.perf_counter()
         proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--object", obj,
                                  "--controller", controller, "--alpha", str(alpha), "--trials", str(args.trials),
-                                 "--jobs", str(args.jobs), "--plant", args.plant, *stop, "--out", str(out), "--json"],
+                                 "--jobs", str(args.jobs), "--plant", args.plant, *stop, "--resolution",
+                                 str(fidelity.resolution), "--timestep", str(fidelity.timestep_s), "--out", str(out),
+                                 "--json"],
                                 cwd=REPO, stdout=subprocess.PIPE)
         try:
             stdout, _ = proc.communicate()
@@ -163,8 +178,8 @@ def main() -> int:
                 entry["wall_s_sessions"] = [*entry.get("wall_s_sessions", []), round(wall, 1)]
                 table_path.write_text(json.dumps(table, indent=1) + "\n")
         if proc.returncode != 0:
-            print(f"{name}: heatmap ended with exit {proc.returncode}; its trials are kept in "
-                  f"{committed.relative_to(REPO)}, and the same command continues", file=sys.stderr)
+            print(f"{name}: heatmap ended with exit {proc.returncode} (its message is above); the trials it holds are "
+                  f"kept in {committed.relative_to(REPO)}", file=sys.stderr)
             return proc.returncode
         times = table[name].get("wall_s_sessions", []) if name in table else []
         summary = json.loads(stdout)

@@ -6,7 +6,7 @@ For each plant, start x [m] (y = 0) and tilt θ [deg]: the object is placed and 
 corners are commanded at once to the plane of a pure x-tilt θ (a_i = x_i tan θ, PROTOCOL.md §5; every corner stays
 in range up to atan(range / (m / 2)) = 45°) and held for --hold s of simulated time. No controller runs: this
 separates what the plant lets an object do (its carriages' speed, the sheet's give, the friction) from what a
-controller asks of it. The physics is the trials' fast mode unless --resolution and --timestep say otherwise.
+controller asks of it. The physics is the trials' default fidelity (the reference) unless --resolution and --timestep say otherwise.
 Prints, per row: when the carriages' own positions first came within 1° of the commanded tilt [s after the
 command] and their tilt at the end [deg]; the object's slide relative to the sheet under it (along x, + =
 downhill; the sheet itself moves as the corners do, carrying the object), when it first exceeded 2 cm and its

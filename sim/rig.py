@@ -66,11 +66,11 @@ class Fidelity:
 
 
 # The named fidelities, the one place they are written. The reference is the configuration whose outcomes the
-# project's answers are to hold at; the fast mode is what the heatmaps, the calibration and the tuner have run in,
-# and what their commands still default to (DEFAULT_FIDELITY) until the fidelity gate (sim/fidelity.py) proves a
-# reference they can afford (docs/results.md, Fidelity).
+# project's answers hold at, and what every command runs by default; the fast mode is the one the committed maps,
+# the fitted `paper` plant and the tuned settings of docs/results.md were made in, which the fidelity gate
+# (sim/fidelity.py) finds changes the reference's outcomes (docs/results.md, Fidelity): kept by name to read them.
 FIDELITIES = {"fast": Fidelity(11, 0.002), "reference": Fidelity(15, 0.001)}
-DEFAULT_FIDELITY = FIDELITIES["fast"]
+DEFAULT_FIDELITY = FIDELITIES["reference"]
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,7 @@ from mantaray.sim.plant import Plant
 
 FAST = {"resolution": 11, "timestep_s": 0.002}
 TINY = ["--params", "contact.rolling_damping_per_s,fabric.size_m", "--cells-per-stratum", "1", "--trials-per-cell",
-        "1", "--duration", "0.6", "--jobs", "1", "--seed", "5"]
+        "1", "--duration", "0.6", "--jobs", "1", "--seed", "5", "--resolution", "11", "--timestep", "0.002"]
 
 
 def _cli(*args: str, **kwargs) -> subprocess.CompletedProcess:
@@ -155,7 +155,7 @@ def test_replaying_a_log_on_its_own_plant_retraces_it_and_on_another_does_not(sy
 
 def test_a_log_fit_prefers_the_hidden_value(synthetic_log):
     path, _ = synthetic_log
-    evidence = L.LogEvidence(logs=(str(path),))
+    evidence = L.LogEvidence(logs=(str(path),), **FAST)        # the fidelity the log was written at
     with LocalPool(1) as pool:
         errors = {beta: evidence.evaluate({"contact.rolling_damping_per_s": beta}, pool)[0][0] for beta in (1.0, 2.0, 4.0)}
     assert min(errors, key=errors.get) == 2.0

@@ -27,7 +27,8 @@ from mantaray.sim.bridge import Bridge, TrialSpec, is_success
 from mantaray.sim.rig import Rig
 
 MODULE = (0.5, 0.5)
-SMALL = E.Experiment(cells=2, trials_per_cell=2, duration_s=0.5)   # four cells, eight short trials
+SMALL = E.Experiment(cells=2, trials_per_cell=2, duration_s=0.5, resolution=11,
+                     timestep_s=0.002)   # four cells, eight short trials, on a cheap mesh: these test the mechanics
 
 
 # ------------------------------------------------------------------------------------------- sampling

@@ -21,7 +21,8 @@ from mantaray.sim import tune as T
 from mantaray.sim.executors import LocalPool
 
 TINY = ["--controller", "scheduled", "--cells-per-stratum", "1", "--trials-per-cell", "1", "--duration", "1",
-        "--final-trials", "1", "--final-cells", "2", "--jobs", "1"]
+        "--final-trials", "1", "--final-cells", "2", "--jobs", "1",
+        "--resolution", "11", "--timestep", "0.002"]   # a cheap mesh: these test the mechanics, not the physics
 
 
 def _tune(*args: str) -> subprocess.CompletedProcess:
@@ -100,7 +101,7 @@ def test_the_scheduled_controllers_first_candidate_is_the_papers_manhattan_on_ev
     """Its boot values (the paper's gains read as the plant reads them, the neutral schedule) score the baseline."""
     for plant in ("paper", "polyester"):
         evidence = T.TuningEvidence(controller="scheduled", plant=plant, cells_per_stratum=1, trials_per_cell=1,
-                                    duration_s=2.0, seed=4)
+                                    duration_s=2.0, seed=4, resolution=11, timestep_s=0.002)
         with LocalPool(1) as pool:
             _, first = evidence.evaluate(T.boot_values("scheduled"), pool)
             assert first == evidence.baseline(pool), plant
