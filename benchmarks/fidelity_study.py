@@ -31,6 +31,7 @@ GATES = {   # name: (plant, candidate, finer), in the order they run
     "paper_11x11_2ms": ("paper", "11:0.002", "15:0.001"),
     "paper_11x11_1ms": ("paper", "11:0.001", "15:0.001"),
     "paper_15x15_0.5ms": ("paper", "15:0.0005", "15:0.001"),   # is 1 ms itself converged in the step?
+    "paper_15x15_0.25ms_vs_0.5ms": ("paper", "15:0.00025", "15:0.0005"),   # ... and 0.5 ms?
     "polyester_15x15_2ms": ("polyester", "15:0.002", "15:0.001"),
     "polyester_11x11_2ms": ("polyester", "11:0.002", "15:0.001"),
     "polyester_11x11_1ms": ("polyester", "11:0.001", "15:0.001"),
