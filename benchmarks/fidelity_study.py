@@ -116,12 +116,13 @@ def main() -> int:
                 code = subprocess.run(command(name, args.jobs), cwd=REPO).returncode
             except KeyboardInterrupt:     # the gate keeps every finished trial; write them back before stopping
                 collect(name)
+                (COMMITTED / "convergence.md").write_text(table())
                 print(f"\ninterrupted: {name}'s trials are kept; the same command continues", file=sys.stderr)
                 return 130
             if code not in (0, 1):        # 0: keeps, 1: changes; anything else went wrong
                 print(f"{name}: the gate ended with exit {code}", file=sys.stderr)
         collect(name)
-    (COMMITTED / "convergence.md").write_text(table())
+        (COMMITTED / "convergence.md").write_text(table())     # after every gate: a stop loses no row
     print(f"table: {(COMMITTED / 'convergence.md').relative_to(REPO)}")
     return 0
 
