@@ -1,7 +1,7 @@
 """Benchmark: how an object answers a held tilt on each plant, open loop: when it starts to slide, and how far it goes.
 
 Run: python3 benchmarks/static_tilt.py [--plants paper,polyester] [--object cube] [--starts 0,0.1]
-     [--tilts 10,20,26.565,35] [--hold 6] [--resolution 11] [--timestep 0.002]
+     [--tilts 10,20,26.565,35] [--hold 6] [--resolution 11] [--timestep 0.002] [--set KEY=VALUE]
 For each plant, start x [m] (y = 0) and tilt θ [deg]: the object is placed and left to settle, then the four
 corners are commanded at once to the plane of a pure x-tilt θ (a_i = x_i tan θ, PROTOCOL.md §5; every corner stays
 in range up to atan(range / (m / 2)) = 45°) and held for --hold s of simulated time. No controller runs: this
@@ -25,6 +25,7 @@ from mantaray.sim import experiment as E
 from mantaray.sim import model as M
 from mantaray.sim.objects import OBJECTS
 from mantaray.sim.parameters import plant_names
+from mantaray.sim.plant import parse_setting
 from mantaray.sim.rig import Rig
 
 SLID_M = 0.02           # [m] a slide this long counts as the object set going (the protocol's ε)
@@ -84,7 +85,13 @@ def main() -> int:
     parser.add_argument("--hold", type=float, default=6.0, help="how long each tilt is held [s, simulated], 0.1..30")
     parser.add_argument("--resolution", type=int, default=E.Experiment.resolution, help="fabric vertices per side")
     parser.add_argument("--timestep", type=float, default=E.Experiment.timestep_s, help="physics step [s]")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="set a plant parameter over each plant (a key of sim/plant.toml, in its range); repeatable")
     args = parser.parse_args()
+    try:
+        setting = tuple(parse_setting(text) for text in args.set)
+    except ValueError as exc:
+        parser.error(str(exc))
     plants = args.plants.split(",")
     unknown = [repr(p) for p in plants if p not in plant_names()]
     if unknown:
@@ -100,7 +107,7 @@ def main() -> int:
     for plant in plants:
         try:
             rig = E.Experiment(object_name=args.object, plant=plant, resolution=args.resolution,
-                               timestep_s=args.timestep).rig()
+                               timestep_s=args.timestep, plant_set=setting).rig()
         except ValueError as exc:
             parser.error(str(exc))
         model, data = M.load(rig)
