@@ -119,8 +119,8 @@ def main() -> int:
                 (COMMITTED / "convergence.md").write_text(table())
                 print(f"\ninterrupted: {name}'s trials are kept; the same command continues", file=sys.stderr)
                 return 130
-            if code not in (0, 1):        # 0: keeps, 1: changes; anything else went wrong
-                print(f"{name}: the gate ended with exit {code}", file=sys.stderr)
+            if code not in (0, 1):        # 0: keeps, 1: changes; 3: no verdict (incomplete, diverged); 2: misused
+                print(f"{name}: the gate gave no verdict (exit {code}; its message is above)", file=sys.stderr)
         collect(name)
         (COMMITTED / "convergence.md").write_text(table())     # after every gate: a stop loses no row
     print(f"table: {(COMMITTED / 'convergence.md').relative_to(REPO)}")

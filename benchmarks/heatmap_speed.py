@@ -1,7 +1,7 @@
 """Benchmark: heatmap trials per wall second at each physics fidelity, side by side in one run on the same trials.
 
 Run: python3 benchmarks/heatmap_speed.py [--configs reference,15:0.001,15:0.002,fast] [--jobs 2] [--plant paper]
-Each config (a named fidelity of sim/fidelity.py, or RESOLUTION:TIMESTEP [vertices per side : s]) runs the same
+Each config (a named fidelity of sim/rig.py, or RESOLUTION:TIMESTEP [vertices per side : s]) runs the same
 sample of cells (a 4 x 4 spread over the 20 x 20 grid, the paper's 10 trials each, T = 10 s) on --jobs workers,
 firmware core in-process. Prints, per config: trials per wall second and its ratio to the first config,
 simulated seconds per wall second, the share of the trials' wall time spent outside mj_step, the share of trials

@@ -499,6 +499,9 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from .progress import Progress
 
     at = _fidelity(parser, args.confirm_at) if args.confirm else None
+    if at is not None and (at.resolution, at.timestep_s) == (args.resolution, args.timestep):
+        parser.error(f"--confirm-at {args.confirm_at} is the fidelity the search runs at ({at.label}): confirm at a "
+                     f"finer one, or search at a cheaper one (--resolution, --timestep)")
     try:
         evidence = T.TuningEvidence(controller=args.controller, object_name=args.object, alpha_m=args.alpha,
                                     plant=args.plant, cells_per_stratum=args.cells_per_stratum,
@@ -521,6 +524,11 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         study = T.open_tuning(out / "study.db", evidence, args.per_axis, start)
     except (C.StudyMismatch, T.StartMismatch) as exc:
         print(f"mantaray sim tune: {exc}", file=sys.stderr)
+        return 2
+    confirmed = T.confirmed_at(study)
+    if confirmed is not None and (at is None or at.spec != confirmed):
+        print(f"mantaray sim tune: the study in {out / 'study.db'} answers with candidates confirmed at {confirmed}: "
+              f"continue it with --confirm K --confirm-at {confirmed}, or search anew (another --out)", file=sys.stderr)
         return 2
     progress = None
 
@@ -563,8 +571,9 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
                                       cells=args.final_cells)
                 final["figures"] = _final_heatmaps(final_path, args)
     except ExperimentMismatch as exc:
-        print(f"mantaray sim tune: {exc} (the final check there began with other settings, or with other --final "
-              f"options: give the same ones to continue it, or delete {out / 'final'} to check anew)", file=sys.stderr)
+        print(f"mantaray sim tune: {exc} (the final check there began with other settings, other --final options or "
+              f"on another model: give the same ones to continue it, or delete {out / 'final'} to check anew)",
+              file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         if progress is not None:
@@ -642,7 +651,8 @@ def cmd_fidelity(args: argparse.Namespace, parser: argparse.ArgumentParser) -> i
     outcome (within ε at T, reached, fell off, time to reach, final error) for a bias and for more flips than the
     floor. The verdict: the candidate "keeps the finer one's outcomes" or "changes them", with the numbers. Trials
     go to --trials-dir as they finish, shared by every gate that needs the same run: interrupt it and the same
-    command continues. --runs compares three existing heatmap results files instead."""
+    command continues. --runs compares three existing heatmap results files instead. Exit status: 0 keeps, 1 changes,
+    2 a usage error, 3 no verdict (the sample is incomplete, or the physics diverged)."""
     import shlex
 
     from . import fidelity as G
@@ -668,7 +678,11 @@ def cmd_fidelity(args: argparse.Namespace, parser: argparse.ArgumentParser) -> i
                            f"{', '.join(a.label for a in arms)}: {len(sample.cells())} cells "
                            f"({args.cells_per_stratum} from each stratum) x {args.trials_per_cell} trials, seed "
                            f"{args.seed}, T = {args.duration:g} s")
-    except (ExperimentMismatch, ValueError) as exc:
+    except ExperimentMismatch as exc:
+        print(f"mantaray sim fidelity: {exc} (the gate keeps its runs in --trials-dir {args.trials_dir})",
+              file=sys.stderr)
+        return 2
+    except ValueError as exc:
         print(f"mantaray sim fidelity: {exc}", file=sys.stderr)
         return 2
     if not args.runs:
@@ -686,7 +700,7 @@ def cmd_fidelity(args: argparse.Namespace, parser: argparse.ArgumentParser) -> i
         except SimulationUnstable as exc:
             bar.close()
             print(f"mantaray sim fidelity: {exc}; the finished trials are kept in {args.trials_dir}", file=sys.stderr)
-            return 1
+            return 3
         bar.close()
     try:
         report = G.compare(runs)
@@ -707,7 +721,7 @@ def cmd_fidelity(args: argparse.Namespace, parser: argparse.ArgumentParser) -> i
     else:
         print(f"{candidate.label} {report['verdict']} of {finer.label} ({report['pairs']} paired trials)"
               + "".join(f"\n  {c}" for c in report["changed"]) + f"\n{paths[1]}")
-    return 0 if report["verdict"] == G.KEEPS else 1
+    return {G.KEEPS: 0, G.CHANGES: 1}.get(report["verdict"], 3)
 
 
 def _fidelity(parser: argparse.ArgumentParser, text: str):

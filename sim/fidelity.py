@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -153,6 +154,16 @@ def check_paired(runs: Runs) -> None:
                                f"({runs.finer.path}) differ in " + "; ".join(
                                    f"{k} ({other.get(k)!r} against {base.get(k)!r})" for k in differ)
                                + ": they are not the same trials")
+    if runs.floor.model != runs.finer.model:
+        raise GateMismatch(f"{runs.label}: the floor run ({runs.floor.path}) ran on another model than the finer run "
+                           f"({runs.floor.model} against {runs.finer.model}): not the same physics")
+    if runs.candidate.model and runs.finer.model and runs.candidate.model["mujoco"] != runs.finer.model["mujoco"]:
+        raise GateMismatch(f"{runs.label}: the candidate ran on MuJoCo {runs.candidate.model['mujoco']}, the finer run "
+                           f"on {runs.finer.model['mujoco']}: a gate compares fidelities, not versions")
+    for name in ("candidate", "floor"):
+        if getattr(runs, name).plant_values != runs.finer.plant_values:
+            raise GateMismatch(f"{runs.label}: the {name} run and the finer run were run on the plant's values of "
+                               f"different days (sim/plant.toml changed between them): not the same plant")
     if runs.floor.protocol.start_shift_m <= 0:
         raise GateMismatch(f"{runs.label}: the floor run ({runs.floor.path}) moves no start (start_shift_m 0): it "
                            f"measures no noise floor")
@@ -210,10 +221,10 @@ def compare(runs: list[Runs]) -> dict:
                                                                                 ("floor", fl))},
                          "candidate_minus_finer": bias.to_json(), "floor_minus_finer": floor.to_json(),
                          "excess_scatter": scatter.to_json()}
-        if bias.n and not bias.low <= 0 <= bias.high:
+        if not (math.isnan(bias.low) or bias.low <= 0 <= bias.high):     # NaN: too few to test
             changed.append(f"{label}: a bias (mean difference {bias.mean:+.4g}, interval {bias.low:+.4g} .. "
                            f"{bias.high:+.4g})")
-        if scatter.n and scatter.low > 0:
+        if not math.isnan(scatter.low) and scatter.low > 0:
             changed.append(f"{label}: more scatter than the noise floor (|candidate - finer| exceeds "
                            f"|perturbed - finer| by {scatter.mean:.4g} on average, at least {scatter.low:.4g})")
     pairs = len(pooled["finer"])
@@ -290,7 +301,12 @@ def write_report(report: dict, out: Path) -> tuple[Path, Path]:
 
 def open_runs(sample: GateSample, candidate: Fidelity, finer: Fidelity, trials_dir: Path,
               shift_m: float = PERTURBATION_M) -> list[Runs]:
-    """Every arm's three runs, opened (created, or continued where an earlier gate left them)."""
+    """Every arm's three runs, opened (created, or continued where an earlier gate left them). Three different runs:
+    a candidate that is the finer fidelity, or a floor that moves nothing, would be the finer run again."""
+    if candidate == finer:
+        raise ValueError(f"the candidate and the finer fidelity are both {finer.label}: nothing to compare")
+    if not shift_m > 0:
+        raise ValueError(f"the noise floor must move every start (a shift > 0 m), got {shift_m:g}")
     fidelity = {"candidate": candidate, "finer": finer, "floor": finer}
     opened: dict[str, dict[str, ResultsFile]] = {}
     for arm in sample.arms:

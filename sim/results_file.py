@@ -30,12 +30,15 @@ class ResultsFile:
     protocol: Experiment
     records: dict[str, dict] = field(default_factory=dict)   # trial key -> record
     rejected: list[tuple[int, str]] = field(default_factory=list)   # (line number from 1, why) of refused lines
+    model: dict | None = None          # the model_identity() it ran on (None: written before files recorded it)
+    plant_values: dict | None = None   # the plant's values it ran with (None: written before files recorded them)
 
     @classmethod
     def open(cls, path: str | Path, protocol: Experiment) -> ResultsFile:
         """Open for this protocol: create the file, or read what an earlier run of the same protocol left."""
         path = Path(path)
-        results = cls(path, protocol)
+        results = cls(path, protocol, model=model_identity(protocol.rig()),
+                      plant_values=protocol.plant_model().values)
         if not path.exists() or _cut_header(path.read_bytes()):   # new, or its header was cut off as it was written
             path.parent.mkdir(parents=True, exist_ok=True)
             write_whole(path, json.dumps(_header(protocol)).encode() + b"\n")
@@ -46,7 +49,7 @@ class ResultsFile:
             raise ValueError(f"{path} is gzipped: it opens for figures and comparisons as it is; to continue its run, "
                              f"gunzip it first (or start from its uncompressed copy)")
         stored = _read(path)
-        now = protocol.plant_model().values
+        now = results.plant_values
         if stored.plant_values is not None and stored.plant_values != now:
             changed = sorted(k for k in now if stored.plant_values.get(k) != now[k])
             raise ExperimentMismatch(f"{path} was run on the plant {protocol.plant!r} when its values were others "
@@ -56,9 +59,8 @@ class ResultsFile:
             raise ExperimentMismatch(f"{path} holds a run with other options ({', '.join(changed)} differ); "
                                    f"use another --out, the same options to continue it, or more trials or "
                                    f"cells to add to it")
-        model_now = model_identity(protocol.rig())
-        if stored.model != model_now:
-            raise ExperimentMismatch(_other_model(path, stored.model, model_now))
+        if stored.model != results.model:
+            raise ExperimentMismatch(_other_model(path, stored.model, results.model))
         if stored.bad_lines:                    # kept aside, never lost
             with open(path.with_name(path.name + ".rejected"), "ab") as f:
                 f.write(b"".join(line + b"\n" for line in stored.bad_lines))
@@ -73,7 +75,7 @@ class ResultsFile:
     def load(cls, path: str | Path) -> ResultsFile:
         """Read a results file whatever its protocol (for figures and comparisons)."""
         stored = _read(Path(path))
-        return cls(Path(path), stored.protocol, stored.records, stored.rejected)
+        return cls(Path(path), stored.protocol, stored.records, stored.rejected, stored.model, stored.plant_values)
 
     def append(self, record: dict) -> None:
         with open(self.path, "a") as f:

@@ -64,6 +64,11 @@ class Fidelity:
     def slug(self) -> str:
         return f"{self.resolution}x{self.resolution}_{self.timestep_s * 1000:g}ms"
 
+    @property
+    def spec(self) -> str:
+        """As a command line gives it: RESOLUTION:TIMESTEP."""
+        return f"{self.resolution}:{self.timestep_s:g}"
+
 
 # The named fidelities, the one place they are written. The reference is the configuration whose outcomes the
 # project's answers hold at, and what every command runs by default; the fast mode is the one the committed maps,
@@ -156,8 +161,8 @@ class FallRule:
     below_fabric_m: float = _d("fall.below_fabric_m")       # [m] centre below the fabric's lowest vertex by more
     floor_z_m: float = 0.1                # [m] object centre below this height above the floor
 
-VISION_MODES = ("aruco", "blob")
-MIN_STEPS_PER_TIMECONST = 2     # MuJoCo runs a constraint's time constant at no less than two steps (refsafe)   # the tracker on rendered frames: ArUco marker, or colour blob
+VISION_MODES = ("aruco", "blob")   # the tracker on rendered frames: ArUco marker, or colour blob
+MIN_STEPS_PER_TIMECONST = 2       # MuJoCo runs a constraint's time constant at no less than two steps (refsafe)
 
 
 @dataclass(frozen=True)

@@ -288,8 +288,9 @@ def best_settings(study, evidence: TuningEvidence) -> ControllerSettings | None:
     return dataclasses.replace(settings, plant=evidence.plant)
 
 
-CONFIRMED = "confirmed"      # the study's user attribute: {fidelity slug: {candidate number: its score there}}, one
+CONFIRMED = "confirmed"      # the study's user attribute: {RESOLUTION:TIMESTEP: {candidate number: its score}}, one
                              # fidelity per study
+CONFIRMED_NOW = "confirmed_now"   # ... and the candidates the last confirm() ranked, whose best is the answer
 
 
 def confirm(study, evidence: TuningEvidence, at: Fidelity, k: int, pool, progress=None) -> dict:
@@ -297,25 +298,28 @@ def confirm(study, evidence: TuningEvidence, at: Fidelity, k: int, pool, progres
     search screened at a cheaper one): the best there is the search's answer, and the rank correlation of the two
     scores over those candidates says whether the cheaper fidelity ranks them as `at` does. Resumable: each score
     is kept in the study as it comes."""
+    if (at.resolution, at.timestep_s) == (evidence.resolution, evidence.timestep_s):
+        raise ValueError(f"the search already ran at {at.label}: confirm at a finer fidelity than it screened at")
     finer = dataclasses.replace(evidence, resolution=at.resolution, timestep_s=at.timestep_s, prune=False)
     ranked = sorted((t for t in C.completed(study) if t.user_attrs["details"]["passed"] >= 0),
                     key=lambda t: t.values[0])[:k]
     kept = study.user_attrs.get(CONFIRMED, {})
-    if kept and at.slug not in kept:
-        raise ValueError(f"this study's best candidates were confirmed at {', '.join(kept)}, not {at.slug}: confirm "
+    if kept and at.spec not in kept:
+        raise ValueError(f"this study's best candidates were confirmed at {', '.join(kept)}, not {at.spec}: confirm "
                          f"at that fidelity, or search anew (another --out)")
-    scores = kept.get(at.slug, {})
+    study.set_user_attr(CONFIRMED_NOW, [t.number for t in ranked])
+    scores = kept.get(at.spec, {})
     for t in ranked:
         if str(t.number) not in scores:
             objectives, details = finer.evaluate(t.user_attrs["values"], pool)
             scores[str(t.number)] = {"misses": objectives[0], **details}
-            study.set_user_attr(CONFIRMED, {**kept, at.slug: scores})
+            study.set_user_attr(CONFIRMED, {**kept, at.spec: scores})
         if progress is not None:
             progress(t.number, scores[str(t.number)])
     screened = [t.values[0] for t in ranked]
     there = [scores[str(t.number)]["misses"] for t in ranked]
     best = ranked[int(np.argmin(there))] if ranked else None
-    return {"fidelity": at.label, "slug": at.slug, "candidates": len(ranked),
+    return {"fidelity": at.label, "spec": at.spec, "candidates": len(ranked),
             "rank_correlation": F.rank_correlation(np.array(screened), np.array(there)) if len(ranked) > 1 else None,
             "best": None if best is None else {"number": best.number, "screened_misses": best.values[0],
                                                **scores[str(best.number)]},
@@ -323,13 +327,21 @@ def confirm(study, evidence: TuningEvidence, at: Fidelity, k: int, pool, progres
                        for t in ranked}}
 
 
+def confirmed_at(study) -> str | None:
+    """The fidelity (RESOLUTION:TIMESTEP) a study's best candidates were confirmed at, if they were."""
+    kept = study.user_attrs.get(CONFIRMED, {})
+    return next(iter(kept), None)
+
+
 def confirmed_best(study):
-    """The candidate with the fewest misses among those confirmed at a finer fidelity (None: none confirmed)."""
+    """The candidate with the fewest misses at the finer fidelity among those the last confirm() scored (None: none
+    confirmed)."""
     kept = study.user_attrs.get(CONFIRMED, {})
     if not kept:
         return None
     (scores,) = kept.values()                 # confirm() keeps one fidelity's
-    number = min(scores, key=lambda n: scores[n]["misses"])
+    now = [str(n) for n in study.user_attrs.get(CONFIRMED_NOW, [])]
+    number = min(now, key=lambda n: scores[n]["misses"])
     return next(t for t in C.completed(study) if t.number == int(number))
 
 

@@ -65,29 +65,34 @@ def test_bootstrap_interval_holds_the_mean_and_covers_a_true_shift_as_often_as_i
 
 def test_bootstrap_of_nothing_is_nan_and_a_bad_level_is_refused():
     assert math.isnan(P.mean_interval([]).mean)
+    few = P.mean_interval([0.01, 0.02, 0.005, 0.03, 0.01], level=0.995)   # one-signed, but only five
+    assert few.n == 5 and few.mean == pytest.approx(0.015) and math.isnan(few.low) and math.isnan(few.high)
     with pytest.raises(ValueError, match="level"):
         P.mean_interval([1.0], level=1.5)
 
 
 # ------------------------------------------------------------------------------------------- the gate's verdict
-def _results(tmp_path: Path, name: str, protocol: E.Experiment, outcomes: list[tuple[bool, bool, bool]]):
-    """A results file of protocol whose trials have the given (success, reached, fell_off), in trial order."""
+def _results(tmp_path: Path, name: str, protocol: E.Experiment, outcomes: list[tuple[bool, bool, bool]],
+             later_s: float = 0.0):
+    """A results file of protocol whose trials have the given (success, reached, fell_off), in trial order, and a
+    time to reach and a final error drawn from the trial's seed (the same trial, the same draw), later_s later."""
     results = R.ResultsFile(tmp_path / f"{name}.jsonl", protocol)
     for trial, (success, reached, fell) in zip(E.trials(protocol), outcomes):
+        draw = np.random.default_rng(trial.seed).random(2)
         results.records[trial.key] = {"key": trial.key, "cell": trial.cell, "k": trial.k, "success": success,
                                       "reached": reached, "fell_off": fell, "target_m": list(trial.target_m),
-                                      "time_to_reach_s": 2.0 if reached else None,
-                                      "final_error_m": 0.01 if success else 0.05}
+                                      "time_to_reach_s": 1.0 + 8.0 * draw[0] + later_s if reached else None,
+                                      "final_error_m": (0.02 if success else 0.05) * draw[1]}
     return results
 
 
-def _sample_runs(tmp_path, finer_outcomes, candidate_outcomes, floor_outcomes, **changes):
+def _sample_runs(tmp_path, finer_outcomes, candidate_outcomes, floor_outcomes, later_s=0.0, **changes):
     sample = G.GateSample(cells_per_stratum=8, trials_per_cell=5, arms=(G.Arm("manhattan", "manhattan"),))
     arm = sample.arms[0]
     finer = sample.protocol(arm, G.FIDELITIES["reference"])
     candidate = dataclasses.replace(sample.protocol(arm, G.FIDELITIES["fast"]), **changes)
     floor = sample.protocol(arm, G.FIDELITIES["reference"], G.PERTURBATION_M)
-    return [G.Runs("manhattan", _results(tmp_path, "candidate", candidate, candidate_outcomes),
+    return [G.Runs("manhattan", _results(tmp_path, "candidate", candidate, candidate_outcomes, later_s),
                    _results(tmp_path, "finer", finer, finer_outcomes),
                    _results(tmp_path, "floor", floor, floor_outcomes))]
 
@@ -138,6 +143,16 @@ def test_a_candidate_that_scatters_far_more_than_the_floor_changes_the_outcomes_
         report = G.compare(_sample_runs(tmp_path, finer, _flip(finer, rng, 0.8), _flip(finer, rng, 0.05)))
         assert report["verdict"] == G.CHANGES
         assert any("more flips than the noise floor" in c for c in report["changed"])
+
+
+def test_a_candidate_that_reaches_later_changes_the_outcomes_through_its_time_to_reach(tmp_path):
+    for seed in SEEDS[:20]:
+        rng = np.random.default_rng(seed)
+        finer = _draw(rng, 200, 0.5)
+        report = G.compare(_sample_runs(tmp_path, finer, finer, _flip(finer, rng, 0.05), later_s=0.5))
+        assert report["verdict"] == G.CHANGES
+        assert any(c.startswith("time to reach [s]: a bias") for c in report["changed"])
+        assert not any(c.startswith(("reached", "fell off", "within")) for c in report["changed"])
 
 
 def test_an_unfinished_sample_has_no_verdict(tmp_path):
@@ -251,6 +266,7 @@ def test_the_command_runs_the_three_runs_writes_its_report_and_resumes_without_r
 
 def test_the_command_says_what_is_wrong_with_its_input_in_one_line(tmp_path):
     for extra, said in ((("--candidate", "14:0.002"), "odd"), (("--controller", "nonsense"), "neither"),
-                        (("--shift", "0.5"), "start shift")):
+                        (("--shift", "0.5"), "start shift"), (("--shift", "0"), "must move every start"),
+                        (("--candidate", "7:0.002"), "nothing to compare")):
         run = _gate(tmp_path, *extra)
         assert run.returncode == 2 and said in run.stderr and "Traceback" not in run.stderr, run.stderr

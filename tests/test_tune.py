@@ -10,6 +10,7 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
@@ -262,7 +263,8 @@ def test_confirming_the_best_candidates_at_a_finer_fidelity_takes_the_best_there
     from mantaray.sim import calibrate as C
     from mantaray.sim.rig import Fidelity
 
-    evidence = T.TuningEvidence(controller="manhattan", plant="polyester", cells_per_stratum=1, trials_per_cell=4)
+    evidence = T.TuningEvidence(controller="manhattan", plant="polyester", cells_per_stratum=1, trials_per_cell=4,
+                                resolution=11, timestep_s=0.002)       # screened on a cheap mesh
     study = T.open_tuning(tmp_path / "study.db", evidence)
     pool = _ByGainAndMesh()
     C.run_study(study, evidence, T.knobs("manhattan"), {}, 16, pool)
@@ -273,11 +275,18 @@ def test_confirming_the_best_candidates_at_a_finer_fidelity_takes_the_best_there
     best = confirmation["best"]["number"]
     assert scores[str(best)]["confirmed"] == min(v["confirmed"] for v in scores.values())
     assert T.confirmed_best(study).number == best                       # the answer is the finer fidelity's
-    assert -1 <= confirmation["rank_correlation"] <= 1 or math.isnan(confirmation["rank_correlation"])
+    from mantaray.sim import findings as F
+    screened = [v["screened"] for v in scores.values()]
+    assert confirmation["rank_correlation"] == pytest.approx(
+        F.rank_correlation(np.array(screened), np.array([v["confirmed"] for v in scores.values()])), nan_ok=True)
     ran = pool.trials
     assert T.confirm(study, evidence, finer, 6, pool)["scores"] == scores and pool.trials == ran   # kept, not rerun
     with pytest.raises(ValueError, match="confirmed at"):
         T.confirm(study, evidence, Fidelity(21, 0.001), 6, pool)
+    with pytest.raises(ValueError, match="already ran at"):
+        T.confirm(study, evidence, Fidelity(evidence.resolution, evidence.timestep_s), 6, pool)
+    T.confirm(study, evidence, finer, 2, pool)              # fewer: the answer is the best of those two
+    assert T.confirmed_best(study).number in {int(n) for n in list(scores)[:2]}
     settings = T.best_settings(study, evidence)
     assert dict(settings.values)["pid.x.kp"] == pytest.approx(
         T.settings_of("manhattan", T.confirmed_best(study).user_attrs["values"]).get("pid.x.kp"))
@@ -292,5 +301,9 @@ def test_the_command_confirms_at_the_finer_fidelity_and_runs_its_final_check_the
     assert report["confirmation"]["candidates"] == 2 and report["confirmation"]["fidelity"] == "7 × 7, 2 ms"
     header = json.loads((out / "final" / "results.jsonl").read_text().split("\n", 1)[0])
     assert header["protocol"]["resolution"] == 7                        # every final number at the finer fidelity
+    unconfirmed = _tune(*TINY, "--candidates", "3", "--resolution", "5", "--out", str(out))
+    assert unconfirmed.returncode == 2 and "--confirm-at 7:0.002" in unconfirmed.stderr, unconfirmed.stderr
+    same = _tune(*TINY, "--confirm", "2", "--confirm-at", "11:0.002", "--out", str(tmp_path / "same"))
+    assert same.returncode == 2 and "is the fidelity the search runs at" in same.stderr
     bad = _tune(*TINY, "--confirm", "2", "--confirm-at", "8:0.002", "--out", str(tmp_path / "bad"))
     assert bad.returncode == 2 and "odd" in bad.stderr and "Traceback" not in bad.stderr
