@@ -24,7 +24,7 @@ import numpy as np
 
 from . import findings as F
 from .experiment import Experiment
-from .paired import MeanInterval, discordance, mean_interval
+from .paired import discordance, mean_interval
 from .plant import DEFAULT_PLANT
 from .results_file import ResultsFile
 from .rig import FIDELITIES, Fidelity
