@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 
 from mantaray.sim.results_file import write_whole
+import paper_heatmaps   # a sibling script: keep() writes a run's trials back gzipped, whole, only when they changed
 
 REPO = Path(__file__).resolve().parents[1]
 COMMITTED = REPO / "docs" / "results" / "fidelity"
@@ -61,7 +62,7 @@ def collect(name: str) -> None:
     """Write a gate's report and every trial of out/ back to docs/results/fidelity/."""
     (COMMITTED / "trials").mkdir(parents=True, exist_ok=True)
     for path in sorted(TRIALS.glob("*.jsonl")):
-        write_whole(COMMITTED / "trials" / (path.name + ".gz"), gzip.compress(path.read_bytes(), mtime=0))
+        paper_heatmaps.keep(path, COMMITTED / "trials" / (path.name + ".gz"))
     out = REPO / "out" / "fidelity" / name
     for report in ("report.json", "report.md"):
         if (out / report).exists():

@@ -105,11 +105,6 @@ class GateSample:
     def cells(self) -> tuple[int, ...]:
         return F.stratified_sample(Experiment.cells, self.cells_per_stratum, self.seed)
 
-    @property
-    def trials(self) -> int:
-        """Paired trials: cells x trials per cell x arms."""
-        return len(self.cells()) * self.trials_per_cell * len(self.arms)
-
     def protocol(self, arm: Arm, fidelity: Fidelity, shift_m: float = 0.0) -> Experiment:
         return Experiment(object_name=self.object_name, controller=arm.controller, settings=arm.settings,
                           trials_per_cell=self.trials_per_cell, duration_s=self.duration_s, alpha_m=self.alpha_m,
@@ -130,17 +125,6 @@ class Runs:
     candidate: ResultsFile
     finer: ResultsFile
     floor: ResultsFile
-
-
-def runs_needed(sample: GateSample, candidate: Fidelity, finer: Fidelity,
-                shift_m: float = PERTURBATION_M) -> list[tuple[str, str, Experiment]]:
-    """(arm label, run name, protocol) of every run the gate needs, in the order they run."""
-    out = []
-    for arm in sample.arms:
-        out += [(arm.label, "candidate", sample.protocol(arm, candidate)),
-                (arm.label, "finer", sample.protocol(arm, finer)),
-                (arm.label, "floor", sample.protocol(arm, finer, shift_m))]
-    return out
 
 
 def check_paired(runs: Runs) -> None:

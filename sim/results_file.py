@@ -41,7 +41,7 @@ class ResultsFile:
                       plant_values=protocol.plant_model().values)
         if not path.exists() or _cut_header(path.read_bytes()):   # new, or its header was cut off as it was written
             path.parent.mkdir(parents=True, exist_ok=True)
-            write_whole(path, json.dumps(_header(protocol)).encode() + b"\n")
+            write_whole(path, json.dumps(_header(results)).encode() + b"\n")
             return results
         with open(path, "rb") as f:
             gzipped = f.read(len(GZIP_MAGIC)) == GZIP_MAGIC
@@ -66,7 +66,7 @@ class ResultsFile:
                 f.write(b"".join(line + b"\n" for line in stored.bad_lines))
         if stored.protocol != protocol or stored.bad_lines or stored.cut:
             # the header names the (possibly grown) run; only the good lines stay
-            write_whole(path, json.dumps(_header(protocol)).encode() + b"\n"
+            write_whole(path, json.dumps(_header(results)).encode() + b"\n"
                      + b"".join(line + b"\n" for line in stored.good_lines))
         results.records, results.rejected = stored.records, stored.rejected
         return results
@@ -124,11 +124,11 @@ def _extends(stored: Experiment, wanted: Experiment) -> bool:
     return same_otherwise and more_per_cell and more_cells
 
 
-def _header(protocol: Experiment) -> dict:
+def _header(results: ResultsFile) -> dict:
     """A results file's first line: the protocol, the values its plant had (a named plant may be refitted) and the
     model that stepped it (the generated MJCF's digest and MuJoCo's version)."""
-    return {"format": RESULTS_FORMAT, "protocol": protocol.to_json(), "plant_values": protocol.plant_model().values,
-            "model": model_identity(protocol.rig())}
+    return {"format": RESULTS_FORMAT, "protocol": results.protocol.to_json(), "plant_values": results.plant_values,
+            "model": results.model}
 
 
 RECORD_TYPES = {"key": str, "cell": int, "k": int, "success": bool, "reached": bool, "fell_off": bool,
