@@ -1,12 +1,15 @@
 """Benchmark: how an object answers a held tilt on each plant, open loop: when it starts to slide, and how far it goes.
 
 Run: python3 benchmarks/static_tilt.py [--plants paper,polyester] [--object cube] [--starts 0,0.1]
-     [--tilts 10,20,26.565,35] [--hold 6] [--resolution 11] [--timestep 0.002] [--set KEY=VALUE]
+     [--tilts 10,20,26.565,35] [--hold 6] [--resolution 11] [--timestep 0.002] [--integrator discrete]
+     [--set KEY=VALUE]
 For each plant, start x [m] (y = 0) and tilt θ [deg]: the object is placed and left to settle, then the four
 corners are commanded at once to the plane of a pure x-tilt θ (a_i = x_i tan θ, PROTOCOL.md §5; every corner stays
 in range up to atan(range / (m / 2)) = 45°) and held for --hold s of simulated time. No controller runs: this
 separates what the plant lets an object do (its carriages' speed, the sheet's give, the friction) from what a
-controller asks of it. The physics is the trials' default fidelity (the reference) unless --resolution and --timestep say otherwise.
+controller asks of it. The physics is the trials' default fidelity (the reference) unless --resolution and --timestep say
+otherwise, under the rig's integrator unless --integrator names another (`discrete` integrates the sheet's bending and
+its damping implicitly, Euler explicitly: the step-convergence probe of sim/README.md, Convergence).
 Prints, per row: when the carriages' own positions first came within 1° of the commanded tilt [s after the
 command] and their tilt at the end [deg]; the object's slide relative to the sheet under it (along x, + =
 downhill; the sheet itself moves as the corners do, carrying the object), when it first exceeded 2 cm and its
@@ -15,6 +18,7 @@ value at the end [cm]; and whether and when it fell off.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import sys
 
@@ -85,6 +89,8 @@ def main() -> int:
     parser.add_argument("--hold", type=float, default=6.0, help="how long each tilt is held [s, simulated], 0.1..30")
     parser.add_argument("--resolution", type=int, default=E.Experiment.resolution, help="fabric vertices per side")
     parser.add_argument("--timestep", type=float, default=E.Experiment.timestep_s, help="physics step [s]")
+    parser.add_argument("--integrator", choices=("Euler", "discrete"), default=None,
+                        help="MuJoCo's integrator (default: the rig's, sim/rig.py Solver)")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="set a plant parameter over each plant (a key of sim/plant.toml, in its range); repeatable")
     args = parser.parse_args()
@@ -110,9 +116,11 @@ def main() -> int:
                                timestep_s=args.timestep, plant_set=setting).rig()
         except ValueError as exc:
             parser.error(str(exc))
+        if args.integrator:
+            rig = dataclasses.replace(rig, solver=dataclasses.replace(rig.solver, integrator=args.integrator))
         model, data = M.load(rig)
         print(f"{plant}: carriages at most {rig.actuators.speed_m_per_s:.3f} m/s; fabric {args.resolution} x "
-              f"{args.resolution} at {args.timestep:g} s", flush=True)
+              f"{args.resolution} at {args.timestep:g} s, {rig.solver.integrator}", flush=True)
         for x0_m in args.starts:
             for tilt_deg in args.tilts:
                 head = f"  {args.object} from x = {x0_m:+.2f} m, tilt {tilt_deg:5.1f} deg:"
