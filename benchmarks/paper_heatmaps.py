@@ -6,7 +6,7 @@ Each run is `mantaray sim heatmap` with the paper's protocol (20 x 20 cells, 10 
 eps = 0.02 m) on the named plant (sim/plant.toml) at the named fidelity (sim/rig.py, FIDELITIES; default the
 reference) into out/heatmap/<run>/ (a plant other than polyester suffixes the run's name with _<plant>, a fidelity
 other than the fast mode, which the committed runs of docs/results.md were made in, with its mesh and step, such as
-_15x15_1ms); runs are resumable, so an interrupted script continues where it
+_15x15_0.5ms); runs are resumable, so an interrupted script continues where it
 stopped, and --trials 3 gives a quick map that a later run with the paper's 10 tops up. A run starts
 from the committed trials (docs/results/<run>.jsonl.gz) when out/ has none, and writes every trial back
 there (also when interrupted; --collect writes back a run still going), so a fresh clone continues the committed
