@@ -269,9 +269,51 @@ def open_tuning(path: Path, evidence: TuningEvidence, per_axis: bool = False, st
 
 
 def _score(records: list[dict]) -> tuple[tuple[float, ...], dict]:
-    """Targets missed under both success rules per trial, and the rates behind it."""
+    """Targets missed under both success rules per trial, the rates behind it, and each cell's [misses, trials]
+    (what replay_pruned() needs to score any rung of the sample again)."""
     rates = {k: float(np.mean([bool(r[k]) for r in records])) for k in ("success", "reached", "fell_off")}
-    return (2.0 - rates["success"] - rates["reached"],), {**rates, "trials": len(records), "passed": 0}
+    cells: dict[str, list[int]] = {}
+    for r in records:
+        kept = cells.setdefault(str(r["cell"]), [0, 0])
+        kept[0] += (not r["success"]) + (not r["reached"])
+        kept[1] += 1
+    return (2.0 - rates["success"] - rates["reached"],), {**rates, "trials": len(records), "passed": 0,
+                                                         "cells": cells}
+
+
+def replay_pruned(evidence: TuningEvidence, candidates: list) -> list[dict]:
+    """What a pruned search (evidence.prune) would have run of an unpruned search's candidates, taken in the same
+    order: each one's rungs scored again from the misses it had in each cell, and put to the pruned search's own
+    pruner. Exact where the sampler's draws do not depend on the scores (a random sampler): the pruned search would
+    have drawn the same candidates. Returns, per candidate: its number, the trials the pruned search would have run
+    on it, and its misses per trial where it would have completed (None where it would have been stopped)."""
+    import optuna
+
+    replay = optuna.create_study(direction="minimize", pruner=evidence.pruner(),
+                                 sampler=optuna.samplers.RandomSampler(seed=0))   # draws nothing that is used
+    out = []
+    for t in candidates:
+        if "cells" not in t.user_attrs["details"]:
+            raise ValueError(f"candidate #{t.number} has no misses per cell (scored before they were kept, or its "
+                             f"physics diverged): it cannot be replayed")
+        cells = t.user_attrs["details"]["cells"]
+        trial = replay.ask()
+        misses = n = 0
+        seen: set[int] = set()
+        for k in evidence.rungs():
+            for cell in F.stratified_sample(C.CELLS, evidence.cells_per_stratum, evidence.seed, first=k):
+                if cell not in seen and str(cell) in cells:
+                    seen.add(cell)
+                    misses, n = misses + cells[str(cell)][0], n + cells[str(cell)][1]
+            trial.report(misses / n, step=n)
+            if k < evidence.cells_per_stratum and trial.should_prune():
+                replay.tell(trial, state=optuna.trial.TrialState.PRUNED)
+                out.append({"number": t.number, "trials": n, "misses": None})
+                break
+        else:
+            replay.tell(trial, misses / n)
+            out.append({"number": t.number, "trials": n, "misses": misses / n})
+    return out
 
 
 class StartMismatch(ValueError):

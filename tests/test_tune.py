@@ -207,7 +207,7 @@ class _ByGain:
             good = abs(math.log(kp / 30.0)) < 0.4
             luck = (trial.seed % 100) / 100
             won = luck < (0.8 if good else 0.1)
-            out.append({"success": won, "reached": won, "fell_off": not won})
+            out.append({"cell": trial.cell, "success": won, "reached": won, "fell_off": not won})
         self.trials += len(jobs)
         return out
 
@@ -245,6 +245,31 @@ def test_a_pruned_search_stops_hopeless_candidates_early_and_keeps_the_good_one(
     assert report["pruned"] == len(pruned) and report["trials_run"] == pool.trials
 
 
+def test_replaying_an_unpruned_search_through_the_pruner_runs_what_the_pruned_search_runs(tmp_path):
+    """The same random draws, searched once pruned and once in full: the replay of the full one stops the same
+    candidates after the same trials, and scores the completed ones as the pruned search did."""
+    import optuna
+
+    from mantaray.sim import calibrate as C
+
+    runs = {}
+    for prune in (True, False):
+        evidence = T.TuningEvidence(controller="manhattan", plant="polyester", cells_per_stratum=4,
+                                    trials_per_cell=3, prune=prune)
+        study = T.open_tuning(tmp_path / f"prune{prune}.db", evidence)
+        study.sampler = optuna.samplers.RandomSampler(seed=5)
+        C.run_study(study, evidence, T.knobs("manhattan"), {}, 24, _ByGain())
+        runs[prune] = (evidence, C.finished(study))
+    evidence, pruned_search = runs[True]
+    replayed = T.replay_pruned(evidence, runs[False][1])
+    assert [r["number"] for r in replayed] == [t.number for t in pruned_search]
+    assert [r["trials"] for r in replayed] == [t.user_attrs["details"]["trials"] for t in pruned_search]
+    stopped = [t.state == optuna.trial.TrialState.PRUNED for t in pruned_search]
+    assert [r["misses"] is None for r in replayed] == stopped and 0 < sum(stopped) < 24
+    assert [r["misses"] for r in replayed if r["misses"] is not None] == pytest.approx(
+        [t.values[0] for t in pruned_search if t.state == optuna.trial.TrialState.COMPLETE])
+
+
 class _ByGainAndMesh(_ByGain):
     """As _ByGain, but on a 15 x 15 mesh the good gain is 45 deg/m: a cheaper fidelity that ranks candidates wrongly."""
 
@@ -254,7 +279,7 @@ class _ByGainAndMesh(_ByGain):
             kp = dict(experiment.settings)["pid.x.kp"]
             good = abs(math.log(kp / (45.0 if experiment.resolution == 15 else 30.0))) < 0.4
             won = (trial.seed % 100) / 100 < (0.8 if good else 0.1)
-            out.append({"success": won, "reached": won, "fell_off": not won})
+            out.append({"cell": trial.cell, "success": won, "reached": won, "fell_off": not won})
         self.trials += len(jobs)
         return out
 
