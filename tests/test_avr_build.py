@@ -105,6 +105,14 @@ def test_elf_is_built_and_fits_the_budget(build):
 
 
 @needs_toolchain
+def test_the_image_leaves_room_below_its_budgets(build):
+    """Room for what comes next: 1.5 KB of flash and 100 B of static RAM below the budgets (once 210 B and 10 B)."""
+    _, sizes = build
+    assert sizes["flash"]["budget"] - sizes["flash"]["used"] >= 1536, sizes["flash"]
+    assert sizes["ram"]["budget"] - sizes["ram"]["used"] >= 100, sizes["ram"]
+
+
+@needs_toolchain
 def test_rebuild_skips_up_to_date_objects(build):
     out, _ = build
     result = run_script("--out", str(out))
@@ -148,8 +156,11 @@ def test_repository_ini_flags_are_the_ones_used():
     result = run_script("--dry-run")
     assert result.returncode == 0, result.stderr
     cxx = [c for c in compile_commands(result.stdout) if c.startswith("avr-g++")]
-    assert cxx and all(f" {flag} " in f" {c} " for c in cxx for flag in build_flags)
+    linker = [flag for flag in build_flags if flag.startswith("-Wl,")]   # PlatformIO gives these to the link only
+    assert cxx and all(f" {flag} " in f" {c} " for c in cxx for flag in build_flags if flag not in linker)
     assert not any("-std=gnu++11" in c for c in cxx)  # build_unflags
+    link = [c for c in result.stdout.splitlines() if c.startswith("avr-g++") and " -c " not in f" {c} "]
+    assert len(link) == 1 and all(f" {flag} " in f" {link[0]} " for flag in linker)
 
 
 def test_unknown_board_and_missing_env_are_errors(tmp_path):

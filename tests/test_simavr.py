@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import re
+import signal
 import subprocess
 import sys
 import time
@@ -11,7 +12,7 @@ import pytest
 
 from conformance_result import assert_suite_passed
 from mantaray.host.controller_settings import ControllerSettings
-from mantaray.host.link import Link
+from mantaray.host.link import CommandRefused, Link
 from mantaray.host.simavr import DEFAULT_ELF, SimulatedUno
 from mantaray.host.transport import SerialTransport
 from mantaray.paths import REPO
@@ -96,6 +97,44 @@ def test_the_rig_build_drives_modelled_motors_to_their_setpoints_and_stops_them(
     assert stats["actuator_loops"]["max_cycles"] < LOOP_PERIOD_CYCLES          # the loops fit their period
     assert stats["main_loop_pass"]["max_cycles"] < RX_BUFFER_CYCLES            # no pass lets the RX buffer fill
     assert 0 < stats["never_used_ram_bytes"] < 2048                            # the stack never met the data
+
+
+def next_boot(link: Link, timeout_s: float = 5.0) -> m.Boot:
+    """The firmware's next boot message, within timeout_s [s, wall]."""
+    deadline = time.monotonic() + timeout_s
+    while (remaining := deadline - time.monotonic()) > 0:
+        if isinstance(msg := link.receive(remaining), m.Boot):
+            return msg
+    raise AssertionError(f"no boot message within {timeout_s} s")
+
+
+def test_an_emergency_stop_stays_latched_across_a_reset_until_the_host_sends_stop(elf):
+    """The reset pin (the reset button, or the host opening the Uno's port) restarts the MCU with its RAM kept: it
+    boots in estop and stays so until stop; a reset after the stop boots idle."""
+    with SimulatedUno(elf, bench=False, realtime=True) as uno:
+        link = Link(SerialTransport(uno.path), ack_timeout_s=1.0)
+        link.identify()
+        link.command(m.Configure(telemetry_period=0))
+        link.command(m.EmergencyStop())
+        probe = Probe(link)
+        assert m.State(probe().state) == m.State.ESTOP
+        uno.process.send_signal(signal.SIGUSR1)                      # the reset pin
+        assert next_boot(link).reset_cause == m.ResetCause.EXTERNAL
+        assert link.identify().clock == m.Clock.WALL                 # the rig again, not the bench
+        t = probe()
+        assert m.State(t.state) == m.State.ESTOP and t.faults == m.Faults.ESTOP
+        with pytest.raises(CommandRefused):                           # a jog is refused: nothing may move
+            link.command(m.Jog(actuator=0, position=0.02))
+        link.command(m.Stop())                                        # the host's clear: the one way out
+        link.command(m.Jog(actuator=0, position=0.02))
+        t = probe.until(lambda t: abs(t.measured[0] - 0.02) < 1e-3)
+        assert m.State(t.state) == m.State.IDLE and t.faults == 0
+        uno.process.send_signal(signal.SIGUSR1)
+        assert next_boot(link).reset_cause == m.ResetCause.EXTERNAL
+        link.identify()
+        t = probe()
+        assert m.State(t.state) == m.State.IDLE and t.faults == 0     # cleared latches stay cleared
+        link.close()
 
 
 def test_a_closed_loop_trial_runs_with_the_avr_binary_in_place_of_the_virtual_mcu(elf, tmp_path):

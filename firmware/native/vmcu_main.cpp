@@ -1,7 +1,8 @@
 // The virtual MCU: the firmware core as a Linux process speaking the protocol on a serial device path.
 //
 //   mantaray-vmcu --port /dev/ttyUSB0     open an existing serial device (or a pty slave someone made)
-//   mantaray-vmcu --pty /tmp/mantaray     create a pty and symlink its slave there for the host to open
+//   mantaray-vmcu --pty /tmp/mantaray     create a pty and symlink its slave there for the host to open (replacing
+//                                         only a link to a pty, such as one an earlier run left)
 //   --clock wall|sim                      wall clock (default) or the simulated clock set by sim_clock
 #include <errno.h>
 #include <fcntl.h>
@@ -10,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -40,9 +42,9 @@ bool make_raw(int fd) {
   return tcsetattr(fd, TCSANOW, &tio) == 0;
 }
 
-// Writes a whole buffer, waiting for room if the reader is slow (a pty holds a few KB).
+// Writes a whole buffer, waiting for room if the reader is slow (a pty holds a few KB); a stop ends the wait.
 bool write_all(int fd, const uint8_t* data, size_t len) {
-  while (len > 0) {
+  while (len > 0 && !g_stop) {
     const ssize_t n = write(fd, data, len);
     if (n > 0) {
       data += n;
@@ -55,6 +57,19 @@ bool write_all(int fd, const uint8_t* data, size_t len) {
     }
   }
   return true;
+}
+
+// Whether the pty's link may go at path: nothing is there, or a symlink to a pty (live, or left by a run that was
+// killed). Anything else there is the user's and stays: unlink() is never called on it.
+bool link_replaceable(const char* path) {
+  struct stat st;
+  if (lstat(path, &st) != 0) return true;  // nothing there (or out of reach: symlink() then says why)
+  if (!S_ISLNK(st.st_mode)) return false;
+  char target[64];
+  const ssize_t n = readlink(path, target, sizeof target - 1);
+  if (n < 0) return false;
+  target[n] = '\0';
+  return strncmp(target, "/dev/pts/", 9) == 0;
 }
 
 }  // namespace
@@ -107,6 +122,10 @@ int main(int argc, char** argv) {
       return 1;
     }
   } else {
+    if (!link_replaceable(link)) {
+      fprintf(stderr, "error: --pty %s: it exists and is not a link to a pty; not replacing it\n", link);
+      return 2;
+    }
     fd = posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK);
     if (fd < 0 || grantpt(fd) != 0 || unlockpt(fd) != 0) {
       fprintf(stderr, "error: cannot create a pty: %s\n", strerror(errno));
@@ -137,7 +156,7 @@ int main(int argc, char** argv) {
   uint8_t buf[256];
   while (!g_stop) {
     size_t n;
-    while ((n = hal.take_tx(buf, sizeof buf)) > 0) {
+    while (!g_stop && (n = hal.take_tx(buf, sizeof buf)) > 0) {
       if (!write_all(fd, buf, n)) {
         fprintf(stderr, "error: write to the serial device failed: %s\n", strerror(errno));
         status = 1;

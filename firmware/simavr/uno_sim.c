@@ -1,7 +1,9 @@
 // The Uno firmware's ELF in simavr, cycle-accurate, its UART bridged to a pty; probe timing and stack use on exit.
 //
 // Usage: mantaray-simavr FIRMWARE.elf [--bench] [--realtime] [--paint-from ADDR] [--stats FILE] [--run-for S]
-// Prints "pty PATH" on stdout once the serial port exists; the host talks to the firmware there.
+// Prints "pty PATH" on stdout once the serial port exists; the host talks to the firmware there. SIGUSR1 pulls the
+// reset pin, as a host opening the Uno's port does through DTR: the MCU restarts with MCUSR's EXTRF set and its
+// RAM as it was (the pty, the modelled motors and the probe statistics carry on).
 //   --bench       hold the bench pin low: external actuators and a simulated clock (protocol/rig.toml);
 //                 without it the pin is held high, as the board's pull-up leaves it on the rig
 //   --realtime    never let simulated time run ahead of the wall clock (simavr is faster than the Uno):
@@ -132,6 +134,16 @@ static avr_cycle_count_t step_motors(avr_t* avr, avr_cycle_count_t when, void* p
   return when + avr_usec_to_cycles(avr, MOTOR_STEP_US);
 }
 
+static void (*g_core_reset)(avr_t* avr);  // the ATmega328P's own reset hook
+
+// Every reset (the reset pin's, the watchdog's) clears simavr's cycle timers and PIN registers, though the motors
+// go on turning and the pull-up goes on holding the bench pin high: the motors' timer is set again, the pin put back.
+static void rig_reset(avr_t* avr) {
+  g_core_reset(avr);
+  avr_cycle_timer_register_usec(avr, MOTOR_STEP_US, step_motors, NULL);
+  avr->data[kBenchPin.data - 2] |= 1u << kBenchPin.bit;  // PINx lies two below PORTx
+}
+
 static void rig_attach(avr_t* avr) {
   static const char* names[2] = {"32<rig.twi_in", "8>rig.twi_out"};
   memset(&g_rig, 0, sizeof g_rig);
@@ -141,10 +153,13 @@ static void rig_attach(avr_t* avr) {
   avr_connect_irq(avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_OUTPUT), g_rig.irq + 0);
   avr_connect_irq(g_rig.irq + 1, avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_INPUT));
   avr_cycle_timer_register_usec(avr, MOTOR_STEP_US, step_motors, NULL);
+  g_core_reset = avr->reset;
+  avr->reset = rig_reset;
 }
 
 // ---------------------------------------------------------------- harness
 static volatile sig_atomic_t g_stop = 0;
+static volatile sig_atomic_t g_reset_pin = 0;  // SIGUSR1 came: pull the reset pin between two runs
 static avr_t* g_avr;
 static probe_t g_frame = {.name = "byte_handling"}, g_actuators = {.name = "actuator_loops"},
                g_pass = {.name = "main_loop_pass"};
@@ -152,6 +167,11 @@ static probe_t g_frame = {.name = "byte_handling"}, g_actuators = {.name = "actu
 static void on_signal(int sig) {
   (void)sig;
   g_stop = 1;
+}
+
+static void on_reset_signal(int sig) {
+  (void)sig;
+  g_reset_pin = 1;
 }
 
 static void record(probe_t* p, avr_cycle_count_t width) {
@@ -261,6 +281,7 @@ int main(int argc, char** argv) {
 
   signal(SIGTERM, on_signal);
   signal(SIGINT, on_signal);
+  signal(SIGUSR1, on_reset_signal);
   const avr_cycle_count_t limit = run_for_s >= 0 ? (avr_cycle_count_t)(run_for_s * g_avr->frequency) : 0;
   int state = cpu_Running;
   struct timespec t0;
@@ -268,6 +289,11 @@ int main(int argc, char** argv) {
   const avr_cycle_count_t pace_every = g_avr->frequency / 1000;  // check the wall clock every 1 ms simulated
   avr_cycle_count_t next_pace = pace_every;
   while (!g_stop && state != cpu_Done && state != cpu_Crashed) {
+    if (g_reset_pin) {
+      g_reset_pin = 0;
+      avr_reset(g_avr);  // registers and I/O to their reset values, the program counter to 0; RAM stays
+      avr_regbit_set(g_avr, g_avr->reset_flags.extrf);
+    }
     state = avr_run(g_avr);
     if (limit && g_avr->cycle >= limit) break;
     if (realtime && g_avr->cycle >= next_pace) {

@@ -5,7 +5,8 @@
 // and polls the core (deadman, periodic telemetry). The controller runs inside the core on each
 // object_position frame. A pass that hangs for 250 ms trips the watchdog: its interrupt cuts every
 // motor and leaves a mark in RAM, and the MCU resets 250 ms later; the next boot reports reset_cause
-// watchdog, also behind the stock bootloader, which clears MCUSR.
+// watchdog, also behind the stock bootloader, which clears MCUSR. Each pass also copies the emergency
+// stop's latch to RAM that survives a reset, so after any reset but a power-on the board boots in estop.
 #include <Arduino.h>        // setup()/loop() contract, Serial, pin helpers
 #include <avr/interrupt.h>  // ISR, cli, sei
 #include <avr/io.h>         // MCUSR, WDTCSR
@@ -14,8 +15,8 @@
 #include "board.h"         // board::hal, board::begin, board::actuators_tick
 #include "board_config.h"  // probe pins
 #include "firmware.h"      // mr::Firmware
-#include "protocol_gen.h"  // mr::proto::ResetCause
-#include "uno_io.h"        // board::on_watchdog_timeout, board::Probe
+#include "protocol_gen.h"  // mr::proto::faults
+#include "uno_io.h"        // board::on_watchdog_timeout, board::keep_estop, board::Probe
 
 namespace {
 
@@ -34,6 +35,8 @@ void save_reset_flags() {
 
 // Written by the watchdog's interrupt, read at the next boot (board::reset_cause): it survives the reset.
 mr::board::ResetMark g_reset_mark __attribute__((section(".noinit")));
+// The emergency stop's latch as of the last pass, read at the next boot (board::estop_survived).
+mr::board::ResetMark g_estop_mark __attribute__((section(".noinit")));
 
 // Interrupt-then-reset mode, 250 ms: the first timeout runs the interrupt, the second resets.
 void watchdog_start() {
@@ -62,7 +65,8 @@ void setup() {
   g_probe_frame.begin(mr::board::kProbeControllerPin);
   g_probe_loop.begin(mr::board::kProbeLoopPin);
   mr::board::begin();
-  g_firmware.boot(mr::board::reset_cause(g_reset_flags, g_reset_mark));
+  const bool estop = mr::board::estop_survived(g_reset_flags, g_estop_mark);
+  g_firmware.boot(mr::board::reset_cause(g_reset_flags, g_reset_mark), estop);
   watchdog_start();
 }
 
@@ -77,4 +81,5 @@ void loop() {
   }
   mr::board::actuators_tick();
   g_firmware.poll();
+  mr::board::keep_estop(g_estop_mark, g_firmware.supervisor().faults() & mr::proto::faults::kEstop);
 }

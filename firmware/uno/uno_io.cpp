@@ -72,18 +72,29 @@ void UnoActuatorIo::motors_off() { all_pwm_off(); }
 
 void on_watchdog_timeout(ResetMark& survives) {
   all_pwm_off();
-  survives.mark = kWatchdogMark;
-  survives.check = static_cast<uint16_t>(~kWatchdogMark);
+  survives.set(kWatchdogMark);
 }
 
 proto::ResetCause reset_cause(uint8_t mcusr, ResetMark& survives) {
-  const bool marked = survives.mark == kWatchdogMark && survives.check == static_cast<uint16_t>(~kWatchdogMark);
-  survives.mark = survives.check = 0;
+  const bool marked = survives.holds(kWatchdogMark);
+  survives.clear();
   if (mcusr & (1u << 0)) return proto::ResetCause::kPowerOn;   // PORF
   if (marked || (mcusr & (1u << 3))) return proto::ResetCause::kWatchdog;   // WDRF
   if (mcusr & (1u << 2)) return proto::ResetCause::kBrownOut;  // BORF
   if (mcusr & (1u << 1)) return proto::ResetCause::kExternal;  // EXTRF
   return proto::ResetCause::kUnknown;
+}
+
+void keep_estop(ResetMark& survives, bool latched) {
+  if (latched) {
+    survives.set(kEstopMark);
+  } else {
+    survives.clear();
+  }
+}
+
+bool estop_survived(uint8_t mcusr, const ResetMark& survives) {
+  return !(mcusr & (1u << 0)) && survives.holds(kEstopMark);  // PORF: RAM is random after a power-on
 }
 
 void Probe::begin(uint8_t pin) {

@@ -29,13 +29,21 @@ struct Probe {
   void toggle() const { *port ^= mask; }
 };
 
-// What survives a watchdog reset in memory the C runtime leaves alone (.noinit): the interrupt writes a mark
-// and its complement, so a reset that follows it is known for one even behind a bootloader that clears MCUSR.
+// What survives a reset in memory the C runtime leaves alone (.noinit): a mark and its complement, so a reset
+// that follows it is known even behind a bootloader that clears MCUSR. Every reset but a power-on keeps RAM.
 struct ResetMark {
   uint16_t mark;
   uint16_t check;  // ~mark: random RAM at power-on passes both with odds of 1 in 2^32
+
+  void set(uint16_t word) {
+    mark = word;
+    check = static_cast<uint16_t>(~word);
+  }
+  bool holds(uint16_t word) const { return mark == word && check == static_cast<uint16_t>(~word); }
+  void clear() { mark = check = 0; }
 };
 constexpr uint16_t kWatchdogMark = 0x57D6;
+constexpr uint16_t kEstopMark = 0xE5A7;
 
 // The watchdog's interrupt, one timeout before it resets the MCU: every motor off, and the mark written.
 void on_watchdog_timeout(ResetMark& survives);
@@ -44,6 +52,12 @@ void on_watchdog_timeout(ResetMark& survives);
 // WDRF 3) and the mark, which it clears. Power-on wins (RAM is random then), then the watchdog (by flag or
 // mark), brown-out and external; nothing known (the stock bootloader cleared the flags) is unknown.
 proto::ResetCause reset_cause(uint8_t mcusr, ResetMark& survives);
+
+// The emergency stop across a reset: the main loop copies the core's latch into its mark on every pass, and the
+// next boot starts latched if the mark holds, after any reset but a power-on (reset pin or the host opening the
+// port, watchdog, brown-out).
+void keep_estop(ResetMark& survives, bool latched);
+bool estop_survived(uint8_t mcusr, const ResetMark& survives);
 
 }  // namespace board
 }  // namespace mr

@@ -26,6 +26,7 @@ class ActuatorBank {
  public:
   static constexpr uint8_t kReadFailuresForFault = 3;  // consecutive failed reads of one encoder
 
+  // config is kept by reference, not copied (the Uno's RAM): it must outlive the bank, as the board's constant does.
   ActuatorBank(ActuatorIo& io, const ActuatorConfig& config, uint32_t period_us)
       : io_(io), config_(config), period_us_(period_us) {}
 
@@ -48,7 +49,7 @@ class ActuatorBank {
 
  private:
   ActuatorIo& io_;
-  const ActuatorConfig config_;
+  const ActuatorConfig& config_;
   const uint32_t period_us_;
   ActuatorLoop loop_[kActuatorCount];
   float setpoint_m_[kActuatorCount] = {};

@@ -27,7 +27,8 @@ Msg decoded(const uint8_t* payload) {
 
 }  // namespace
 
-void Firmware::boot(proto::ResetCause cause) {
+void Firmware::boot(proto::ResetCause cause, bool estop) {
+  if (estop) supervisor_.emergency_stop();
   apply_outputs();
   proto::Boot msg{static_cast<uint8_t>(cause)};
   uint8_t payload[proto::Boot::kSize];

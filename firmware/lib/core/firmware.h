@@ -19,8 +19,9 @@ class Firmware {
   // The board it runs on: every clock reading, byte out and actuator command goes through it.
   explicit Firmware(Hal& hal) : hal_(hal) {}
 
-  // Announces the start to the host (boot message) and levels the surface.
-  void boot(proto::ResetCause cause);
+  // Announces the start to the host (boot message) and levels the surface. estop: the board kept an emergency stop
+  // latched across its reset; it holds (actuator power cut) until the host's stop, as one sent now would.
+  void boot(proto::ResetCause cause, bool estop = false);
   void rx_byte(uint8_t byte);
   void poll();
 

@@ -35,8 +35,9 @@ class Pid {
   float integral_ = 0.0f;  // [deg]
 };
 
-// Clamps x to [low, high]; NaN becomes 0.
-float clamp(float x, float low, float high);
+// Clamps x to [low, high]; NaN becomes 0. Never inlined: one copy serves its many callers, which on the Uno
+// saves half a kilobyte of flash for a call's few cycles.
+float clamp(float x, float low, float high) __attribute__((noinline));
 // Clamps x to [-limit, limit]; NaN becomes 0.
 inline float clamp_symmetric(float x, float limit) { return clamp(x, -limit, limit); }
 

@@ -224,6 +224,22 @@ TEST_CASE("the reset cause: power-on first, then the watchdog, brown-out and ext
   CHECK(mr::board::reset_cause(0x02, half) == ResetCause::kExternal);
 }
 
+TEST_CASE("the emergency stop's mark survives every reset but a power-on, and only while latched") {
+  mr::board::ResetMark survives{0x1234, 0x0000};  // whatever RAM held
+  CHECK_FALSE(mr::board::estop_survived(0, survives));
+  mr::board::keep_estop(survives, true);
+  CHECK(mr::board::estop_survived(0x02, survives));  // reset pin, or the host opening the port
+  CHECK(mr::board::estop_survived(0x08, survives));  // watchdog
+  CHECK(mr::board::estop_survived(0x04, survives));  // brown-out
+  CHECK(mr::board::estop_survived(0, survives));     // behind the stock bootloader, which clears MCUSR
+  CHECK_FALSE(mr::board::estop_survived(0x01, survives));  // power-on: RAM is random
+  mr::board::keep_estop(survives, false);                  // the host's stop cleared it
+  CHECK_FALSE(mr::board::estop_survived(0x02, survives));
+  mr::board::ResetMark watchdog{0, 0};
+  mr::board::on_watchdog_timeout(watchdog);
+  CHECK_FALSE(mr::board::estop_survived(0x08, watchdog));  // the watchdog's mark is not the emergency stop's
+}
+
 TEST_CASE("soft limits: a setpoint beyond the travel stops the carriage at the limit") {
   Stack s;
   const float beyond[4] = {0.4f, -0.4f, 0.3f, -0.3f};

@@ -504,6 +504,26 @@ TEST_CASE("firmware: emergency stop cuts actuator power: the measured positions 
   CHECK(t.faults == 0);
 }
 
+TEST_CASE("firmware: an emergency stop the board kept across its reset holds from boot until stop") {
+  mr::NativeHal hal(proto::Clock::kSimulated);
+  mr::Firmware fw(hal);
+  hal.actuators_command({0.1f, 0.0f, 0.0f, 0.0f});  // where the carriage stood when the board reset
+  fw.boot(proto::ResetCause::kExternal, true);
+  CHECK(fw.supervisor().state() == State::kEstop);
+  CHECK(fw.supervisor().faults() == proto::faults::kEstop);
+  CHECK_FALSE(fw.supervisor().actuator_power());
+  float measured[mr::kActuatorCount];
+  hal.actuators_measured(measured);
+  CHECK(measured[0] == 0.1f);  // the levelled command did not reach the unpowered actuator
+  uint8_t wire[proto::kMaxWire];
+  const uint8_t n = mr::frame_encode(proto::Stop::kId, 1, nullptr, 0, wire);
+  for (uint8_t i = 0; i < n; ++i) fw.rx_byte(wire[i]);
+  CHECK(fw.supervisor().state() == State::kIdle);  // the host's stop clears it, as any emergency stop
+  CHECK(fw.supervisor().faults() == 0);
+  hal.actuators_measured(measured);
+  CHECK(measured[0] == 0.0f);  // power back: level
+}
+
 TEST_CASE("firmware: corrupted frames get no reply and are counted in telemetry") {
   Host h;
   h.take();
