@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 import math
-import signal
+import shlex
 import sys
 import time
 
@@ -12,7 +12,7 @@ from mantaray.outputs import IMAGE_SUFFIXES, OutputError, writable_dir, writable
 from mantaray.protocol import messages as m
 from mantaray.protocol.codec import bounds_text, choices
 
-from .runlog import RunLog
+from .ports import PortError, check_port
 
 
 def parse_gains(text: str) -> tuple[float, float, float, float]:
@@ -85,180 +85,130 @@ def _hsv_range(text: str):
 
 
 # ------------------------------------------------------------------------------------------- rig
-def targets_along(args, t_s: float) -> tuple[float, float]:
-    """The target at run time t_s [s]: fixed, or moving round the circle of --path circle."""
-    if args.path is None:
-        return args.target
-    cx, cy = args.target
-    a = 2 * math.pi * t_s / args.period
-    return cx + args.radius * math.cos(a), cy + args.radius * math.sin(a)
-
-
 def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
-    """Run the closed loop on the rig: camera -> tracker -> firmware, until success, timeout or Ctrl-C.
+    """Run the closed loop on the rig: camera -> tracker -> firmware, until success, timeout, a key or Ctrl-C.
 
     The Uno runs the controller; this host tracks the object (ArUco marker, or a colour blob with --blob)
     and sends its position at the camera's rate. It stops when the object has stayed within the tolerance
     for --hold seconds (a fixed target), at --timeout, or on Ctrl-C, which levels the surface and stops the
-    motors. Every run writes one log (configuration, every position and telemetry frame) and the paper's
-    Fig. 3-style plot."""
-    from mantaray.plots import path_phase_figure
+    motors. Run from a terminal, the key s stops the same way, and e or space is the emergency stop: the
+    actuators' power is cut and stays cut (latched) until `mantaray stop` (keys are read only from a terminal in
+    the foreground: under nohup, from a pipe or in the background the run goes on without them). A board that
+    goes away (unplugged, reset) is waited for up to --reconnect-timeout and set up again. Every run writes a log
+    of its own (configuration, every position and telemetry frame) and the paper's Fig. 3-style plot."""
+    from .rig_run import EXIT_STATUS, RigRun, StopRules
+    from .runlog import RunLog
 
-    from .link import LinkError
-    from .loop import STOPPED_REACHED, ClosedLoop, Frame, Tolerance
-    from .session import BoardLost, RigSession, Setup, check_port, controller_axes
+    course = _course(args, parser)
+    setup, source, tracker, out = _rig_inputs(args, parser, course.at(0.0))
+    log = RunLog.new(out, "rig", {"args": {k: v for k, v in vars(args).items() if k != "func"}})
+    run = RigRun(args.port, setup, source, tracker, log, course,
+                 StopRules(args.tolerance, args.hold, args.timeout, _half_module_m()),
+                 reconnect_timeout_s=args.reconnect_timeout)
+    outcome = run.run()
+    figure = run.figure(log.path.with_suffix(".png"))
+    print(f"{outcome}: {len(run.loop.t_s)} frames; log {log.path}; figure {figure}")
+    return EXIT_STATUS.get(outcome, 1)
+
+
+def _course(args: argparse.Namespace, parser: argparse.ArgumentParser):
+    """--target, or the circle of --path circle about it, which must lie on the fabric."""
+    from .rig_run import Course
+
+    if args.path is None:
+        return Course(args.target)
+    if not (args.radius > 0 and args.period > 0):
+        parser.error("--path circle needs --radius > 0 and --period > 0")
+    (cx, cy), (hx, hy) = args.target, _half_module_m()
+    if abs(cx) + args.radius > hx or abs(cy) + args.radius > hy:
+        parser.error(f"the circle of radius {args.radius:g} m about {cx:g},{cy:g} is not on the fabric "
+                     f"(|x| <= {hx:g} m, |y| <= {hy:g} m)")
+    return Course(args.target, args.radius, args.period)
+
+
+def _rig_inputs(args: argparse.Namespace, parser: argparse.ArgumentParser, target_m: tuple[float, float]):
+    """(the firmware's Setup, the camera, the tracker, the output folder), each checked before any work: a mistake
+    in any of them is a usage error in one line."""
+    from .session import Setup
     from .tracker import Calibration, FrameSource, Tracker
 
-    if args.path is not None:
-        if not (args.radius > 0 and args.period > 0):
-            parser.error("--path circle needs --radius > 0 and --period > 0")
-        cx, cy = args.target
-        hx, hy = _half_module_m()
-        if abs(cx) + args.radius > hx or abs(cy) + args.radius > hy:
-            parser.error(f"the circle of radius {args.radius:g} m about {cx:g},{cy:g} is not on the fabric "
-                         f"(|x| <= {hx:g} m, |y| <= {hy:g} m)")
     if args.marker_height >= args.camera_height:
         parser.error(f"--marker-height ({args.marker_height:g} m) must be below the camera (--camera-height "
                      f"{args.camera_height:g} m)")
     settings = controller_settings(parser, args)
     try:
-        check_port(args.port)
         configure = settings.configure(m.Configure(tolerance=args.tolerance, noise_amplitude=args.alpha,
                                                    telemetry_period=0)).check()
-        gains = {} if args.gains is None else {
-            axis: m.ConfigurePid(axis, *args.gains).check().as_dict() for axis in controller_axes(args.controller)}
-        for fields in gains.values():
-            del fields["axis"]
-        gains = settings.gains(gains)
+        gains = settings.gains(_gains(args))
         calibration = Calibration.load(args.calibration) if args.calibration else None
         source = FrameSource(args.camera)            # a camera that does not open is the user's to fix, before work
+        check_port(args.port)
         out = writable_dir(args.out)
-    except (ValueError, OSError, KeyError, LinkError) as exc:
+    except (ValueError, OSError, KeyError) as exc:
         parser.error(str(exc))
     tracker = Tracker(marker_height_m=args.marker_height, camera_height_m=args.camera_height,
                       calibration=calibration, blob=args.blob)
-    stamp = time.strftime("%Y%m%d-%H%M%S")
-    log = RunLog(out / f"rig-{stamp}.jsonl", {"args": {k: v for k, v in vars(args).items() if k != "func"}})
-    events = []
+    return Setup(configure, gains, target_m, settings.commands()), source, tracker, out
 
-    def report(text: str) -> None:
-        events.append(text)
-        log.write("event", {"text": text})
-        print(f"mantaray rig: {text}", file=sys.stderr)
 
-    interrupted = False
+def _gains(args: argparse.Namespace) -> dict:
+    """--gains for each PID the controller runs (axis -> configure_pid fields, schema-checked); {} without it."""
+    from .session import controller_axes
 
-    def on_sigint(signum, frame):
-        """The first Ctrl-C ends the loop after this frame; a second one (say, while reconnecting) at once."""
-        nonlocal interrupted
-        interrupted = True
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+    if args.gains is None:
+        return {}
+    gains = {axis: m.ConfigurePid(axis, *args.gains).check().as_dict() for axis in controller_axes(args.controller)}
+    for fields in gains.values():
+        del fields["axis"]
+    return gains
 
-    previous = signal.getsignal(signal.SIGINT)
-    outcome = "timeout"
-    half_m = _half_module_m()
-    session = RigSession(args.port, Setup(configure, gains, targets_along(args, 0.0), settings.commands()), report=report,
-                         reconnect_timeout_s=args.reconnect_timeout)
-    loop = ClosedLoop(session.position)
-    seen = {}                                        # the tracker's last observation, for the log
 
-    def frames():
-        """The camera's frames, tracked, until Ctrl-C, the end of the video, the timeout or the object off the fabric."""
-        nonlocal outcome
-        t0 = wall0 = None
-        while not interrupted:
-            grabbed = source.read()
-            if grabbed is None:
-                outcome = "camera stopped"
-                return
-            image, capture_s = grabbed
-            if t0 is None:
-                t0, wall0 = capture_s, time.monotonic()
-            run_s = capture_s - t0
-            if source.is_file:                       # a recording plays at its own pace, as a camera would
-                time.sleep(max(0.0, run_s - (time.monotonic() - wall0)))
-            if run_s > args.timeout:
-                return
-            obs = seen["obs"] = tracker.observe(image, capture_s)
-            if obs.visible and (abs(obs.xy_m[0]) > 2 * half_m[0] or abs(obs.xy_m[1]) > 2 * half_m[1]):
-                report(f"the object was seen at {obs.xy_m[0]:+.3f},{obs.xy_m[1]:+.3f} m, off the fabric by more "
-                       f"than half a module")    # what the firmware refuses
-                outcome = "fell off"
-                return
-            target = targets_along(args, run_s)
-            judged = obs.xy_m if args.path is None and obs.visible else None   # what the camera sees: the rig knows
-            yield Frame(run_s, obs.xy_m if obs.visible else None, target, judged_xy_m=judged,   # nothing better
-                        deliver=(lambda target=target: move_target(target)) if args.path is not None else None)
+# ------------------------------------------------------------------------------------------- the board's state
+def _board_state(telemetry: m.Telemetry) -> str:
+    """The state telemetry reports, with its faults: IDLE, FAULT (position_timeout), ESTOP."""
+    faults = [f.name.lower() for f in m.Faults if telemetry.faults & f and f != m.Faults.ESTOP]   # its own state
+    return m.State(telemetry.state).name + (f" ({', '.join(faults)})" if faults else "")
 
-    def move_target(target) -> bool:
-        """Before a frame along a path: the target moves on (the run goes on)."""
-        session.set_target(*target)
-        return True
 
-    def record(frame, telemetry) -> None:
-        obs = seen["obs"]
-        log.write("position", {"frame": loop.frame, "capture_s": round(frame.capture_s, 6), "status": obs.status,
-                               "xy_m": obs.xy_m, "corners_seen": list(obs.corners_seen)})
-        if telemetry is not None:
-            log.write("telemetry", {k: (list(v) if isinstance(v, tuple) else int(v) if isinstance(v, int)
-                                        else v) for k, v in vars(telemetry).items()})
+def _leaving(telemetry: m.Telemetry, port: str) -> str:
+    """The board's state, for a command that only an idle board takes, and the command that leaves it."""
+    stop = f"`mantaray stop --port {shlex.quote(port)}`"
+    state = m.State(telemetry.state)
+    if state == m.State.FAULT:
+        return f"the board is in {_board_state(telemetry)}: clear it with {stop} first (it levels the surface)"
+    if state == m.State.ESTOP:
+        return f"the board is in {_board_state(telemetry)}, the emergency stop (latched): clear it with {stop} first"
+    if state in (m.State.RUNNING, m.State.REACHED):
+        return f"the board is {_board_state(telemetry)}: a run is going on (mantaray rig?); end it, or {stop}, first"
+    return f"the board is {_board_state(telemetry)}"
 
-    try:
-        session.open()
-        log.write("identify", {k: v if isinstance(v, float) else int(v) for k, v in vars(session.identity).items()})
-        signal.signal(signal.SIGINT, on_sigint)
-        session.start()
-        stopped = loop.run(frames(), Tolerance(args.tolerance, args.hold), stop_when_reached=True, on_frame=record)
-        if stopped == STOPPED_REACHED:
-            outcome = "reached"
-        if interrupted:
-            outcome = "interrupted"
-    except KeyboardInterrupt:                        # while connecting, or a second Ctrl-C
-        outcome = "interrupted"
-    except LinkError as exc:                         # what the session's retries could not absorb: the run ends
-        report(f"the run ended: {exc}")
-        outcome = "board lost" if isinstance(exc, BoardLost) else "refused"
-    finally:
-        signal.signal(signal.SIGINT, previous)
-        try:
-            if session.link is not None and outcome == "board lost":
-                session.link.command(m.Stop())       # once: the session's recoveries are spent
-            elif session.link is not None:
-                session.stop()                       # level the surface, controller off
-        except LinkError as exc:
-            report(f"could not level the surface and stop ({exc}): the firmware's deadman stops it")
-        finally:
-            session.close()
-            source.close()
-            log.write("end", {"outcome": outcome})
-            log.close()
-    rows = loop.arrays()
-    xy = rows["measured_xy_m"]
-    targets = rows["target_m"] if args.path is not None and len(xy) else [args.target]   # a path, or one target
-    figure = path_phase_figure(xy, rows["tilt_deg"], xy[0] if len(xy) and math.isfinite(xy[0][0]) else None,
-                               targets, args.tolerance, f"rig: {outcome}", (configure.module_x, configure.module_y),
-                               configure.tilt_limit, out / f"rig-{stamp}.png", t_s=rows["t_s"] if len(xy) else None,
-                               command_m=rows["command_m"] if len(xy) else None)
-    print(f"{outcome}: {len(xy)} frames; log {log.path}; figure {figure}")
-    return {"reached": 0, "interrupted": 130}.get(outcome, 1)
+
+def _refused(name: str, session, refused) -> int:
+    """A command the board refused, in one line (exit 2); refused for the board's state (bad_state), which state
+    and how to leave it."""
+    text = str(refused)
+    if refused.code == m.ErrorCode.BAD_STATE:
+        text = f"{refused.command.NAME} refused: {_leaving(session.probe(), session.port)}"
+    print(f"mantaray {name}: {text}", file=sys.stderr)
+    return 2
 
 
 # ------------------------------------------------------------------------------------------- monitor
-def _connect(args: argparse.Namespace, parser: argparse.ArgumentParser):
-    """The firmware on --port, identified and announced; a path that is no serial device is a usage error."""
-    from .link import LinkError
-    from .session import check_port, connect
+def _attach(args: argparse.Namespace, parser: argparse.ArgumentParser, reconnect_timeout_s: float = 30.0):
+    """A session on the firmware at --port that sets nothing up on it, identified and announced; a path that is no
+    serial device is a usage error."""
+    from .session import RigSession
 
     try:
         check_port(args.port)
-    except LinkError as exc:
+    except PortError as exc:
         parser.error(str(exc))
-    link, identity = connect(args.port)
+    session = RigSession(args.port, reconnect_timeout_s=reconnect_timeout_s,
+                         report=lambda text: print(f"mantaray {args.command}: {text}", file=sys.stderr)).attach()
+    identity = session.identity
     print(f"{args.port}: protocol {identity.protocol_version}, firmware {identity.firmware_major}."
           f"{identity.firmware_minor}.{identity.firmware_patch}, clock {m.Clock(identity.clock).name.lower()}")
-    for text in link.rig_differences:
-        print(f"warning: {text}", file=sys.stderr)
-    return link
+    return session
 
 
 def _checked(parser: argparse.ArgumentParser, command: m.Message) -> m.Message:
@@ -270,32 +220,76 @@ def _checked(parser: argparse.ArgumentParser, command: m.Message) -> m.Message:
 
 
 def cmd_monitor(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
-    """Show the firmware's telemetry live, decoded, without changing anything on it (Ctrl-C ends)."""
-    link = _connect(args, parser)
+    """Show the firmware's telemetry live, decoded, without changing anything on it, until --count, --seconds or
+    Ctrl-C. A board that goes away (unplugged, or reset by a replug) is waited for as mantaray rig waits for it, up
+    to --reconnect-timeout, and the monitor goes on by itself once it is back: what happens to the board at the
+    bench is what one watches it for. A board that stays away ends it (exit 1)."""
+    from .session import BoardLost
+
+    session = _attach(args, parser, args.reconnect_timeout)
     shown = 0
     try:
         deadline = time.monotonic() + args.seconds if args.seconds else math.inf
         while time.monotonic() < deadline and (not args.count or shown < args.count):
-            msg = link.receive(0.2)
+            msg = session.receive(0.2)
             if isinstance(msg, m.Telemetry):
-                faults = ",".join(f.name.lower() for f in m.Faults if msg.faults & f) or "-"
-                print(f"{msg.time / 1000:9.3f} s  {m.State(msg.state).name.lower():8s} faults {faults:16s} "
-                      f"tilt {msg.tilt_zx:+6.2f} {msg.tilt_zy:+6.2f} deg  cmd "
-                      + " ".join(f"{a:+.4f}" for a in msg.command) + "  meas "
-                      + " ".join(f"{a:+.4f}" for a in msg.measured)
-                      + f"  frame {msg.position_frame} age {msg.position_age} ms  errors {msg.crc_errors}/"
-                        f"{msg.frame_errors}", flush=True)
+                print(_telemetry_line(msg), flush=True)
                 shown += 1
             elif isinstance(msg, m.Boot):
                 print(f"firmware reset ({m.ResetCause(msg.reset_cause).name.lower()})", flush=True)
     except KeyboardInterrupt:
         pass
+    except BoardLost as exc:
+        print(f"mantaray monitor: board lost: {exc}", file=sys.stderr)
+        return 1
     finally:
-        link.close()
+        session.close()
     if shown == 0:
         print("no telemetry arrived: the firmware's telemetry_period is 0 (set by a host), or nothing is running",
               file=sys.stderr)
     return 0
+
+
+def _telemetry_line(msg: m.Telemetry) -> str:
+    faults = ",".join(f.name.lower() for f in m.Faults if msg.faults & f) or "-"
+    return (f"{msg.time / 1000:9.3f} s  {m.State(msg.state).name.lower():8s} faults {faults:16s} "
+            f"tilt {msg.tilt_zx:+6.2f} {msg.tilt_zy:+6.2f} deg  cmd " + " ".join(f"{a:+.4f}" for a in msg.command)
+            + "  meas " + " ".join(f"{a:+.4f}" for a in msg.measured)
+            + f"  frame {msg.position_frame} age {msg.position_age} ms  errors {msg.crc_errors}/{msg.frame_errors}")
+
+
+# ------------------------------------------------------------------------------------------- stop, estop
+def cmd_stop(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """Stop the board: it levels the surface and stops driving (the controller off, a jog ended) and stays usable,
+    idle, for jog, zero or a run. Also how a fault or an emergency stop is cleared. The s key of mantaray rig sends
+    the same, through the same session. Prints the state the board reports afterwards (exit 1 if not IDLE)."""
+    return _stop(args, parser, emergency=False)
+
+
+def cmd_estop(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """Emergency stop: the board cuts its actuators' power at once, whatever it is doing, and stays so (ESTOP,
+    latched) until `mantaray stop`. The e and space keys of mantaray rig send the same, through the same session.
+    Opening an Uno's port resets the board first (unless another program holds the port open); the motor supply's
+    own emergency-stop button needs no software at all. Prints the state the board reports afterwards (exit 1 if
+    not ESTOP)."""
+    return _stop(args, parser, emergency=True)
+
+
+def _stop(args: argparse.Namespace, parser: argparse.ArgumentParser, emergency: bool) -> int:
+    """stop or emergency_stop through a session attached to the board, and the state it reports afterwards."""
+    session = _attach(args, parser)
+    try:
+        if emergency:
+            session.emergency_stop()
+        else:
+            session.stop()
+        telemetry = session.probe()
+    finally:
+        session.close()
+    state = m.State(telemetry.state)
+    clear = f": `mantaray stop --port {shlex.quote(args.port)}` clears it" if state == m.State.ESTOP else ""
+    print(f"{args.port}: the board is in {_board_state(telemetry)}{clear}")
+    return 0 if state == (m.State.ESTOP if emergency else m.State.IDLE) else 1
 
 
 # ------------------------------------------------------------------------------------------- jog, zero
@@ -304,54 +298,56 @@ JOG_SETTLE_M = 1e-3     # [m] a carriage this close to its jog target has arrive
 
 def cmd_jog(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """Move one carriage to a position (+ lowers its corner) and report where its encoder says it got to, to check
-    each motor's and encoder's direction and the pulley. The firmware must be idle; the carriage then holds there
-    until `stop` (which levels the surface) or `start`."""
-    from .link import CommandRefused
-
+    each motor's and encoder's direction and the pulley. The firmware must be idle (`mantaray stop` makes it so);
+    the carriage then holds there until `stop` (which levels the surface) or `start`."""
     from mantaray.protocol.rig import ACTUATOR_RANGE_M
+
+    from .link import CommandRefused
 
     jog = _checked(parser, m.Jog(actuator=args.actuator, position=args.position))
     if abs(args.position) > ACTUATOR_RANGE_M:      # the firmware refuses it too, but only once connected
         parser.error(f"--position must be within ±{ACTUATOR_RANGE_M:g} m (the actuators' travel, protocol/rig.toml), "
                      f"got {args.position:g}")
-    link = _connect(args, parser)
+    session = _attach(args, parser)
     try:
-        link.command(jog)
-        t0, frame = time.monotonic(), 0
-        while True:       # telemetry on demand: a not-visible frame steps nothing and feeds no deadman
-            frame += 1
-            t = link.position(m.ObjectPosition(frame=frame, capture_time=frame * 50_000,
-                                               flags=m.PositionFlags.NOT_VISIBLE))
-            arrived = abs(t.measured[args.actuator] - args.position) < JOG_SETTLE_M
-            if arrived or time.monotonic() - t0 > args.wait:
-                break
-            time.sleep(0.05)
+        session.command(jog)
+        measured, waited_s, arrived = _settle(session, args.actuator, args.position, args.wait)
     except CommandRefused as exc:
-        print(f"mantaray jog: {exc}", file=sys.stderr)
-        return 2
+        return _refused("jog", session, exc)
     finally:
-        link.close()
-    measured = t.measured[args.actuator]
+        session.close()
     print(f"actuator {args.actuator}: commanded {args.position:+.4f} m, measured {measured:+.4f} m "
-          + (f"after {time.monotonic() - t0:.1f} s" if arrived else f"after {args.wait:g} s: NOT ARRIVED "
+          + (f"after {waited_s:.1f} s" if arrived else f"after {args.wait:g} s: NOT ARRIVED "
              f"(check the motor's and the encoder's direction, and the wiring)"))
     return 0 if arrived else 1
 
 
+def _settle(session, actuator: int, position_m: float, wait_s: float) -> tuple[float, float, bool]:
+    """The carriage's encoder read until it is within JOG_SETTLE_M of position_m [m] or wait_s [s] have passed:
+    (measured [m], waited [s], arrived)."""
+    t0 = time.monotonic()
+    while True:       # telemetry on demand: a not-visible frame steps nothing and feeds no deadman
+        measured = session.probe().measured[actuator]
+        waited_s = time.monotonic() - t0
+        arrived = abs(measured - position_m) < JOG_SETTLE_M
+        if arrived or waited_s > wait_s:
+            return measured, waited_s, arrived
+        time.sleep(0.05)
+
+
 def cmd_zero(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """Take the present position of the named carriages as 0 m, the reference height z0 (homing), after jogging
-    them there. The firmware must be idle."""
+    them there. The firmware must be idle (`mantaray stop` makes it so)."""
     from .link import CommandRefused
 
     zero = _checked(parser, m.Zero(actuators=sum(1 << i for i in args.actuators)))
-    link = _connect(args, parser)
+    session = _attach(args, parser)
     try:
-        link.command(zero)
+        session.command(zero)
     except CommandRefused as exc:
-        print(f"mantaray zero: {exc}", file=sys.stderr)
-        return 2
+        return _refused("zero", session, exc)
     finally:
-        link.close()
+        session.close()
     print(f"actuators {', '.join(map(str, args.actuators))}: their present positions are now 0 m")
     return 0
 
@@ -380,7 +376,11 @@ def cmd_markers(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
         out = writable_file(args.out, (".pdf", ".png"))
     except OutputError as exc:
         parser.error(str(exc))
-    count = write_marker_sheet(out, args.dpi)
+    try:
+        count = write_marker_sheet(out, args.dpi)
+    except OutputError as exc:            # the write itself failed (a full disk): nothing is left at out
+        print(f"mantaray markers: {exc}", file=sys.stderr)
+        return 2
     print(f"{out}: {count} markers on A4 at true size" + (f", {args.dpi} dpi" if out.suffix == ".png" else ""))
     return 0
 
@@ -399,37 +399,15 @@ def _squares(text: str) -> tuple[int, int]:
 def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """Calibrate the camera with a ChArUco board: --board-out writes the board to print; then show it to the
     camera from several angles (or give a video of that) and the intrinsics go to --out (.npz)."""
-    import cv2
+    from .charuco import calibrate_from_frames, charuco_board
 
-    from .charuco import PRINT_DPI, board_image, calibrate_from_frames, charuco_board
-
-    if not 0 < args.marker_mm < args.square_mm:
-        parser.error(f"the marker ({args.marker_mm:g} mm) must be smaller than its square ({args.square_mm:g} mm) "
-                     f"and larger than 0")
-    try:
-        if args.board_out:
-            writable_file(args.board_out, IMAGE_SUFFIXES)
-        if args.camera is not None:
-            writable_file(args.out, (".npz",))
-    except OutputError as exc:
-        parser.error(str(exc))
+    _check_calibrate_arguments(args, parser)
     board = charuco_board(args.squares, args.square_mm, args.marker_mm)
     if args.board_out:
-        if not cv2.imwrite(args.board_out, board_image(board, args.squares, args.square_mm)):
-            parser.error(f"could not write {args.board_out!r} (an image: .png, .jpg, .tif ...)")
-        print(f"{args.board_out}: {args.squares[0]} x {args.squares[1]} squares of {args.square_mm} mm at "
-              f"{PRINT_DPI} dpi")
-        if args.camera is None:
-            return 0
+        _write_board(args, parser, board)
     if args.camera is None:
-        parser.error("give --camera (index or video file) to calibrate, or --board-out to print the board")
-    from .tracker import FrameSource
-
-    source = FrameSource(args.camera)
-    frames = []
-    while len(frames) < args.frames and (grabbed := source.read()) is not None:
-        frames.append(grabbed[0])
-    source.close()
+        return 0
+    frames = _read_frames(args.camera, args.frames)
     try:
         calibration, rms, used = calibrate_from_frames(board, frames)
     except ValueError as exc:
@@ -442,12 +420,62 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
     return 0
 
 
+def _check_calibrate_arguments(args: argparse.Namespace, parser: argparse.ArgumentParser) -> None:
+    """The board's sizes, something to do, and the outputs writable, before any work."""
+    if not 0 < args.marker_mm < args.square_mm:
+        parser.error(f"the marker ({args.marker_mm:g} mm) must be smaller than its square ({args.square_mm:g} mm) "
+                     f"and larger than 0")
+    if args.camera is None and not args.board_out:
+        parser.error("give --camera (index or video file) to calibrate, or --board-out to print the board")
+    try:
+        if args.board_out:
+            writable_file(args.board_out, IMAGE_SUFFIXES)
+        if args.camera is not None:
+            writable_file(args.out, (".npz",))
+    except OutputError as exc:
+        parser.error(str(exc))
+
+
+def _write_board(args: argparse.Namespace, parser: argparse.ArgumentParser, board) -> None:
+    import cv2
+
+    from .charuco import PRINT_DPI, board_image
+
+    if not cv2.imwrite(args.board_out, board_image(board, args.squares, args.square_mm)):
+        parser.error(f"could not write {args.board_out!r} (an image: .png, .jpg, .tif ...)")
+    print(f"{args.board_out}: {args.squares[0]} x {args.squares[1]} squares of {args.square_mm} mm at {PRINT_DPI} dpi")
+
+
+def _read_frames(camera: str, most: int) -> list:
+    """Up to `most` frames from the camera or video (fewer when a video ends first)."""
+    from .tracker import FrameSource
+
+    source = FrameSource(camera)
+    frames = []
+    while len(frames) < most and (grabbed := source.read()) is not None:
+        frames.append(grabbed[0])
+    source.close()
+    return frames
+
+
 # ------------------------------------------------------------------------------------------- parsers
+def add_port_argument(parser: argparse.ArgumentParser) -> None:
+    """--port, as every command that talks to a board takes it (checked by ports.check_port before any work)."""
+    parser.add_argument("--port", required=True, default=argparse.SUPPRESS, help="serial device path of the firmware: a board (/dev/ttyACM0, "
+                        "/dev/ttyUSB0), or the /dev/pts/N that mantaray vmcu or simavr prints")
+
+
+def add_reconnect_argument(parser: argparse.ArgumentParser, what: str) -> None:
+    """--reconnect-timeout: rig and monitor wait the same way for a board that went away."""
+    parser.add_argument("--reconnect-timeout", type=number(0, above=True), default=30.0,
+                        help=f"how long to wait for a board that went away (unplugged, reset) before {what} ends [s]")
+
+
 def add_parsers(sub: argparse._SubParsersAction) -> None:
     fmt = argparse.ArgumentDefaultsHelpFormatter
     rig = sub.add_parser("rig", help="the closed loop on the real rig: camera, tracker, Uno",
                          description=cmd_rig.__doc__, formatter_class=fmt)
-    rig.add_argument("--port", required=True, help="serial device of the Uno (e.g. /dev/ttyACM0)")
+    add_port_argument(rig)
     rig.add_argument("--camera", required=True, help="camera index (0, 1, ...) or a video file")
     rig.add_argument("--target", type=_xy, required=True, metavar="X,Y",
                      help="target [m] in the fabric frame (with --path: the circle's centre); write "
@@ -461,8 +489,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     rig.add_argument("--gains", type=parse_gains, metavar="KP,KI,KD[,ILIM]",
                      help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
     rig.add_argument("--hold", type=number(0), default=1.0, help="seconds within ε that count as reached")
-    rig.add_argument("--reconnect-timeout", type=number(0, above=True), default=30.0,
-                     help="how long to wait for a board that went away (unplugged, reset) before the run ends [s]")
+    add_reconnect_argument(rig, "the run")
     rig.add_argument("--timeout", type=number(0, above=True), default=60.0, help="give up after this many seconds (paper: 60)")
     rig.add_argument("--marker-height", type=number(0), default=0.0,
                      help="height [m] of the object's marker (or blob) above the corner markers' plane")
@@ -476,15 +503,26 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
     monitor = sub.add_parser("monitor", help="live decoded telemetry from a firmware", description=cmd_monitor.__doc__,
                              formatter_class=fmt)
-    monitor.add_argument("--port", required=True, help="serial device path of the firmware")
+    add_port_argument(monitor)
+    add_reconnect_argument(monitor, "the monitor")
     monitor.add_argument("--count", type=number(0, integer=True), default=0, help="stop after this many telemetry frames (0: never)")
     monitor.add_argument("--seconds", type=number(0), default=0.0, help="stop after this long (0: never)")
     monitor.set_defaults(func=lambda args: cmd_monitor(args, monitor))
 
+    stop = sub.add_parser("stop", help="stop the board: level, stop driving, stay usable (clears a fault or an e-stop)",
+                          description=cmd_stop.__doc__, formatter_class=fmt)
+    add_port_argument(stop)
+    stop.set_defaults(func=lambda args: cmd_stop(args, stop))
+
+    estop = sub.add_parser("estop", help="emergency stop: the actuators' power cut, latched until mantaray stop",
+                           description=cmd_estop.__doc__, formatter_class=fmt)
+    add_port_argument(estop)
+    estop.set_defaults(func=lambda args: cmd_estop(args, estop))
+
     actuator = next(f for f in m.Jog.FIELDS if f.name == "actuator")
     jog = sub.add_parser("jog", help="move one carriage and read its encoder (bring-up)", description=cmd_jog.__doc__,
                          formatter_class=fmt)
-    jog.add_argument("--port", required=True, help="serial device path of the firmware")
+    add_port_argument(jog)
     jog.add_argument("--actuator", type=int, required=True, choices=range(int(actuator.min), int(actuator.max) + 1),
                      help="which carriage (PROTOCOL.md, geometry: 0 -x-y, 1 +x-y, 2 -x+y, 3 +x+y)")
     jog.add_argument("--position", type=float, required=True, help="where to [m], + lowers the corner")
@@ -493,7 +531,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
     zero = sub.add_parser("zero", help="take the carriages' present positions as 0 m (homing)",
                           description=cmd_zero.__doc__, formatter_class=fmt)
-    zero.add_argument("--port", required=True, help="serial device path of the firmware")
+    add_port_argument(zero)
     zero.add_argument("--actuators", type=_actuators, default="all", metavar="I,J|all", help="which carriages")
     zero.set_defaults(func=lambda args: cmd_zero(args, zero))
 

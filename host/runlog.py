@@ -1,6 +1,7 @@
 """The log of a rig run (what `mantaray rig` writes): one JSON-lines file, written as it runs and read back for fitting."""
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import time
@@ -11,13 +12,27 @@ import numpy as np
 
 
 class RunLog:
-    """One JSON-lines file per run: the configuration first, then every position frame and telemetry frame."""
+    """One JSON-lines file per run: the configuration first, then every position frame and telemetry frame.
 
-    def __init__(self, path: Path, header: dict) -> None:
+    RunLog(path, header) writes that file over; RunLog.new(folder, prefix, header) names a file of its own."""
+
+    def __init__(self, path: Path, header: dict, *, exclusive: bool = False) -> None:
+        """exclusive: the file must not exist yet (FileExistsError), and this process is the one that created it."""
         path.parent.mkdir(parents=True, exist_ok=True)
         self.path = path
-        self._file = open(path, "w")
+        self._file = open(path, "x" if exclusive else "w")
         self.write("config", header)
+
+    @classmethod
+    def new(cls, folder: Path, prefix: str, header: dict) -> RunLog:
+        """A log in a file no other run has: folder/PREFIX-YYYYmmdd-HHMMSS.jsonl, or -2, -3 ... after the stamp when
+        runs started in the same second (created exclusively, so two at once never share one)."""
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        for n in itertools.count(1):
+            try:
+                return cls(folder / f"{prefix}-{stamp}{f'-{n}' if n > 1 else ''}.jsonl", header, exclusive=True)
+            except FileExistsError:
+                continue
 
     def write(self, kind: str, record: dict) -> None:
         self._file.write(json.dumps({"kind": kind, "t": round(time.monotonic(), 6), **record}) + "\n")

@@ -4,12 +4,12 @@ The rig command talks through this rather than a bare Link. Opening an Uno's USB
 so the session waits for its boot message before the handshake (a pty has no such reset). When the board
 resets (a boot message mid-session) or the link fails (unplugged, or no answers), the session reopens
 the port as soon as it is back, identifies the firmware again, and re-sends the configuration, the gains
-and the target, and `start` if it was running: the user restarts nothing.
+and the target, and `start` if it was running: the user restarts nothing. A session that only attached (monitor,
+jog, zero, stop, estop) reconnects the same way and sends nothing again: it set nothing up.
 """
 from __future__ import annotations
 
 import os
-import stat
 import time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -23,6 +23,7 @@ class EmergencyStopLatched(RuntimeError):
     """A start while the session's emergency stop is latched: the user clears it with stop() first."""
 
 
+PROBE_STEP_US = 50_000       # [us] capture time between two probes' not-visible frames (any step forward will do)
 MISSES_BEFORE_RECONNECT = 3  # camera frames in a row without telemetry that mean a lost board, not a lost frame
 SETUP_ATTEMPTS = 5           # times a session sets a board up (reconnecting between tries) before it counts as lost
 
@@ -46,32 +47,6 @@ def controller_axes(controller: str) -> tuple[m.Axis, ...]:
 CONTROLLER_AXES = {m.Controller.MANHATTAN: (m.Axis.X, m.Axis.Y), m.Controller.EUCLIDEAN: (m.Axis.RADIAL,),
                    m.Controller.SCHEDULED: (m.Axis.X, m.Axis.Y), m.Controller.CASCADE: (m.Axis.VX, m.Axis.VY)}
 PAPER_AXES = (m.Axis.X, m.Axis.Y, m.Axis.RADIAL)   # the PIDs whose gains the paper gives (a plant may read them per rad)
-
-
-def check_port(port: str) -> None:
-    """Raise LinkError at once when the path names no serial device: missing, a regular file, a folder.
-
-    The commands check their --port with it before anything else, where waiting would only be silence; a
-    reconnection (connect) waits for the port to come back instead."""
-    if not port.startswith("/"):            # COM3 and the like: only opening them tells
-        return
-    try:
-        mode = os.stat(port).st_mode
-    except FileNotFoundError:
-        raise LinkError(f"{port}: no such device; is the board plugged in? Serial devices here: "
-                        f"{', '.join(_serial_devices()) or 'none'}") from None
-    except OSError as exc:
-        raise LinkError(f"{port}: cannot look at it ({exc.strerror})") from None
-    if not stat.S_ISCHR(mode):
-        kind = "a folder" if stat.S_ISDIR(mode) else "a regular file" if stat.S_ISREG(mode) else "not a device"
-        raise LinkError(f"{port} is {kind}, not a serial device (a board is /dev/ttyACM0 or /dev/ttyUSB0, the "
-                        f"virtual MCU prints its /dev/pts/N)")
-
-
-def _serial_devices() -> list[str]:
-    from serial.tools import list_ports
-
-    return sorted(p.device for p in list_ports.comports())
 
 
 def connect(port: str, *, reset_wait_s: float | None = None, timeout_s: float = 30.0, ack_timeout_s: float = 0.2,
@@ -161,9 +136,11 @@ class RigSession:
         self._open_transport = open_transport
         self.link: Link | None = None
         self.identity: m.IdentifyReply | None = None
+        self.sets_up = True          # open() set the board up, and a reconnection sets it up again; attach(): not
         self.running = False
         self.estopped = False        # emergency_stop() latched it; only stop() clears it
         self._setup_pending = False  # a (re)connection during the emergency stop sent only the stop
+        self._last_position: m.ObjectPosition | None = None   # the last frame sent: a probe's comes after it
         self.reconnects = 0          # times the link was reopened
         self.lost_telemetry = 0      # camera frames whose telemetry never came (skipped)
         self._missed_in_a_row = 0
@@ -173,8 +150,17 @@ class RigSession:
     # ----------------------------------------------------------------------------------- connection
     def open(self) -> RigSession:
         """Connects and sets the board up; raises BoardLost when it cannot (IncompatibleFirmware at once)."""
+        self.sets_up = True
         self._connect(self.reconnect_timeout_s)
         self._set_up("connected")
+        return self
+
+    def attach(self) -> RigSession:
+        """Connects without setting the board up: changes nothing on it (a monitor may watch a running rig). Its
+        reconnections send nothing again; raises BoardLost when the board does not answer (IncompatibleFirmware at
+        once)."""
+        self.sets_up = False
+        self._connect(self.reconnect_timeout_s)
         return self
 
     def _connect(self, timeout_s: float) -> None:
@@ -241,10 +227,13 @@ class RigSession:
         self.reconnects += 1
 
     def _recover(self, why: str) -> None:
-        """Reopen the link and re-apply the setup."""
+        """Reopen the link and re-apply the setup (an attached session: nothing to re-apply)."""
         self.report(f"{why}: reconnecting to {self.port}")
         self._reconnect()
-        self._restore("reconnected")
+        if self.sets_up:
+            self._restore("reconnected")
+        else:
+            self.report(f"reconnected to {self.port}")
 
     def _restore(self, why: str) -> None:
         self._set_up(why)
@@ -287,10 +276,31 @@ class RigSession:
         self.estopped = True
         self.command(m.EmergencyStop())
 
+    def receive(self, timeout_s: float) -> m.Message | None:
+        """The board's next message within timeout_s [s], None when none came; a port that fails (unplugged) is
+        reconnected as a command's would be, within reconnect_timeout_s, else BoardLost."""
+        try:
+            return self.link.receive(timeout_s)
+        except OSError as exc:
+            self._recover(f"the port failed ({exc})")
+            return None
+
+    def probe(self) -> m.Telemetry:
+        """The board's telemetry now, asked for with a not-visible position after the last frame sent: it steps
+        nothing and feeds no deadman. LinkError when none answers."""
+        last = self._last_position or m.ObjectPosition(frame=0, capture_time=0)
+        self._last_position = m.ObjectPosition(frame=(last.frame + 1) & 0xFFFF,
+                                               capture_time=(last.capture_time + PROBE_STEP_US) & 0xFFFFFFFF,
+                                               flags=m.PositionFlags.NOT_VISIBLE)
+        return self.link.position(self._last_position)
+
     def position(self, msg: m.ObjectPosition) -> m.Telemetry | None:
         """One camera frame; None when it got no answer. A lost answer is skipped (the next frame carries fresh
         news, and a reconnect would level the surface and reset the PIDs); a port that fails, or
-        MISSES_BEFORE_RECONNECT answers lost in a row, mean a lost board: the session reconnects and restores."""
+        MISSES_BEFORE_RECONNECT answers lost in a row, mean a lost board: the session reconnects and restores. A board
+        that reports an emergency stop this session did not send (`mantaray estop` from another terminal) has it
+        latched here too: no restore or end of run undoes it, only stop()."""
+        self._last_position = msg
         try:
             telemetry = self.link.position(msg)
         except CommandRefused:
@@ -306,9 +316,12 @@ class RigSession:
                 self._recover(f"{MISSES_BEFORE_RECONNECT} camera frames in a row got no telemetry ({exc})")
             return None
         self._missed_in_a_row = 0
-        if self.link.resets != self._resets_seen:    # the board restarted (its boot came in): idle, defaults
+        if self.link.resets != self._resets_seen and self.sets_up:   # the board restarted (its boot came in)
             self.report("the firmware reset")
             self._restore("after the reset")          # BoardLost when the board cannot be set up again
+        elif m.State(telemetry.state) == m.State.ESTOP and not self.estopped:
+            self.running, self.estopped = False, True
+            self.report("the board reports an emergency stop this host did not send: latched; stop() clears it")
         return telemetry
 
     def close(self) -> None:

@@ -50,10 +50,16 @@ def cmd_vmcu(args: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_conformance(args: argparse.Namespace) -> int:
+def cmd_conformance(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """Run the protocol conformance suite against a firmware on a serial device path."""
     import pytest
 
+    from mantaray.host.ports import PortError, check_port
+
+    try:
+        check_port(args.port)
+    except PortError as exc:
+        parser.error(str(exc))
     pytest_args = ["--pyargs", "mantaray.protocol.conformance", "-p", "mantaray.protocol.conformance.plugin",
                    "-q", "-p", "no:cacheprovider"]
     if args.port:
@@ -80,7 +86,7 @@ def build_parser() -> argparse.ArgumentParser:
     conf.add_argument("--port", help="serial device path of the firmware (board, simulator or pty)")
     conf.add_argument("pytest_args", nargs=argparse.REMAINDER,
                       help="after --, options for pytest (e.g. -- -m 'not wall_timing' -k deadman)")
-    conf.set_defaults(func=cmd_conformance)
+    conf.set_defaults(func=lambda args: cmd_conformance(args, conf))
 
     from mantaray.host.cli import add_parsers as add_rig
     from mantaray.sim.cli import add_parser as add_sim

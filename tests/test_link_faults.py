@@ -171,6 +171,62 @@ def test_an_emergency_stop_stays_latched_across_a_reset_until_the_user_clears_it
     assert m.State(t.state) == m.State.RUNNING and t.tilt_zx < 0 and t.tilt_zy > 0   # the target came back
 
 
+def test_an_emergency_stop_another_host_sent_is_latched_in_the_session_too():
+    """`mantaray estop` from another terminal: the running session sees ESTOP in its telemetry and keeps it latched
+    (no start, none restored after a reset, no stop at the end of a run) until its own stop()."""
+    from mantaray.host.session import EmergencyStopLatched
+    from mantaray.protocol.framing import encode_frame
+
+    events = []
+    session, transport = _running_in_process_session(events)
+    transport.write(encode_frame(m.EmergencyStop(), (session.link.seq + 100) & 0xFF))   # the other host's frame
+    t = session.position(m.ObjectPosition(frame=2, capture_time=84000, x=0.0, y=0.0))
+    assert m.State(t.state) == m.State.ESTOP and session.estopped and not session.running
+    assert any("emergency stop this host did not send" in e for e in events)
+    with pytest.raises(EmergencyStopLatched):
+        session.start()
+    transport.power_cycle()                          # a reset does not undo it either
+    session.position(m.ObjectPosition(frame=3, capture_time=168000, x=0.0, y=0.0))
+    assert m.State(session.probe().state) == m.State.ESTOP
+    session.stop()
+    assert m.State(session.probe().state) == m.State.IDLE
+
+
+def test_an_attached_session_reconnects_and_sends_nothing_again():
+    """What monitor, jog, zero, stop and estop use: a reconnection identifies the board and leaves it as it is."""
+    from mantaray.host.transport import InProcessTransport
+
+    board = InProcessTransport(simulated_clock=False)
+    owner = RigSession("in-process", Setup(m.Configure(telemetry_period=0, deadman=60_000), target=(0.1, 0.0)),
+                       reset_wait_s=0.0, open_transport=lambda port: board).open()   # no deadman in this test's time
+    owner.start()
+    events, opened = [], []
+
+    class Unplugging:
+        """The board's port, whose next read fails as an unplugged one's does once `unplugged` is set."""
+        unplugged = False
+
+        def write(self, data: bytes) -> None:
+            board.write(data)
+
+        def read(self, timeout_s: float) -> bytes:
+            if Unplugging.unplugged:
+                Unplugging.unplugged = False
+                raise OSError("device disconnected")
+            return board.read(timeout_s)
+
+        def close(self) -> None:
+            pass
+
+    watcher = RigSession("in-process", reset_wait_s=0.0, report=events.append,
+                         open_transport=lambda port: opened.append(port) or Unplugging()).attach()
+    Unplugging.unplugged = True
+    watcher.receive(0.1)
+    assert watcher.reconnects == 1 and len(opened) == 2
+    assert events[-1] == "reconnected to in-process" and watcher.restores == 0
+    assert m.State(watcher.probe().state) == m.State.RUNNING      # still the owner's run, with its setup
+
+
 def test_a_lost_telemetry_frame_is_skipped_not_a_reconnect():
     """At 0.3 % of bytes dropped about one round trip in six loses its answer: each is skipped (a reconnect
     levels the surface and resets the PIDs); only frames lost three in a row mean a lost board."""

@@ -1,11 +1,16 @@
-"""The rig's commands without a rig: the closed loop on a recorded video against the virtual MCU, monitor, markers, calibrate."""
+"""The rig's commands without a rig: the loop on a recorded video against the virtual MCU, and the bench's tools.
+
+The loop with its keys and logs; monitor, stop and estop, jog and zero, markers, calibrate."""
 from __future__ import annotations
 
+import fcntl
 import json
+import os
 import re
 import signal
 import subprocess
 import sys
+import termios
 import time
 
 import cv2
@@ -277,3 +282,158 @@ def test_calibrate_recovers_a_cameras_intrinsics_from_charuco_views(tmp_path):
     found = np.load(out)["camera_matrix"]
     assert found[0, 0] == pytest.approx(k[0, 0], rel=0.03) and found[1, 1] == pytest.approx(k[1, 1], rel=0.03)
     assert found[0, 2] == pytest.approx(k[0, 2], abs=15) and found[1, 2] == pytest.approx(k[1, 2], abs=15)
+
+
+def _board_state(port: str) -> m.Telemetry:
+    """The board's telemetry, asked for as another host would: identify, then a not-visible frame."""
+    link = Link(SerialTransport(port))
+    link.identify()
+    t = link.position(m.ObjectPosition(frame=1, capture_time=1, flags=m.PositionFlags.NOT_VISIBLE))
+    link.close()
+    return t
+
+
+def test_estop_latches_the_emergency_stop_and_stop_clears_it():
+    with VirtualMcu(clock="wall") as vmcu:
+        estop = _mantaray("estop", "--port", vmcu.path)
+        assert estop.returncode == 0 and f"the board is in ESTOP: `mantaray stop --port {vmcu.path}` clears it" \
+            in estop.stdout, estop.stderr
+        t = _board_state(vmcu.path)
+        assert m.State(t.state) == m.State.ESTOP and t.faults & m.Faults.ESTOP and t.command == (0.0,) * 4
+        assert m.State(_board_state(vmcu.path).state) == m.State.ESTOP             # latched: a new host sees it
+        stop = _mantaray("stop", "--port", vmcu.path)
+        assert stop.returncode == 0 and "the board is in IDLE" in stop.stdout, stop.stderr
+        t = _board_state(vmcu.path)
+    assert m.State(t.state) == m.State.IDLE and t.faults == 0
+
+
+def _faulted(port: str) -> None:
+    """A deadman fault: the board started, and no camera frame after it for longer than the deadman (0.5 s)."""
+    link = Link(SerialTransport(port))
+    link.identify()
+    link.command(m.SetTarget(x=0.1, y=0.0))
+    link.command(m.Start())
+    time.sleep(0.8)
+    t = link.position(m.ObjectPosition(frame=1, capture_time=1, flags=m.PositionFlags.NOT_VISIBLE))
+    link.close()
+    assert m.State(t.state) == m.State.FAULT and t.faults == m.Faults.POSITION_TIMEOUT
+
+
+def test_jog_and_zero_on_a_board_not_idle_name_its_state_and_the_command_that_leaves_it():
+    with VirtualMcu(clock="wall") as vmcu:
+        _faulted(vmcu.path)
+        leave = f"clear it with `mantaray stop --port {vmcu.path}` first"
+        zero = _mantaray("zero", "--port", vmcu.path)
+        assert zero.returncode == 2 and f"mantaray zero: zero refused: the board is in FAULT (position_timeout): " \
+            f"{leave}" in zero.stderr, zero.stderr
+        jog = _mantaray("jog", "--port", vmcu.path, "--actuator", "1", "--position", "0.01")
+        assert jog.returncode == 2 and "the board is in FAULT (position_timeout)" in jog.stderr, jog.stderr
+        assert _mantaray("stop", "--port", vmcu.path).returncode == 0                 # as the message says
+        assert _mantaray("estop", "--port", vmcu.path).returncode == 0
+        jog = _mantaray("jog", "--port", vmcu.path, "--actuator", "1", "--position", "0.01")
+        assert jog.returncode == 2 and f"jog refused: the board is in ESTOP, the emergency stop (latched): {leave}" \
+            in jog.stderr, jog.stderr
+        assert _mantaray("stop", "--port", vmcu.path).returncode == 0
+        jog = _mantaray("jog", "--port", vmcu.path, "--actuator", "1", "--position", "0.01")
+        assert jog.returncode == 0 and "measured +0.0100 m" in jog.stdout, jog.stderr
+    assert "Traceback" not in zero.stderr + jog.stderr
+
+
+def _rig_on_a_terminal(port: str, video: str, out) -> tuple[subprocess.Popen, int]:
+    """mantaray rig with a pty as its controlling terminal and stdin, as from a shell: (process, the pty's master)."""
+    master, slave = os.openpty()
+
+    def terminal() -> None:
+        os.setsid()
+        fcntl.ioctl(0, termios.TIOCSCTTY, 0)
+
+    rig = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "rig", "--port", port, "--camera", video,
+                            "--target=-0.2,0.2", "--out", str(out)], cwd=REPO, stdin=slave, stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True, preexec_fn=terminal)
+    os.close(slave)
+    return rig, master
+
+
+@pytest.mark.parametrize("key, outcome, state", [(b"e", "emergency stop", m.State.ESTOP),
+                                                 (b" ", "emergency stop", m.State.ESTOP),
+                                                 (b"s", "stopped", m.State.IDLE)])
+def test_a_key_during_the_run_stops_it_or_latches_the_emergency_stop(still_video, tmp_path, key, outcome, state):
+    with VirtualMcu(clock="wall") as vmcu:
+        rig, master = _rig_on_a_terminal(vmcu.path, still_video, tmp_path)
+        before = termios.tcgetattr(master)
+        time.sleep(4)
+        os.write(master, key)
+        out, err = rig.communicate(timeout=60)
+        after = termios.tcgetattr(master)
+        os.close(master)
+        t = _board_state(vmcu.path)
+    assert rig.returncode == 1 and out.startswith(outcome), err
+    assert "keys: s stops" in err and _log(tmp_path)[-1]["outcome"] == outcome
+    assert m.State(t.state) == state and t.command == (0.0,) * 4                 # levelled, or its power cut
+    assert after[3] == before[3]                                                 # the terminal echoes again
+
+
+def test_without_a_terminal_the_rig_reads_no_keys_and_runs_on(still_video, tmp_path):
+    """Under nohup or from a pipe stdin is no terminal: what comes in on it is no key."""
+    with VirtualMcu(clock="wall") as vmcu:
+        proc = _mantaray("rig", "--port", vmcu.path, "--camera", still_video, "--target=-0.1,0.1", "--timeout", "1",
+                         "--out", str(tmp_path), input="e s e\n")
+    assert proc.returncode == 1 and proc.stdout.startswith("timeout"), proc.stderr
+    assert "keys:" not in proc.stderr
+
+
+def test_two_runs_started_in_the_same_second_write_a_log_each(still_video, tmp_path):
+    """The clock says the same second to both (faked in each process); each log is whole and reads back."""
+    from mantaray.host.runlog import read_run_log
+
+    code = ("import sys, time\n"
+            "real = time.strftime\n"
+            "time.strftime = lambda f, *t: '20260101-120000' if f == '%Y%m%d-%H%M%S' else real(f, *t)\n"
+            "from mantaray.cli import main\n"
+            "sys.exit(main(sys.argv[1:]))\n")
+    with VirtualMcu(clock="wall") as one, VirtualMcu(clock="wall") as two:
+        runs = [subprocess.Popen([sys.executable, "-c", code, "rig", "--port", vmcu.path, "--camera", still_video,
+                                  "--target=-0.1,0.1", "--timeout", "1", "--out", str(tmp_path)], cwd=REPO,
+                                 stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                for vmcu in (one, two)]
+        done = [run.communicate(timeout=120) for run in runs]
+    assert [run.returncode for run in runs] == [1, 1], done
+    logs = sorted(tmp_path.glob("rig-*.jsonl"))
+    assert [p.name for p in logs] == ["rig-20260101-120000-2.jsonl", "rig-20260101-120000.jsonl"]
+    assert all(len(read_run_log(p).t_s) >= 8 for p in logs)
+    assert {p.with_suffix(".png").exists() for p in logs} == {True}
+    assert sorted(out.split("; log ")[1].split(";")[0] for out, _ in done) == [str(p) for p in logs]
+
+
+def test_monitor_waits_for_a_board_that_goes_away_as_the_rig_does(tmp_path):
+    """Unplugged and plugged back in: the monitor reconnects and goes on (it exited at once)."""
+    port = str(tmp_path / "ttyUNO")
+    vmcu = VirtualMcu(clock="wall", path=port)
+    monitor = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "monitor", "--port", port, "--count", "30",
+                                "--reconnect-timeout", "10"], cwd=REPO, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    monitor.stdout.readline()                      # identified
+    for _ in range(5):                             # telemetry comes
+        assert "idle" in monitor.stdout.readline()
+    vmcu.close()
+    time.sleep(0.5)
+    with VirtualMcu(clock="wall", path=port):
+        out, err = monitor.communicate(timeout=60)
+    assert monitor.returncode == 0 and "Traceback" not in err, err
+    assert f"reconnecting to {port}" in err and f"reconnected to {port}" in err
+    assert len([line for line in out.splitlines() if " s  idle" in line]) == 30 - 5
+
+
+def test_monitor_ends_in_one_line_when_the_board_does_not_come_back(tmp_path):
+    port = str(tmp_path / "ttyUNO")
+    with VirtualMcu(clock="wall", path=port) as vmcu:
+        monitor = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "monitor", "--port", port,
+                                    "--reconnect-timeout", "1"], cwd=REPO, stdout=subprocess.PIPE,
+                                   stderr=subprocess.PIPE, text=True)
+        monitor.stdout.readline()
+        monitor.stdout.readline()
+        vmcu.close()
+        t0 = time.monotonic()
+        out, err = monitor.communicate(timeout=60)
+    assert monitor.returncode == 1 and "mantaray monitor: board lost: " in err and "Traceback" not in err, err
+    assert time.monotonic() - t0 < 15
