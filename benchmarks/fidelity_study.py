@@ -39,6 +39,7 @@ GATES = {   # name: (plant, candidate, finer), in the order they run
     "polyester_15x15_0.5ms": ("polyester", "15:0.0005", "15:0.001"),   # is 1 ms converged for this plant too?
     "paper_15x15_1ms_vs_21x21": ("paper", "15:0.001", "21:0.001"),
     "polyester_15x15_0.5ms_vs_21x21": ("polyester", "15:0.0005", "21:0.0005"),   # the reference's mesh (no clamp)
+    "polyester_15x15_0.25ms_vs_0.5ms": ("polyester", "15:0.00025", "15:0.0005"),   # the reference's step
 }
 
 
