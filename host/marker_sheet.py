@@ -1,7 +1,11 @@
 """The printable A4 sheet of the rig's ArUco markers at true size (PDF or PNG), with a ruler to check the print."""
 from __future__ import annotations
 
+import os
 from pathlib import Path
+from typing import Callable
+
+from mantaray.outputs import OutputError
 
 from .markers import MarkerLayout, marker_image, quiet_scale
 
@@ -34,6 +38,33 @@ def write_marker_sheet(out: Path, dpi: int, layout: MarkerLayout = MarkerLayout(
     ax.text(25, 18, "100 mm: check this after printing (print at 100 %, no fit-to-page)", fontsize=8)
     ax.text(25, 8, f"{layout.dictionary}; corner markers at (±{layout.corner_offset_m[0]}, ±{layout.corner_offset_m[1]})"
                    " m in the fabric frame, their tops toward +y", fontsize=7)
-    fig.savefig(out, dpi=dpi)
-    plt.close(fig)
+    try:
+        write_then_replace(out, lambda tmp: fig.savefig(tmp, dpi=dpi))
+    finally:
+        plt.close(fig)
     return len(items)
+
+
+def write_then_replace(out: Path, write: Callable[[Path], None]) -> None:
+    """write(path) into a file beside out (its suffix out's, for writers that go by it), then put that file in out's
+    place: a write that fails (a full disk) leaves out as it was, or absent, never cut short, and removes its file.
+    The failure is an OutputError of one line, also when the writer reports it as something else (matplotlib's PDF
+    writer raises an AttributeError on a full disk, the OSError behind it)."""
+    tmp = out.with_name(f".{out.stem}.tmp-{os.getpid()}{out.suffix}")
+    try:
+        write(tmp)
+        os.replace(tmp, out)
+    except Exception as exc:
+        cause = next((e for e in _chain(exc) if isinstance(e, OSError)), None)
+        if cause is None:
+            raise
+        raise OutputError(f"cannot write {out}: {cause.strerror or cause}") from None
+    finally:
+        tmp.unlink(missing_ok=True)       # gone already when the write went through
+
+
+def _chain(exc: BaseException | None):
+    """exc, the exception it was raised while handling, and so on back to the first."""
+    while exc is not None:
+        yield exc
+        exc = exc.__context__

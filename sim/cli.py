@@ -44,6 +44,7 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
     With --port, the firmware on that serial device path (a board, the AVR simulator) drives it instead."""
     from mantaray.host.link import Link
+    from mantaray.host.ports import check_port
     from mantaray.host.transport import SerialTransport
     from mantaray.host.vmcu import VirtualMcu
 
@@ -62,6 +63,7 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     _inside(parser, "--start", args.start, half)
     _inside(parser, "--target", args.target, half)
     try:
+        check_port(args.port)
         tracking = plant.tracking(rate_hz=args.rate, latency_s=args.latency, noise_m=args.noise,
                                   drop_rate=args.drop, vision=args.vision)
         spec = TrialSpec(args.start, args.target, controller=args.controller, duration_s=args.duration,
@@ -222,8 +224,8 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     firmware core runs in-process (the same C++ as the virtual MCU). Results go to OUT/results.jsonl, one
     line per trial as it finishes: interrupt the run and the same command continues where it stopped."""
     from .experiment import Experiment, ExperimentMismatch
-    from .results_file import ResultsFile
-    from .executors import run, run_local, run_ray
+    from .results_file import ResultsFile, ResultsFileBusy
+    from .executors import RayUnavailable, run, run_local, run_ray
     from .model import SimulationUnstable
 
     settings = controller_settings(parser, args)
@@ -239,14 +241,13 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     if args.jobs is not None and args.jobs < 1:
         parser.error(f"--jobs must be at least 1, got {args.jobs}")
     plant = "" if args.plant == DEFAULT_PLANT else f"_{args.plant}"
-    if args.ray_address and args.executor != "ray":
-        parser.error("--ray-address needs --executor ray")
+    _check_ray(parser, args)
     tuned = f"_{Path(args.settings).stem}" if args.settings else ""
     out = _output(parser, writable_dir,
                   args.out or f"out/heatmap/{args.object}_{args.controller}{tuned}_alpha{args.alpha:g}{plant}")
     try:
         results = ResultsFile.open(out / "results.jsonl", protocol)
-    except (ExperimentMismatch, ValueError) as exc:
+    except (ExperimentMismatch, ValueError, ResultsFileBusy) as exc:
         print(f"mantaray sim heatmap: {exc}", file=sys.stderr)
         return 2
     for warning in results.warnings():
@@ -262,12 +263,6 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     _interruptible()
     try:
         if args.executor == "ray":
-            try:
-                import ray  # noqa: F401  (only to say clearly when it is missing)
-            except ImportError:
-                bar.close()
-                print("mantaray sim heatmap: --executor ray needs Ray: pip install 'mantaray[ray]'", file=sys.stderr)
-                return 2
             records = run_ray(protocol, todo, args.jobs, args.ray_address)
         else:
             records = run_local(protocol, todo, args.jobs or os.cpu_count() or 1)
@@ -282,6 +277,10 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
         print(f"mantaray sim heatmap: {exc}; the {len(results.records)} finished trials are kept in "
               f"{out / 'results.jsonl'}", file=sys.stderr)
         return 1
+    except RayUnavailable as exc:
+        bar.close()
+        print(f"mantaray sim heatmap: {exc}", file=sys.stderr)
+        return 2
     bar.close()
     title = (f"{args.object}, {args.controller}, α = {args.alpha:g} m, ε = {args.tolerance:g} m, T = {args.duration:g} s, "
              f"{protocol.trials_per_cell} trials/cell")
@@ -384,8 +383,7 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
         parser.error("nothing to search: every parameter named is fixed by --set")
     if args.candidates < 0 or (args.jobs is not None and args.jobs < 1):
         parser.error("--candidates must be >= 0 and --jobs >= 1")
-    if args.ray_address and args.executor != "ray":
-        parser.error("--ray-address needs --executor ray")
+    _check_ray(parser, args)
     out = _output(parser, writable_dir, args.out or f"out/calibration/{'log' if args.log else 'findings'}")
     try:
         study = C.open_study(out / "study.db", evidence, keys, fixed)
@@ -443,16 +441,30 @@ def _candidates(study, out: Path, candidates: int, label: str):
     return Progress(max(candidates, done), initial=done, unit="candidate", label=label, line_every_s=0)
 
 
+def _check_ray(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """--executor and --ray-address, before any work: Ray (and Ray Client, for a ray:// address) installed, the
+    cluster's address answering; else one line and exit status 2."""
+    from .executors import RayUnavailable, check_ray
+
+    if args.ray_address and args.executor != "ray":
+        parser.error("--ray-address needs --executor ray")
+    if args.executor == "ray":
+        try:
+            check_ray(args.ray_address)
+        except RayUnavailable as exc:
+            parser.exit(2, f"{parser.prog}: {exc}\n")
+
+
 def _pool(parser: argparse.ArgumentParser, args: argparse.Namespace):
-    """The worker pool --executor asks for: this machine's processes (--jobs), or Ray (a cluster at --ray-address)."""
-    from .executors import LocalPool, RayPool
+    """The worker pool --executor asks for (checked by _check_ray): this machine's processes (--jobs), or Ray (a
+    cluster at --ray-address); a cluster that answers but not as Ray does is one line and exit status 2."""
+    from .executors import LocalPool, RayPool, RayUnavailable
 
     if args.executor == "ray":
         try:
-            import ray  # noqa: F401  (only to say clearly when it is missing)
-        except ImportError:
-            parser.error("--executor ray needs Ray: pip install 'mantaray[ray]'")
-        return RayPool(args.jobs, args.ray_address)
+            return RayPool(args.jobs, args.ray_address)
+        except RayUnavailable as exc:
+            parser.exit(2, f"{parser.prog}: {exc}\n")
     return LocalPool(args.jobs or os.cpu_count() or 1)
 
 
@@ -497,6 +509,7 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from . import tune as T
     from .experiment import ExperimentMismatch
     from .progress import Progress
+    from .results_file import ResultsFileBusy
 
     at = _fidelity(parser, args.confirm_at) if args.confirm else None
     if at is not None and (at.resolution, at.timestep_s) == (args.resolution, args.timestep):
@@ -515,8 +528,7 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         parser.error(str(exc))
     if args.final_trials and args.final_seed == args.seed:
         parser.error("--final-seed must differ from --seed: the final check must not run the trials the search saw")
-    if args.ray_address and args.executor != "ray":
-        parser.error("--ray-address needs --executor ray")
+    _check_ray(parser, args)
     start = _tuning_start(parser, args, evidence) if args.start_from else None
     out = _output(parser, writable_dir,
                   args.out or f"out/tune/{args.object}_{args.controller}_alpha{args.alpha:g}_{args.plant}")
@@ -574,6 +586,9 @@ def cmd_tune(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         print(f"mantaray sim tune: {exc} (the final check there began with other settings, other --final options or "
               f"on another model: give the same ones to continue it, or delete {out / 'final'} to check anew)",
               file=sys.stderr)
+        return 2
+    except ResultsFileBusy as exc:
+        print(f"mantaray sim tune: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         if progress is not None:
@@ -659,6 +674,7 @@ def cmd_fidelity(args: argparse.Namespace, parser: argparse.ArgumentParser) -> i
     from .experiment import ExperimentMismatch
     from .model import SimulationUnstable
     from .progress import Progress
+    from .results_file import ResultsFileBusy
 
     try:
         if args.runs:
@@ -682,7 +698,7 @@ def cmd_fidelity(args: argparse.Namespace, parser: argparse.ArgumentParser) -> i
         print(f"mantaray sim fidelity: {exc} (the gate keeps its runs in --trials-dir {args.trials_dir})",
               file=sys.stderr)
         return 2
-    except ValueError as exc:
+    except (ValueError, ResultsFileBusy) as exc:
         print(f"mantaray sim fidelity: {exc}", file=sys.stderr)
         return 2
     if not args.runs:

@@ -1,9 +1,13 @@
 """Where an experiment's trials run: this process, worker processes of this machine, or Ray actors."""
 from __future__ import annotations
 
+import importlib.util
 import json
+import os
 import signal
+import socket
 from typing import Callable, Iterable, Iterator
+from urllib.parse import urlsplit
 
 from .experiment import Experiment, Trial, trial_spec
 from .model import SimulationUnstable
@@ -126,15 +130,66 @@ class LocalPool:
         return self._pool.map(_call_in_worker, [(fn, a) for a in args], chunksize=1)
 
 
+RAY_CONNECT_TIMEOUT_S = 10.0   # [s] how long a cluster's address may take to answer before a run gives up on it
+RAY_DEFAULT_PORTS = {"": 6379, "ray": 10001}   # a head's GCS port, and its Ray Client server's (ray://), when unnamed
+
+
+class RayUnavailable(Exception):
+    """Ray cannot run the trials as asked (not installed, Ray Client missing, no cluster at the address); the message
+    says so in one line, and what to do."""
+
+
+def check_ray(address: str | None) -> None:
+    """Before any work: Ray is installed; for a cluster's address (but "auto", Ray's own search of this machine), Ray
+    Client is too where the address is a ray:// one, and the address accepts a connection within
+    RAY_CONNECT_TIMEOUT_S (ray.init would retry an unreachable one for many minutes)."""
+    if importlib.util.find_spec("ray") is None:
+        raise RayUnavailable("--executor ray needs Ray: pip install 'mantaray[ray]'")
+    if address in (None, "auto"):
+        return
+    scheme, _, where = address.rpartition("://")
+    if scheme not in RAY_DEFAULT_PORTS:
+        raise RayUnavailable(f"--ray-address is HOST:PORT (a cluster's head) or ray://HOST:PORT (its Ray Client "
+                             f"server), got {address!r}")
+    if scheme == "ray" and importlib.util.find_spec("grpc") is None:
+        raise RayUnavailable(f'--ray-address {address} goes through Ray Client, which is not installed: '
+                             f'pip install "ray[client]"')
+    try:
+        parts = urlsplit(f"//{where}")
+        host, port = parts.hostname, parts.port or RAY_DEFAULT_PORTS[scheme]
+    except ValueError:
+        host = None
+    if not host:
+        raise RayUnavailable(f"--ray-address {address}: expected HOST:PORT after the scheme")
+    try:
+        socket.create_connection((host, port), timeout=RAY_CONNECT_TIMEOUT_S).close()
+    except OSError as exc:
+        raise RayUnavailable(f"--ray-address {address}: no connection to port {port} of {host} within "
+                             f"{RAY_CONNECT_TIMEOUT_S:g} s ({exc.strerror or exc}); is the cluster up, and its port "
+                             f"open to this machine?") from None
+
+
 class RayPool:
-    """Ray actors (a cluster at address, or a local Ray instance) that run (protocol, trial) jobs."""
+    """Ray actors (a cluster at address, or a local Ray instance of this process's own) that run (protocol, trial)
+    jobs. The local instance listens on this machine's loopback only, not on every interface: Ray's single-machine
+    mode (its default on macOS and Windows), which the environment selects when ray is first imported in a process."""
 
     def __init__(self, jobs: int | None, address: str | None) -> None:
+        if address is None:                       # Ray's single-machine mode: its node address is 127.0.0.1
+            os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
+        elif "://" not in address:   # an address that answers, but not as a head: Ray would wait 20 tries of 30 s
+            os.environ.setdefault("RAY_py_gcs_connect_timeout_s", f"{RAY_CONNECT_TIMEOUT_S:g}")
+            os.environ.setdefault("RAY_gcs_server_port_wait_time_s", "1")
         import ray
         from ray.util import ActorPool
 
         if not ray.is_initialized():
-            ray.init(address=address, include_dashboard=False, logging_level="ERROR", log_to_driver=False)
+            try:
+                ray.init(address=address or "local", include_dashboard=False, logging_level="ERROR",
+                         log_to_driver=False)
+            except ConnectionError as exc:        # it answered, but not as a Ray cluster does
+                why = str(exc).splitlines()[0].rstrip(".")
+                raise RayUnavailable(f"--ray-address {address}: {why}; is a Ray cluster's head there?") from None
         actors_n = jobs or max(1, int(ray.cluster_resources().get("CPU", 1)))
         actor = ray.remote(num_cpus=1)(TrialRunner)
         self._pool = ActorPool([actor.remote() for _ in range(actors_n)])

@@ -2,21 +2,82 @@
 
 Running the same experiment on the same file skips the trials already there, so an interrupted run continues
 where it stopped and loses nothing. A run with more trials per cell, or more cells, on the same file keeps the
-trials already there and adds the rest (a quick N = 3 map first, topped up to the paper's N = 10 later).
+trials already there and adds the rest (a quick N = 3 map first, topped up to the paper's N = 10 later). One
+process at a time continues a file: a second run on it would do the same trials again and write each line twice.
 """
 from __future__ import annotations
 
+import atexit
 import dataclasses
+import fcntl
 import gzip
 import json
 import os
+import shlex
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import IO
 
 from .experiment import Experiment, ExperimentMismatch, Trial, trials
 from .mjcf import model_identity
 
 RESULTS_FORMAT = "mantaray-heatmap/1"
+
+
+class ResultsFileBusy(Exception):
+    """Another process is continuing the same results file; the message names it."""
+
+
+_HELD: dict[Path, tuple[Path, IO[str]]] = {}   # results file (resolved) -> its lock file, path and open, held here
+
+
+def _lock(path: Path) -> None:
+    """Hold the lock of path (the file <name>.lock beside it) for the rest of this process, or raise ResultsFileBusy
+    naming the process that holds it. The lock is flock's: the kernel drops it when its holder exits, however it
+    ends, so a killed run blocks no later one. A process that opens the same file again holds it already. The lock
+    is a file of its own because continuing a run may replace the results file (write_whole); the process removes it
+    as it exits (_release), and a lock taken on a file removed meanwhile is taken again on the one there now."""
+    key = path.resolve()
+    if key in _HELD:
+        return
+    lock_path = path.absolute().with_name(path.name + ".lock")     # absolute: removed at exit, from any folder
+    while True:
+        lock = os.fdopen(os.open(lock_path, os.O_RDWR | os.O_CREAT, 0o644), "r+")
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = lock.read().strip() or "a process that has not written its PID yet"
+            lock.close()
+            raise ResultsFileBusy(f"{path} is being continued by another run ({holder}); wait for it to end or stop "
+                                  f"it: two runs on one file would do the same trials twice") from None
+        if _same_file(lock, lock_path):
+            break
+        lock.close()
+    lock.truncate()
+    lock.write(f"PID {os.getpid()}: {shlex.join(sys.argv)}\n")
+    lock.flush()
+    if not _HELD:
+        atexit.register(_release, os.getpid())
+    _HELD[key] = (lock_path, lock)
+
+
+def _same_file(lock: IO[str], lock_path: Path) -> bool:
+    """Whether the open lock file is still the one at lock_path (its holder did not remove it before we locked it)."""
+    try:
+        return os.path.samestat(os.fstat(lock.fileno()), os.stat(lock_path))
+    except FileNotFoundError:
+        return False
+
+
+def _release(owner_pid: int) -> None:
+    """At exit: remove each lock file while still holding it, then let it go (in the process that took the locks,
+    not in a child forked from it). A run killed outright leaves its file behind, unlocked: the next run takes it."""
+    if os.getpid() != owner_pid:
+        return
+    for lock_path, lock in _HELD.values():
+        lock_path.unlink(missing_ok=True)
+        lock.close()
 
 
 @dataclass
@@ -35,12 +96,14 @@ class ResultsFile:
 
     @classmethod
     def open(cls, path: str | Path, protocol: Experiment) -> ResultsFile:
-        """Open for this protocol: create the file, or read what an earlier run of the same protocol left."""
+        """Open for this protocol: create the file, or read what an earlier run of the same protocol left. The
+        process holds the file from here on (ResultsFileBusy when another one does)."""
         path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        _lock(path)
         results = cls(path, protocol, model=model_identity(protocol.rig()),
                       plant_values=protocol.plant_model().values)
         if not path.exists() or _cut_header(path.read_bytes()):   # new, or its header was cut off as it was written
-            path.parent.mkdir(parents=True, exist_ok=True)
             write_whole(path, json.dumps(_header(results)).encode() + b"\n")
             return results
         with open(path, "rb") as f:

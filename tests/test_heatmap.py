@@ -214,6 +214,39 @@ def test_a_header_cut_off_as_the_run_began_starts_the_run_afresh(tmp_path):
     assert path.read_bytes() == b"something else entirely"
 
 
+_HOLD = ("import json, sys; from mantaray.sim import experiment as E, results_file as R; "
+         "R.ResultsFile.open(sys.argv[1], E.Experiment.from_json(json.loads(sys.argv[2]))); print('open', flush=True); "
+         "sys.stdin.read()")   # a run that holds a results file until it is killed
+
+
+def test_a_results_file_is_continued_by_one_process_at_a_time_and_a_killed_ones_lock_is_gone(tmp_path):
+    path = tmp_path / "results.jsonl"
+    holder = subprocess.Popen([sys.executable, "-c", _HOLD, str(path), json.dumps(SMALL.to_json())],
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline() == "open\n"
+        before = path.read_bytes()
+        with pytest.raises(R.ResultsFileBusy, match=f"PID {holder.pid}: "):
+            R.ResultsFile.open(path, SMALL)
+        second = _cli("heatmap", "--cells", "2", "--trials", "2", "--duration", "0.5", "--resolution", "11",
+                      "--timestep", "0.002", "--jobs", "1", "--out", str(tmp_path))
+        assert second.returncode == 2
+        (line,) = second.stderr.splitlines()
+        assert line.startswith(f"mantaray sim heatmap: {path} is being continued by another run (PID {holder.pid}: ")
+        assert path.read_bytes() == before
+    finally:
+        holder.kill()                     # as a run killed mid-way: the kernel drops its lock, its file stays
+        holder.wait()
+    lock_file = path.with_name("results.jsonl.lock")
+    assert lock_file.exists()
+    after = subprocess.run([sys.executable, "-c", _HOLD, str(path), json.dumps(SMALL.to_json())], input="",
+                           capture_output=True, text=True, timeout=60)
+    assert after.stdout == "open\n" and not lock_file.exists()    # taken, and removed by a run that ends
+    assert not R.ResultsFile.open(path, SMALL).records
+    other = R.ResultsFile.open(tmp_path / "other.jsonl", SMALL)   # one process holds several files, and one twice
+    assert R.ResultsFile.open(path, SMALL).missing() == other.missing()
+
+
 def _compare(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "compare", *args], cwd=cwd,
                           capture_output=True, text=True, timeout=120)

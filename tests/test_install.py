@@ -1,10 +1,10 @@
-"""`pip install .` (not editable) gives a working mantaray outside the checkout: the wheel carries the native
-firmware (built by scikit-build-core from CMakeLists.txt) and every data file the package reads."""
+"""`pip install .` (not editable) into a fresh virtual environment gives a working mantaray outside the checkout:
+the wheel carries the native firmware (built by scikit-build-core from CMakeLists.txt) and every data file the
+package reads, and what its commands import comes with it (the environment sees none of this machine's packages)."""
 from __future__ import annotations
 
 import json
 import os
-import site
 import subprocess
 import sys
 import zipfile
@@ -14,27 +14,33 @@ import pytest
 from mantaray.paths import REPO
 
 
+def _env() -> dict[str, str]:
+    """This process's environment without what would point the installed package back at the checkout."""
+    return {k: v for k, v in os.environ.items() if k not in ("MANTARAY_BUILD_DIR", "PYTHONPATH", "VIRTUAL_ENV")}
+
+
 @pytest.fixture(scope="module")
 def installed(tmp_path_factory):
-    """The wheel built from this checkout and installed into a folder of its own: (wheel, site folder)."""
+    """A fresh virtual environment (python3 -m venv, no system site packages) with the wheel built from this checkout
+    installed by its own pip, dependencies from the package index: (wheel, the environment's bin folder)."""
     root = tmp_path_factory.mktemp("install")
-    build = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
-                            "-w", str(root / "dist"), str(REPO)], capture_output=True, text=True, timeout=600)
+    venv = subprocess.run([sys.executable, "-m", "venv", str(root / "venv")], capture_output=True, text=True,
+                          timeout=300)
+    assert venv.returncode == 0, venv.stderr
+    bin_dir = root / "venv" / "bin"
+    pip = [str(bin_dir / "python"), "-m", "pip", "-q"]
+    build = subprocess.run([*pip, "wheel", "--no-deps", "-w", str(root / "dist"), str(REPO)], capture_output=True,
+                           text=True, timeout=900, env=_env())
     assert build.returncode == 0, build.stderr
     (wheel,) = (root / "dist").glob("mantaray-*.whl")
-    target = root / "site"
-    install = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(target),
-                              str(wheel)], capture_output=True, text=True, timeout=300)
+    install = subprocess.run([*pip, "install", str(wheel)], capture_output=True, text=True, timeout=900, env=_env())
     assert install.returncode == 0, install.stderr
-    return wheel, target
+    return wheel, bin_dir
 
 
-def _run_installed(target, *args: str, cwd) -> subprocess.CompletedProcess:
-    """python -S: no site hooks, so the checkout's editable install cannot answer for the installed package; the
-    dependencies come from this interpreter's site-packages, after the installed package."""
-    env = {k: v for k, v in os.environ.items() if k not in ("MANTARAY_BUILD_DIR", "PYTHONPATH")}
-    env["PYTHONPATH"] = os.pathsep.join([str(target), *site.getsitepackages()])
-    return subprocess.run([sys.executable, "-S", *args], capture_output=True, text=True, timeout=300, cwd=cwd, env=env)
+def _run_installed(bin_dir, program: str, *args: str, cwd) -> subprocess.CompletedProcess:
+    return subprocess.run([str(bin_dir / program), *args], capture_output=True, text=True, timeout=300, cwd=cwd,
+                          env=_env())
 
 
 def test_the_wheel_carries_the_native_firmware_and_the_data_files(installed):
@@ -48,15 +54,25 @@ def test_the_wheel_carries_the_native_firmware_and_the_data_files(installed):
 
 
 def test_the_installed_package_runs_the_main_job_outside_the_checkout(installed, tmp_path):
-    _, target = installed
-    where = _run_installed(target, "-c", "import mantaray.paths as p, mantaray.sim.bridge as b; "
+    _, bin_dir = installed
+    where = _run_installed(bin_dir, "python", "-c", "import mantaray.paths as p, mantaray.sim.bridge as b; "
                            "print(p.native_artifact('libmantaray_capi.so')); print(b.__file__)", cwd=tmp_path)
     assert where.returncode == 0, where.stderr
-    assert all(line.startswith(str(target)) for line in where.stdout.split())      # nothing from the checkout
-    vmcu = _run_installed(target, "-m", "mantaray.cli", "vmcu", "--identify-only", cwd=tmp_path)
+    venv = str(bin_dir.parent)
+    assert all(line.startswith(venv) for line in where.stdout.split())      # nothing from the checkout
+    vmcu = _run_installed(bin_dir, "mantaray", "vmcu", "--identify-only", cwd=tmp_path)
     assert vmcu.returncode == 0 and "matches this host" in vmcu.stdout, vmcu.stderr
-    run = _run_installed(target, "-m", "mantaray.cli", "sim", "run", "--duration", "0.5", "--json", "--out",
+    run = _run_installed(bin_dir, "mantaray", "sim", "run", "--duration", "0.5", "--json", "--out",
                          str(tmp_path / "out"), cwd=tmp_path)
     result = json.loads(run.stdout.splitlines()[-1])
     assert run.returncode == 1 and not result["success"], run.stderr   # 0.10 m short after 0.5 s: a result, exit 1
     assert result["camera_frames"] == 7 and (tmp_path / "out").is_dir()
+
+
+def test_the_installed_conformance_command_runs_its_suite_on_a_virtual_mcu(installed, tmp_path):
+    _, bin_dir = installed
+    usage = _run_installed(bin_dir, "mantaray", "conformance", "--help", cwd=tmp_path)
+    assert usage.returncode == 0 and "--port" in usage.stdout, usage.stderr
+    suite = _run_installed(bin_dir, "mantaray", "conformance", cwd=tmp_path)
+    assert suite.returncode == 0, suite.stdout[-2000:] + suite.stderr
+    assert " passed" in suite.stdout.splitlines()[-1] and "failed" not in suite.stdout.splitlines()[-1]

@@ -106,7 +106,7 @@ def test_any_text_is_either_a_serial_device_or_one_line_saying_why_not(text):
 
 
 COMMANDS = {"rig": ("--target", "0,0"), "monitor": (), "stop": (), "estop": (),
-            "jog": ("--actuator", "0", "--position", "0.01"), "zero": (), "conformance": ()}
+            "jog": ("--actuator", "0", "--position", "0.01"), "zero": (), "conformance": (), "sim run": ()}
 
 
 @pytest.fixture(scope="module")
@@ -129,7 +129,7 @@ def test_every_command_with_a_port_refuses_dev_null_at_once(command, video, tmp_
     text."""
     extra = COMMANDS[command] + (("--camera", video) if command == "rig" else ())
     t0 = time.monotonic()
-    proc = subprocess.run([sys.executable, "-m", "mantaray.cli", command, "--port", "/dev/null", *extra],
+    proc = subprocess.run([sys.executable, "-m", "mantaray.cli", *command.split(), "--port", "/dev/null", *extra],
                           cwd=tmp_path, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
     assert proc.stderr.strip().splitlines()[-1].endswith(
