@@ -25,9 +25,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import paper_heatmaps  # a sibling script: the baselines' committed trials, and the zones of the paper's maps
+
 from mantaray.sim.paired import discordance
 from mantaray.sim.results_file import write_whole
-import paper_heatmaps   # a sibling script: the baselines' committed trials, and the zones of the paper's maps
 
 REPO = Path(__file__).resolve().parents[1]
 COMMITTED = REPO / "docs" / "results" / "tune"

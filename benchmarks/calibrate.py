@@ -23,7 +23,7 @@ import numpy as np
 from mantaray.host.link import Link
 from mantaray.host.transport import SerialTransport
 from mantaray.host.vmcu import VirtualMcu
-from mantaray.sim.bridge import Bridge, TrialSpec, Tracking
+from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
 from mantaray.sim.model import SimulationUnstable
 from mantaray.sim.plant import Plant
 

@@ -19,8 +19,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+import paper_heatmaps  # a sibling script: keep() writes a run's trials back gzipped, whole, only when they changed
+
 from mantaray.sim.results_file import write_whole
-import paper_heatmaps   # a sibling script: keep() writes a run's trials back gzipped, whole, only when they changed
 
 REPO = Path(__file__).resolve().parents[1]
 COMMITTED = REPO / "docs" / "results" / "fidelity"
@@ -89,10 +90,10 @@ def table() -> str:
         r = json.loads(path.read_text())
         o = r["outcomes"]
 
-        def rates(key: str) -> str:
+        def rates(key: str, o: dict = o) -> str:
             return f"{o[key]['rate']['candidate']:.3f} / {o[key]['rate']['finer']:.3f}"
 
-        def flips(key: str) -> str:
+        def flips(key: str, o: dict = o) -> str:
             return f"{o[key]['candidate_vs_finer']['flips']} / {o[key]['floor_vs_finer']['flips']}"
 
         verdict = r["verdict"] or f"incomplete ({r['pairs']} of {r['expected_pairs']})"

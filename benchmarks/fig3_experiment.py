@@ -19,14 +19,14 @@ import time
 from pathlib import Path
 
 from mantaray.host.cli import controller_settings
+from mantaray.plots import fig3_figure
 from mantaray.protocol import messages as m
-from mantaray.sim.fig3 import run_fig3
-from mantaray.sim.findings import MODULE_M, fig3_finding
 from mantaray.sim.executors import LocalPool
 from mantaray.sim.experiment import Experiment
+from mantaray.sim.fig3 import run_fig3
+from mantaray.sim.findings import MODULE_M, fig3_finding
 from mantaray.sim.parameters import plant_names
 from mantaray.sim.plant import plant_for
-from mantaray.plots import fig3_figure
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -55,7 +55,9 @@ def main() -> None:
           f"{(telemetry + position) / BAUD_BYTES_PER_S * 1e3:.2f} ms")
     for clock in ("wall", "sim"):
         rtts = sorted(measure(clock, args.frames))
-        q = lambda p: rtts[min(len(rtts) - 1, int(p * len(rtts)))] * 1e6
+        def q(p: float, rtts: list[float] = rtts) -> float:   # [us] the p-quantile
+            return rtts[min(len(rtts) - 1, int(p * len(rtts)))] * 1e6
+
         print(f"pty RTT, {clock} clock, {len(rtts)} frames: median {statistics.median(rtts) * 1e6:.0f} us, "
               f"p90 {q(0.9):.0f} us, p99 {q(0.99):.0f} us, max {rtts[-1] * 1e6:.0f} us")
 

@@ -59,7 +59,7 @@ def main() -> int:
     truths = rng.uniform(-0.22, 0.22, (args.frames, 2))
     frames = [render(xy, rng=rng) for xy in truths]
     colour = [cv2.cvtColor(f, cv2.COLOR_GRAY2BGR) for f in frames]
-    for f, xy in zip(colour, truths):   # a yellow blob where the object is, for the blob mode
+    for f, xy in zip(colour, truths, strict=True):   # a yellow blob where the object is, for the blob mode
         c, _ = cv2.projectPoints(np.array([[xy[0], xy[1], 0.0]]), *camera(1.0), intrinsics(), None)
         cv2.circle(f, tuple(int(round(v)) for v in c.ravel()), 20, (40, 200, 240), -1)
 
@@ -92,7 +92,7 @@ def main() -> int:
           f"max {max(spans) * 1000:.1f} ms; -> its telemetry back: median {statistics.median(rtts) * 1000:.1f} ms")
 
     print("accuracy against ground truth [mm RMS]:")
-    errors = [np.hypot(*(np.asarray(T.Tracker().observe(f, 0).xy_m) - xy)) for f, xy in zip(frames, truths)]
+    errors = [np.hypot(*(np.asarray(T.Tracker().observe(f, 0).xy_m) - xy)) for f, xy in zip(frames, truths, strict=True)]
     print(f"  synthetic, homography mode, camera 1 m straight above: {rms_mm(errors):.2f} ({len(errors)} frames)")
     cam = camera(1.2, xy_m=(0.04, -0.05), tilt_deg=3.0)
     pose = T.Tracker(marker_height_m=0.04, calibration=T.Calibration(intrinsics(), np.zeros(5)))

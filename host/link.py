@@ -4,7 +4,7 @@ from __future__ import annotations
 import collections
 import math
 import time
-from typing import Callable
+from collections.abc import Callable
 
 from mantaray.protocol import messages as m
 from mantaray.protocol import rig

@@ -8,8 +8,8 @@ lock-step in the simulation). Times are trial time [s] from the start; positions
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import Callable, Iterable
 
 import numpy as np
 

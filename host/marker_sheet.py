@@ -2,8 +2,8 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from mantaray.outputs import OutputError
 
@@ -13,7 +13,10 @@ A4_MM = (210.0, 297.0)
 DPI_RANGE = (72, 2400)    # [1/inch] a PNG sheet's resolution: from screen to the finest printers
 
 
-def write_marker_sheet(out: Path, dpi: int, layout: MarkerLayout = MarkerLayout()) -> int:
+PRINTED = MarkerLayout()   # the layout this sheet prints unless told another
+
+
+def write_marker_sheet(out: Path, dpi: int, layout: MarkerLayout = PRINTED) -> int:
     """Draw the four corner markers and two object markers on A4 into out; returns how many markers it holds."""
     import matplotlib
 

@@ -83,7 +83,7 @@ def terminal_type(rdev: int) -> str | None:
 
 
 def _group(gid: int) -> str:
-    import grp                               # POSIX only, as this check is
+    import grp  # POSIX only, as this check is
 
     try:
         return grp.getgrgid(gid).gr_name

@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 from mantaray.protocol import messages as m
 
 from .link import CommandRefused, IncompatibleFirmware, Link, LinkError
 from .transport import SerialTransport, Transport
+
 
 class EmergencyStopLatched(RuntimeError):
     """A start while the session's emergency stop is latched: the user clears it with stop() first."""

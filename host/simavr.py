@@ -93,7 +93,7 @@ class SimulatedUno:
                 stream.close()
         self._dir.cleanup()
 
-    def __enter__(self) -> "SimulatedUno":
+    def __enter__(self) -> SimulatedUno:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -87,7 +87,7 @@ class Tracker:
         t = time.monotonic() if capture_time_s is None else capture_time_s
         grey = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
         corners, ids, _ = self._detector.detectMarkers(grey)
-        found = {int(i): c.reshape(4, 2) for i, c in zip(ids.ravel(), corners)} if ids is not None else {}
+        found = {int(i): c.reshape(4, 2) for i, c in zip(ids.ravel(), corners, strict=True)} if ids is not None else {}
         seen = tuple(k for k, marker_id in enumerate(self.layout.corner_ids) if marker_id in found)
         reused = False
         if len(seen) == 4:

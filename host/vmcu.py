@@ -11,7 +11,6 @@ from pathlib import Path
 
 from mantaray.paths import native_artifact
 
-
 PR_SET_PDEATHSIG = 1  # prctl option (linux/prctl.h): a signal the child gets when its parent dies
 
 
@@ -54,7 +53,7 @@ class VirtualMcu:
             self.process.stderr.close()
         self._dir.cleanup()
 
-    def __enter__(self) -> "VirtualMcu":
+    def __enter__(self) -> VirtualMcu:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -165,7 +165,7 @@ def pareto_figure(values: np.ndarray, on_front: np.ndarray, names: tuple[str, ..
     grey dot, those on the Pareto front (on_front) ringed."""
     pairs = [(i, j) for i in range(len(names)) for j in range(i + 1, len(names))]
     fig, axes = plt.subplots(1, len(pairs), figsize=(4.2 * len(pairs), 3.8), squeeze=False)
-    for ax, (i, j) in zip(axes[0], pairs):
+    for ax, (i, j) in zip(axes[0], pairs, strict=True):
         ax.scatter(values[:, i], values[:, j], s=12, c="0.6", label="candidate")
         ax.scatter(values[on_front, i], values[on_front, j], s=40, facecolors="none", edgecolors="C3",
                    label="Pareto front")

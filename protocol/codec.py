@@ -4,7 +4,8 @@ from __future__ import annotations
 import enum
 import math
 import struct
-from dataclasses import dataclass, fields as dc_fields
+from dataclasses import dataclass
+from dataclasses import fields as dc_fields
 from typing import Any, ClassVar
 
 F32_MAX = 3.4028234663852886e38
@@ -20,7 +21,7 @@ def choices(kind: type[enum.Enum]) -> list[str]:
     return [member.name.lower() for member in kind]
 
 
-def bounds_text(message: type["Message"], field: str) -> str:
+def bounds_text(message: type[Message], field: str) -> str:
     """A field's bounds as the schema declares them, for help texts: "0.001..0.5 m"."""
     spec = next(f for f in message.FIELDS if f.name == field)
     unit = f" {spec.unit}" if spec.unit else ""
@@ -30,7 +31,7 @@ def bounds_text(message: type["Message"], field: str) -> str:
 class FieldRefused(ValueError):
     """A field the firmware would refuse by the schema's field-local rules; code and field as its nack would say."""
 
-    def __init__(self, message: "Message", field: str, code: str, text: str) -> None:
+    def __init__(self, message: Message, field: str, code: str, text: str) -> None:
         self.message_name, self.field, self.code = message.NAME, field, code   # code: not_finite | out_of_range
         self.reason = text
         super().__init__(f"{message.NAME}.{field}: {text}")
@@ -133,7 +134,7 @@ class Message:
             values += [_to_wire(spec, v) for v in elements]
         return struct.pack(self.struct_format(), *values)
 
-    def check(self) -> "Message":
+    def check(self) -> Message:
         """Raise FieldRefused for the first field the firmware would refuse by the schema alone (bounds, finiteness,
         enum values); returns the message. Rules across fields (PROTOCOL.md) stay the firmware's to judge."""
         for spec in self.FIELDS:
@@ -145,7 +146,7 @@ class Message:
         return self
 
     @classmethod
-    def decode_payload(cls, payload: bytes) -> "Message":
+    def decode_payload(cls, payload: bytes) -> Message:
         if len(payload) != cls.SIZE:
             raise CodecError(f"{cls.NAME}: payload is {len(payload)} bytes, expected {cls.SIZE}")
         raw = struct.unpack(cls.struct_format(), payload)

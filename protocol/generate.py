@@ -16,8 +16,8 @@ from pathlib import Path
 
 if __package__ in (None, ""):              # run as a script (CI, setup.sh), also from a copy of the tree
     sys.path.insert(0, str(Path(__file__).resolve().parent))
-    import generate_rig                                         # noqa: E402
-    from codegen import TYPES, camel, f32_literal               # noqa: E402
+    import generate_rig  # noqa: E402
+    from codegen import TYPES, camel, f32_literal  # noqa: E402
 else:
     from . import generate_rig
     from .codegen import TYPES, camel, f32_literal
@@ -217,7 +217,7 @@ def render_cpp(schema: dict) -> str:
     out.append("// Boot gains of each PID, indexed by Axis: {kp [deg/m], ki [deg/(m s)], kd [deg s/m], integral_limit [deg]}.")
     out.append("struct PidDefaults { float kp, ki, kd, integral_limit; };")
     out.append("constexpr PidDefaults kPidDefaults[] = {")
-    for axis, value in sorted(schema["enums"]["axis"]["values"].items(), key=lambda kv: kv[1]):
+    for axis, _ in sorted(schema["enums"]["axis"]["values"].items(), key=lambda kv: kv[1]):
         g = schema["pid_defaults"][axis]
         out.append(f"    {{{f32_literal(g['kp'])}, {f32_literal(g['ki'])}, {f32_literal(g['kd'])}, "
                    f"{f32_literal(g['integral_limit'])}}},  // {axis}")

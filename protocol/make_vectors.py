@@ -18,7 +18,7 @@ from pathlib import Path
 
 if __package__ in (None, ""):               # run as a script: the checkout's package
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-    from protocol import messages as m      # noqa: E402
+    from protocol import messages as m  # noqa: E402
     from protocol.framing import cobs_encode, encode_frame, encode_packet  # noqa: E402
 else:
     from . import messages as m

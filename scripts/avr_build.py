@@ -278,7 +278,7 @@ def plan_build(project: Project, out: Path) -> Plan:
             unit.command = compile_command(unit, flags, core_defines, [include, include / "utility"])
         libs[library.name] = units
         lib_includes.append(include)
-    for root, include in zip(lib_roots, lib_includes):
+    for root, include in zip(lib_roots, lib_includes, strict=True):
         units = [Unit(s, out / "lib" / root.name / f"{s.relative_to(include)}.o", True) for s in sources(include)]
         for unit in units:
             unit.command = compile_command(unit, flags, [], lib_includes)
@@ -342,7 +342,7 @@ def compile_units(units: list[Unit], jobs: int, verbose: bool) -> int:
     with ThreadPoolExecutor(max_workers=jobs) as pool:
         results = list(pool.map(lambda u: run(u.command, u.obj, verbose), stale))
     failed = []
-    for unit, result in zip(stale, results):
+    for unit, result in zip(stale, results, strict=True):
         if result.stderr and (unit.project or verbose or result.returncode):
             sys.stderr.write(result.stderr)
         if result.returncode:

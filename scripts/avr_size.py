@@ -35,7 +35,7 @@ def symbols(elf: Path) -> list[tuple[int, int, str, str]]:
     names = "\n".join(CLONE_SUFFIX.sub("", parts[3]) for parts in rows)
     demangled = subprocess.run(["avr-c++filt"], input=names, capture_output=True, text=True, check=True).stdout
     return [(int(parts[0], 16), int(parts[1], 16), parts[2], name)
-            for parts, name in zip(rows, demangled.splitlines())]
+            for parts, name in zip(rows, demangled.splitlines(), strict=True)]
 
 
 def code_by_file(elf: Path, functions: list[tuple[int, int]]) -> dict[Path, int]:

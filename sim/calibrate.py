@@ -16,9 +16,9 @@ import json
 import math
 import time
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 from typing import Protocol as Interface
 
 from . import findings as F
@@ -93,7 +93,7 @@ class FindingsEvidence:
         protocols = self.protocols(values)
         jobs = [(p, t) for p in protocols.values() for t in trials(p)]
         records = {c: [] for c in protocols}
-        for record, (protocol, _) in zip(pool.map(jobs), jobs):
+        for record, (protocol, _) in zip(pool.map(jobs), jobs, strict=True):
             records[protocol.controller].append(record)
         rule = Plant(self.plant).set(values).success_rule
         stats = {c: F.map_stats(records[c], CELLS, rule) for c in protocols}
@@ -299,7 +299,7 @@ def write_report(study, evidence, out: Path, fig3: dict | None = None) -> dict:
         lines.append("No candidate finished yet.")
     else:
         lines += [f"Best candidate: #{best.number}, objectives "
-                  + ", ".join(f"{n} {v:.3f}" for n, v in zip(evidence.objective_names, best.values)), "",
+                  + ", ".join(f"{n} {v:.3f}" for n, v in zip(evidence.objective_names, best.values, strict=True)), "",
                   "| parameter | value |", "|---|---|"]
         lines += [f"| `{k}` | {v:.6g} |" if isinstance(v, float) else f"| `{k}` | {v} |"
                   for k, v in best.user_attrs["values"].items()]

@@ -11,10 +11,10 @@ import signal
 import sys
 from pathlib import Path
 
-from mantaray.protocol import messages as m
+from mantaray.arguments import number
 from mantaray.host.cli import add_controller_arguments, controller_settings, parse_gains
 from mantaray.outputs import FIGURE_SUFFIXES, OutputError, writable_dir, writable_file
-from mantaray.arguments import number
+from mantaray.protocol import messages as m
 from mantaray.protocol.codec import bounds_text, choices
 
 from .objects import OBJECTS
@@ -47,11 +47,11 @@ def cmd_run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from mantaray.host.ports import check_port
     from mantaray.host.transport import SerialTransport
     from mantaray.host.vmcu import VirtualMcu
+    from mantaray.plots import path_phase_figure
 
     from .bridge import Bridge, TrialSpec
     from .experiment import controller_gains
     from .plant import Plant
-    from mantaray.plots import path_phase_figure
 
     settings = controller_settings(parser, args)
     args.plant = _plant(parser, settings, args.plant)
@@ -191,9 +191,10 @@ def _cells(text: str) -> tuple[int, ...]:
 
 def _heatmap_outputs(results, out: Path, title: str) -> dict:
     """Write per-cell rates (CSV), the summary (JSON) and the figure beside the results file; return the summary."""
+    from mantaray.plots import heatmap_figure
+
     from .experiment import cell_bounds
     from .summary import summarize
-    from mantaray.plots import heatmap_figure
 
     s = summarize(results)
     p = results.protocol
@@ -223,10 +224,10 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     a trial succeeds if the object ends within ε of its target at the end of T without falling off. The
     firmware core runs in-process (the same C++ as the virtual MCU). Results go to OUT/results.jsonl, one
     line per trial as it finishes: interrupt the run and the same command continues where it stopped."""
-    from .experiment import Experiment, ExperimentMismatch
-    from .results_file import ResultsFile, ResultsFileBusy
     from .executors import RayUnavailable, run, run_local, run_ray
+    from .experiment import Experiment, ExperimentMismatch
     from .model import SimulationUnstable
+    from .results_file import ResultsFile, ResultsFileBusy
 
     settings = controller_settings(parser, args)
     args.plant = _plant(parser, settings, args.plant)
@@ -298,9 +299,10 @@ def cmd_heatmap(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
 
 def cmd_compare(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """The difference map of two heatmap runs (first minus second), like the paper's Euclidean - Manhattan."""
+    from mantaray.plots import heatmap_figure
+
     from .results_file import ResultsFile
     from .summary import summarize
-    from mantaray.plots import heatmap_figure
 
     _output(parser, writable_file, args.out, FIGURE_SUFFIXES)
     runs = []
@@ -328,7 +330,7 @@ def cmd_compare(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     if not args.reached and (pa.stop_when_reached or pb.stop_when_reached):
         parser.error("a run that stops at its first frame within ε (--stop-when-reached) has no end-of-T success; "
                      "compare with --reached")
-    for given, results in zip((args.first, args.second), runs):
+    for given, results in zip((args.first, args.second), runs, strict=True):
         left = len(results.missing())
         if left:
             print(f"mantaray sim compare: warning: {given} is incomplete ({left} of "
@@ -642,10 +644,11 @@ def _interrupt(signum, frame) -> None:
 def _fig3_for(best, args: argparse.Namespace, pool, out: Path) -> dict:
     """F6 for the best candidate: the paper's Fig. 3 experiment on it, with its figure."""
 
+    from mantaray.plots import fig3_figure
+
+    from .experiment import Experiment
     from .fig3 import run_fig3
     from .findings import MODULE_M, fig3_finding
-    from .experiment import Experiment
-    from mantaray.plots import fig3_figure
 
     records = run_fig3(pool, args.plant, best.user_attrs["values"], resolution=args.resolution,
                        timestep_s=args.timestep)

@@ -6,7 +6,7 @@ import json
 import os
 import signal
 import socket
-from typing import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from urllib.parse import urlsplit
 
 from .experiment import Experiment, Trial, trial_spec

@@ -29,7 +29,6 @@ from .plant import DEFAULT_PLANT
 from .results_file import ResultsFile
 from .rig import FIDELITIES, Fidelity
 
-
 PERTURBATION_M = 1e-4      # [m] how far the noise floor's run moves every start
 SIGNIFICANCE = 0.05        # the whole verdict's false-alarm rate, split evenly over its tests
 BINARY = (("success", "within ε at T"), ("reached", "reached"), ("fell_off", "fell off"))

@@ -18,13 +18,13 @@ counts as success is a reading of the paper (sim/plant.toml reading.success_rule
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Iterable
 
 import numpy as np
 
-from .summary import FAILURE_REGION_AT
 from .rig import Frame
+from .summary import FAILURE_REGION_AT
 
 MODULE_M = (Frame().size_x_m, Frame().size_y_m)   # [m] the paper's module; the findings' zones are drawn on it
 PAPER_CELLS = 20                 # per side: the paper's grid, over which its totals are summed
@@ -154,7 +154,7 @@ def map_stats(records: Iterable[dict], cells: int, rule: str) -> MapStats:
     strata_rates, total = {}, 0.0
     members = strata_cells(cells)
     for name in STRATA:
-        run = [rate for c, rate in zip(cell_ids, rates) if c in set(members[name])]
+        run = [rate for c, rate in zip(cell_ids, rates, strict=True) if c in set(members[name])]
         strata_rates[name] = float(np.mean(run)) if run else math.nan
         if members[name]:
             total += len(members[name]) * strata_rates[name]

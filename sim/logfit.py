@@ -98,7 +98,7 @@ class LogEvidence:
         jobs = [(log, self.plant, values, self.object_name, self.resolution, self.timestep_s, self.horizon_s)
                 for log in self.logs]
         errors = pool.map_calls(_replay_error, jobs)
-        return (float(np.mean(errors)),), {"errors_m": {Path(p).name: round(e, 5) for p, e in zip(self.logs, errors)},
+        return (float(np.mean(errors)),), {"errors_m": {Path(p).name: round(e, 5) for p, e in zip(self.logs, errors, strict=True)},
                                            "passed": 0}
 
 

@@ -200,7 +200,7 @@ def rolling_damping(rig: Rig) -> float:
 def _object_xml(rig: Rig, marker_geom: str = "") -> tuple[str, str]:
     """(asset lines, body) for the rig's object; qpos0 puts it at the world's origin, place_object() puts it on the fabric."""
     joints = "".join(f'      <joint name="{name}" type="slide" axis="{_v(*axis)}"/>\n'
-                     for name, axis in zip(OBJECT_SLIDES, np.eye(3)))
+                     for name, axis in zip(OBJECT_SLIDES, np.eye(3), strict=True))
     joints += f'      <joint name="{OBJECT_TURN}" type="ball" damping="{_exact(rolling_damping(rig))}"/>\n'
     return _mesh_asset(rig), _object_body(rig, joints, marker_geom)
 
@@ -224,7 +224,7 @@ def _marker_xml(rig: Rig) -> tuple[str, str, str]:
     z0 = rig.frame.z0_m
     world = "\n".join(f'    <geom name="corner_marker{k}" type="box" size="{_v(half_corner, half_corner, MARKER_PLATE_M)}" '
                       f'pos="{_v(x, y, z0 - MARKER_PLATE_M)}" material="aruco{i}" contype="0" conaffinity="0"/>'
-                      for k, (i, (x, y)) in enumerate(zip(layout.corner_ids, layout.corner_centres_m()))
+                      for k, (i, (x, y)) in enumerate(zip(layout.corner_ids, layout.corner_centres_m(), strict=True))
                       if rig.camera.corner_markers)
     half_object = layout.object_size_m * quiet_scale(layout) / 2
     top = rig.object.half_height_m

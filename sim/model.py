@@ -9,6 +9,8 @@ import numpy as np
 from .mjcf import FABRIC, MARKER, N_ACTUATORS, OBJECT, OBJECT_SLIDES, REST_KEY, write_model
 from .rig import FallRule, Rig
 
+ANY_FALL = FallRule()   # the fall rule's defaults, for callers that pass no rig's
+
 AT_REST_SPEED_M_PER_S = 0.01   # [m/s] object linear speed below which it counts as at rest ...
 AT_REST_SPIN_RAD_PER_S = 0.5   # [rad/s] ... with its angular speed below this ...
 AT_REST_HOLD_S = 0.2           # [s] ... for this long without a break
@@ -135,7 +137,7 @@ def object_speed(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[float, flo
     return float(np.linalg.norm(data.qvel[dadr:dadr + 3])), float(np.linalg.norm(data.qvel[dadr + 3:dadr + 6]))
 
 
-def fell_off(model: mujoco.MjModel, data: mujoco.MjData, rule: FallRule = FallRule()) -> bool:
+def fell_off(model: mujoco.MjModel, data: mujoco.MjData, rule: FallRule = ANY_FALL) -> bool:
     """Whether the object has left the fabric, by rule (pass rig.fall); any one of:
 
     - its marker is outside the frame by more than rule.outside_margin_m in x or y (the frame's
@@ -168,7 +170,7 @@ def drop_object(model: mujoco.MjModel, data: mujoco.MjData, x_m: float, y_m: flo
 
 
 def place_object(model: mujoco.MjModel, data: mujoco.MjData, x_m: float, y_m: float, *,
-                 yaw_rad: float = 0.0, settle_max_s: float = 3.0, rule: FallRule = FallRule()) -> float:
+                 yaw_rad: float = 0.0, settle_max_s: float = 3.0, rule: FallRule = ANY_FALL) -> float:
     """drop_object() at (x, y), then step until the object is at rest.
 
     Returns the settling time [s] (simulated). At rest: linear speed below AT_REST_SPEED_M_PER_S and

@@ -58,7 +58,7 @@ def _bunny_bounds() -> tuple[tuple[float, float, float], tuple[float, float, flo
 def _bunny() -> ObjectSpec:
     """The bunny stood z-up (+90 deg about x maps the file's y onto z) with its bounding box centred on the body."""
     lo, hi = _bunny_bounds()
-    cx, cy, cz = (BUNNY_SCALE * (a + b) / 2 for a, b in zip(lo, hi))
+    cx, cy, cz = (BUNNY_SCALE * (a + b) / 2 for a, b in zip(lo, hi, strict=True))
     height_m = BUNNY_SCALE * (hi[1] - lo[1])
     # Rotating by +90 deg about x sends (x, y, z) to (x, -z, y); the geom offset undoes the centre.
     return ObjectSpec(

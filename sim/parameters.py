@@ -139,7 +139,7 @@ def markdown_table() -> str:
     for p in parameters().values():
         unit = "" if p.unit in ("", "-") else f" {p.unit}"
 
-        def shown(value) -> str:
+        def shown(value, p: Parameter = p, unit: str = unit) -> str:
             return value if p.choices else f"{value:g}{unit}"
 
         span = " / ".join(p.choices) if p.choices else f"{p.low:g} – {p.high:g}{unit}"

@@ -75,7 +75,7 @@ def assert_same_message(got: Message, sent: Message) -> None:
         g, s = getattr(got, spec.name), getattr(sent, spec.name)
         if spec.count > 1:
             assert isinstance(g, tuple) and len(g) == spec.count
-            for ge, se in zip(g, s):
+            for ge, se in zip(g, s, strict=True):
                 assert_same_element(spec, ge, se)
         else:
             assert_same_element(spec, g, s)

@@ -360,7 +360,7 @@ def test_extreme_gains_modules_and_noise(capi, controller, module):
     rng = np.random.default_rng(42)
     values = EXTREMES + list(rng.uniform(-1, 1, 30))
     frames = [(float(x), float(y), True, int(g)) for x, y, g in
-              zip(rng.permutation(values * 2), rng.permutation(values * 2), rng.integers(1, 100_000, 2 * len(values)))]
+              zip(rng.permutation(values * 2), rng.permutation(values * 2), rng.integers(1, 100_000, 2 * len(values)), strict=True)]
     rig.run("positions", frames)
     extremes = [t for t in rig.telemetry if t.state in (m.State.RUNNING, m.State.REACHED)]
     assert extremes and max(abs(c) for t in extremes for c in t.command) >= 0.2  # the limits were reached
@@ -397,7 +397,7 @@ def test_non_finite_positions_are_refused_and_change_nothing(capi, seed):
     rng = np.random.default_rng(seed)
     bad_values = [math.nan, math.inf, -math.inf]
     valid = [(float(x), float(y), int(g)) for x, y, g in zip(rng.uniform(-0.3, 0.3, 60), rng.uniform(-0.3, 0.3, 60),
-                                                               rng.integers(20_000, 120_000, 60))]
+                                                               rng.integers(20_000, 120_000, 60), strict=True)]
 
     def run(with_bad: bool) -> list[tuple]:
         rig = Rig(capi)

@@ -6,8 +6,8 @@ import subprocess
 import sys
 
 import pytest
-
 from conformance_result import assert_suite_passed
+
 from mantaray.paths import REPO, NotBuilt, native_artifact
 
 

@@ -77,7 +77,7 @@ def _results(tmp_path: Path, name: str, protocol: E.Experiment, outcomes: list[t
     """A results file of protocol whose trials have the given (success, reached, fell_off), in trial order, and a
     time to reach and a final error drawn from the trial's seed (the same trial, the same draw), later_s later."""
     results = R.ResultsFile(tmp_path / f"{name}.jsonl", protocol)
-    for trial, (success, reached, fell) in zip(E.trials(protocol), outcomes):
+    for trial, (success, reached, fell) in zip(E.trials(protocol), outcomes, strict=False):   # fewer outcomes: an unfinished run
         draw = np.random.default_rng(trial.seed).random(2)
         results.records[trial.key] = {"key": trial.key, "cell": trial.cell, "k": trial.k, "success": success,
                                       "reached": reached, "fell_off": fell, "target_m": list(trial.target_m),
@@ -101,13 +101,13 @@ def _draw(rng, n, p_reach):
     reached = rng.random(n) < p_reach
     fell = ~reached & (rng.random(n) < 0.5)
     success = reached & (rng.random(n) < 0.5)
-    return list(zip(success, reached, fell))
+    return list(zip(success, reached, fell, strict=True))
 
 
 def _flip(outcomes, rng, share):
     """The outcomes with each trial redrawn with probability share (a perturbation's scatter, no bias)."""
     redrawn = _draw(rng, len(outcomes), 0.5)
-    return [r if rng.random() < share else o for o, r in zip(outcomes, redrawn)]
+    return [r if rng.random() < share else o for o, r in zip(outcomes, redrawn, strict=True)]
 
 
 SEEDS = [int(s) for s in np.random.default_rng(2026).integers(0, 2 ** 32, 60)]   # the drawn samples below

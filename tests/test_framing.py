@@ -136,7 +136,7 @@ def _kwargs(cls: type[Message], fields: dict) -> dict:
 def _assert_field_equal(spec, got, want):
     if spec.count > 1:
         assert len(got) == spec.count and len(want) == spec.count, spec.name
-        for g, w in zip(got, want):
+        for g, w in zip(got, want, strict=True):
             _assert_element_equal(spec, g, w)
     else:
         _assert_element_equal(spec, got, want)
@@ -185,7 +185,7 @@ def test_vector_decodes_to_its_yields(vector):
     decoder = FrameDecoder()
     out = decoder.feed(wire)
     assert len(out) == len(vector["yields"]), out
-    for item, want in zip(out, vector["yields"]):
+    for item, want in zip(out, vector["yields"], strict=True):
         _check_yield(item, want)
     assert decoder.crc_errors == sum(y["yield"] == "crc_error" for y in vector["yields"])
     assert decoder.frame_errors == sum(y["yield"] == "frame_error" for y in vector["yields"])

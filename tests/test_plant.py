@@ -10,11 +10,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mantaray.paths import REPO
+from mantaray.protocol import messages as m
 from mantaray.sim import parameters as P
 from mantaray.sim.experiment import Experiment, controller_gains, trial_spec, trials
 from mantaray.sim.plant import Plant, parse_setting
 from mantaray.sim.rig import Rig
-from mantaray.protocol import messages as m
 
 PHYSICAL = [p for p in P.parameters().values() if p.section not in ("tracking", "reading")]
 

@@ -277,7 +277,7 @@ class Harness:
         assert abs(tel.tilt_zx - want.tilt_zx) <= TILT_QUANTUM / 2 + TILT_EPS, context
         assert abs(tel.tilt_zy - want.tilt_zy) <= TILT_QUANTUM / 2 + TILT_EPS, context
         assert max(abs(tel.tilt_zx), abs(tel.tilt_zy)) <= self.cfg.tilt_limit + TILT_QUANTUM / 2
-        for got, expected in zip(tel.command, want.command):
+        for got, expected in zip(tel.command, want.command, strict=True):
             assert abs(got - expected) <= COMMAND_QUANTUM / 2 + COMMAND_EPS, context
             assert abs(got) <= ref.ACTUATOR_RANGE
         if abs(want.distance - 0.02) > 1e-6:

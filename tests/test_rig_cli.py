@@ -16,6 +16,7 @@ import time
 import cv2
 import numpy as np
 import pytest
+from synthetic_camera import H, W, camera, intrinsics, render
 
 from mantaray.host.controller_settings import ControllerSettings
 from mantaray.host.link import Link
@@ -24,7 +25,6 @@ from mantaray.host.transport import SerialTransport
 from mantaray.host.vmcu import VirtualMcu
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
-from synthetic_camera import H, W, camera, intrinsics, render
 
 FPS = 12.0
 
@@ -250,7 +250,7 @@ def test_markers_sheet_is_at_true_size(tmp_path):
     detector = cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, layout.dictionary)))
     corners, ids, _ = detector.detectMarkers(image)
     sizes = {}
-    for c, i in zip(corners, ids.ravel()):
+    for c, i in zip(corners, ids.ravel(), strict=True):
         side_px = np.mean(np.linalg.norm(np.diff(np.vstack([c[0], c[0][:1]]), axis=0), axis=1))
         sizes.setdefault(int(i), []).append(side_px / 300 * 25.4)
     for i in layout.corner_ids:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 
+import paper_reference as ref
 import pytest
 
 from mantaray.host import link as L
@@ -15,8 +16,6 @@ from mantaray.protocol.generate import load_schema
 from mantaray.sim import parameters as P
 from mantaray.sim.bridge import Bridge
 from mantaray.sim.rig import Actuators, Rig
-
-import paper_reference as ref
 
 
 @pytest.fixture

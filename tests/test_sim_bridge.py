@@ -16,8 +16,8 @@ from mantaray.host.vmcu import VirtualMcu
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
 from mantaray.protocol.framing import Frame, FrameDecoder, encode_packet
-from mantaray.sim import findings as F
 from mantaray.sim import experiment as E
+from mantaray.sim import findings as F
 from mantaray.sim import mjcf as J
 from mantaray.sim import model as M
 from mantaray.sim.bridge import Bridge, Tracking, TrialSpec

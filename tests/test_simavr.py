@@ -9,8 +9,8 @@ import sys
 import time
 
 import pytest
-
 from conformance_result import assert_suite_passed
+
 from mantaray.host.controller_settings import ControllerSettings
 from mantaray.host.link import CommandRefused, Link
 from mantaray.host.simavr import DEFAULT_ELF, SimulatedUno

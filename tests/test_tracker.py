@@ -4,9 +4,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
+from synthetic_camera import LAYOUT, H, W, camera, intrinsics, render
 
 from mantaray.host import tracker as T
-from synthetic_camera import LAYOUT, H, W, camera, intrinsics, render
 
 
 def test_homography_mode_is_within_2_mm_rms_at_1280x720():

@@ -11,8 +11,8 @@ from mantaray.host.transport import InProcessTransport
 from mantaray.sim import mjcf as J
 from mantaray.sim import model as M
 from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
-from mantaray.sim.rig import Rig
 from mantaray.sim.objects import OBJECTS
+from mantaray.sim.rig import Rig
 from mantaray.sim.vision import FRAME_PX, CameraVision, blob_colour
 
 

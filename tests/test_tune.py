@@ -12,7 +12,8 @@ import time
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from mantaray.host.controller_settings import ControllerSettings, SettingsError
 from mantaray.host.session import controller_axes
@@ -139,7 +140,7 @@ def test_a_start_from_settings_gives_back_the_knobs_that_made_them(controller, p
 
     @given(st.lists(st.floats(0.0, 1.0), min_size=len(space), max_size=len(space)), st.sampled_from([1.0, 180 / math.pi]))
     def check(fractions, scale):
-        values = {k.key: k.low + f * (k.high - k.low) for k, f in zip(space, fractions)}
+        values = {k.key: k.low + f * (k.high - k.low) for k, f in zip(space, fractions, strict=True)}
         settings = T.settings_of(controller, values, scale)
         back, clipped = T.start_values(settings, per_axis, scale)
         assert back.keys() == values.keys() and clipped == []

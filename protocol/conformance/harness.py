@@ -4,7 +4,7 @@ from __future__ import annotations
 import dataclasses
 import struct
 import time
-from typing import Iterable
+from collections.abc import Iterable
 
 from mantaray.host.link import CommandRefused, Link
 from mantaray.host.session import CONTROLLER_AXES

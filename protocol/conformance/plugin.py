@@ -7,7 +7,6 @@ import time
 import pytest
 
 from mantaray.protocol import messages as m
-
 from mantaray.protocol.conformance.harness import Dut
 
 HANDSHAKE_TIMEOUT_S = 5.0  # [s] identify is retried this long before the device counts as silent

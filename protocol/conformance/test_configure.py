@@ -9,8 +9,17 @@ import pytest
 from mantaray.host.link import CommandRefused
 from mantaray.protocol import messages as m
 from mantaray.protocol.conformance.harness import (
-    ALT_CONFIG, BASE_CONFIG, CONFIGURE_FIELD, DEFAULT_CONFIG, TILT_TOL, base_config_fingerprint,
-    config_fingerprint, f32, f32_above, f32_below)
+    ALT_CONFIG,
+    BASE_CONFIG,
+    CONFIGURE_FIELD,
+    DEFAULT_CONFIG,
+    TILT_TOL,
+    base_config_fingerprint,
+    config_fingerprint,
+    f32,
+    f32_above,
+    f32_below,
+)
 
 NAN, INF = math.nan, math.inf
 OUT, NOT_FINITE = m.ErrorCode.OUT_OF_RANGE, m.ErrorCode.NOT_FINITE

@@ -7,7 +7,14 @@ import pytest
 
 from mantaray.protocol import messages as m
 from mantaray.protocol.conformance.harness import (
-    ALT_GAINS, CONFIGURE_PID_FIELD, TILT_TOL, base_pid_fingerprint, f32_above, f32_below, pid_fingerprint)
+    ALT_GAINS,
+    CONFIGURE_PID_FIELD,
+    TILT_TOL,
+    base_pid_fingerprint,
+    f32_above,
+    f32_below,
+    pid_fingerprint,
+)
 
 NAN, INF = math.nan, math.inf
 OUT, NOT_FINITE = m.ErrorCode.OUT_OF_RANGE, m.ErrorCode.NOT_FINITE

@@ -7,8 +7,16 @@ import pytest
 
 from mantaray.protocol import messages as m
 from mantaray.protocol.conformance.harness import (
-    ALT_CONFIG, BASE_CONFIG, DEFAULT_CONFIG, base_config_fingerprint, config_fingerprint, error_delta, packet_wire,
-    reference_errors, reference_frames)
+    ALT_CONFIG,
+    BASE_CONFIG,
+    DEFAULT_CONFIG,
+    base_config_fingerprint,
+    config_fingerprint,
+    error_delta,
+    packet_wire,
+    reference_errors,
+    reference_frames,
+)
 from mantaray.protocol.framing import Frame, cobs_encode, crc16, encode_frame
 
 HOST_TO_MCU = [cls for cls in m.MESSAGES.values() if cls.DIRECTION == "host_to_mcu"]
@@ -263,7 +271,7 @@ def test_frames_split_across_writes_are_answered(dut, chunk):
     mark = len(dut.log)
     dut.send_raw(b"".join(w for w, _ in frames), chunk=chunk)
     t = dut.probe()
-    assert nacks_and_acks(dut.log[mark:]) == [m.Ack(x.ID, seq) for x, (_, seq) in zip(msgs, frames)]
+    assert nacks_and_acks(dut.log[mark:]) == [m.Ack(x.ID, seq) for x, (_, seq) in zip(msgs, frames, strict=True)]
     assert t.command[1] > 0.0
 
 
@@ -271,4 +279,4 @@ def test_back_to_back_frames_are_answered_in_order(dut):
     msgs = [m.SetTarget(0.05 * i / 10, 0.0) for i in range(10)] + [DEFAULT_CONFIG, m.Stop()]
     frames = [dut.frame_bytes(x) for x in msgs]
     before, _ = dut.exchange(b"".join(w for w, _ in frames))
-    assert nacks_and_acks(before) == [m.Ack(x.ID, seq) for x, (_, seq) in zip(msgs, frames)]
+    assert nacks_and_acks(before) == [m.Ack(x.ID, seq) for x, (_, seq) in zip(msgs, frames, strict=True)]

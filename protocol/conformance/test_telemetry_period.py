@@ -1,6 +1,8 @@
 """Conformance: unsolicited telemetry every telemetry_period ms (0 = none), in every state."""
 from __future__ import annotations
 
+import itertools
+
 import pytest
 
 from mantaray.protocol import messages as m
@@ -34,7 +36,7 @@ def test_periodic_telemetry_on_a_wall_clock(dut, advance):
     # busy 2-core machine, where the firmware and this host share the cores (the simulated-clock test above
     # checks the period to the millisecond)
     assert 8 <= len(times) <= 16
-    gaps = [(b - a) & 0xFFFFFFFF for a, b in zip(times, times[1:])]
+    gaps = [(b - a) & 0xFFFFFFFF for a, b in itertools.pairwise(times)]
     assert min(gaps) >= 20
     assert sum(gaps) / len(gaps) <= 30
 
