@@ -11,6 +11,7 @@ Two runs of the same ELF, each for --seconds of simulated time:
 Prints cycles (and microseconds) for each, the longest main-loop pass against the 5.6 ms the Uno's 64-byte
 receive buffer lasts at 115200 baud, and the RAM the stack never reached. Writes them to --out as JSON.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -43,9 +44,12 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seconds", type=float, default=60.0, help="simulated seconds of each run")
     parser.add_argument("--out", default="out/bench/avr_timing.json")
-    parser.add_argument("--plant", choices=plant_names(),
-                        help=f"the plant of the bench-side trial (sim/plant.toml) (default: the one --settings was "
-                             f"tuned for, else {DEFAULT_PLANT})")
+    parser.add_argument(
+        "--plant",
+        choices=plant_names(),
+        help=f"the plant of the bench-side trial (sim/plant.toml) (default: the one --settings was "
+        f"tuned for, else {DEFAULT_PLANT})",
+    )
     add_controller_arguments(parser)
     args = parser.parse_args()
     settings = controller_settings(parser, args)
@@ -61,9 +65,16 @@ def main() -> int:
 
     with SimulatedUno(DEFAULT_ELF, bench=True) as uno:
         bridge = Bridge(Link(SerialTransport(uno.path)), plant.rig(), plant.tracking())
-        result = bridge.run(TrialSpec((0.08, -0.06), (-0.05, 0.05), duration_s=args.seconds,
-                                      controller=settings.controller, settings=settings.values,
-                                      gains=controller_gains(settings.controller, None, plant.gain_scale)))
+        result = bridge.run(
+            TrialSpec(
+                (0.08, -0.06),
+                (-0.05, 0.05),
+                duration_s=args.seconds,
+                controller=settings.controller,
+                settings=settings.values,
+                gains=controller_gains(settings.controller, None, plant.gain_scale),
+            )
+        )
         bridge.link.close()
     bench = uno.stats
 
@@ -73,29 +84,41 @@ def main() -> int:
     link.command(m.Configure(telemetry_period=100))
     sign = 1.0
     try:
-        while uno.process.poll() is None:       # jog the carriages back and forth until the run ends
+        while uno.process.poll() is None:  # jog the carriages back and forth until the run ends
             for i in range(4):
                 link.command(m.Jog(actuator=i, position=sign * 0.05 * (1 + i % 2)))
             sign = -sign
             time.sleep(0.5)
-    except (LinkError, OSError):                # the simulation ended under a command
+    except (LinkError, OSError):  # the simulation ended under a command
         pass
     link.close()
     uno.wait(timeout_s=600)
     rig = uno.stats
 
-    report = {"bench": bench, "rig": rig, "trial": result.summary(), "controller": settings.controller,
-              "settings": dict(settings.values), "plant": args.plant}
+    report = {
+        "bench": bench,
+        "rig": rig,
+        "trial": result.summary(),
+        "controller": settings.controller,
+        "settings": dict(settings.values),
+        "plant": args.plant,
+    }
     frame, loops = bench["byte_handling"], rig["actuator_loops"]
     worst = max(bench["main_loop_pass"]["max_cycles"], rig["main_loop_pass"]["max_cycles"])
     print(f"simavr, ATmega328P at 16 MHz, {args.seconds:g} s simulated per run")
-    print(f"object_position frame ({settings.controller} step + reply), longest of {frame['count']} bytes handled: "
-          f"{us(frame['max_cycles'])}")
-    print(f"four actuator loops (4 I2C reads, 4 PIDs, 4 PWM writes), {loops['count']} runs: "
-          f"mean {us(loops['mean_cycles'])}, max {us(loops['max_cycles'])} (period 4,000 us)")
+    print(
+        f"object_position frame ({settings.controller} step + reply), longest of {frame['count']} bytes handled: "
+        f"{us(frame['max_cycles'])}"
+    )
+    print(
+        f"four actuator loops (4 I2C reads, 4 PIDs, 4 PWM writes), {loops['count']} runs: "
+        f"mean {us(loops['mean_cycles'])}, max {us(loops['max_cycles'])} (period 4,000 us)"
+    )
     print(f"longest main-loop pass: {us(worst)} (the 64-byte RX buffer lasts {RX_BUFFER_US:,.0f} us)")
-    print(f"RAM the stack never reached: bench {bench['never_used_ram_bytes']} B, rig {rig['never_used_ram_bytes']} B "
-          f"of 2,048 B")
+    print(
+        f"RAM the stack never reached: bench {bench['never_used_ram_bytes']} B, rig {rig['never_used_ram_bytes']} B "
+        f"of 2,048 B"
+    )
     print(f"closed-loop trial on the bench side ({args.plant} plant): {result.summary()}")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

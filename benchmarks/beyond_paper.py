@@ -12,6 +12,7 @@ script prints each run's scores under both rules beside the baseline's, the fall
 trials (for either rule and for the falls), and copies the tuned controller's heatmaps and writes the difference
 maps to docs/figures/.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -32,9 +33,9 @@ from mantaray.sim.results_file import write_whole
 
 REPO = Path(__file__).resolve().parents[1]
 COMMITTED = REPO / "docs" / "results" / "tune"
-BASELINES = REPO / "out" / "heatmap"          # where paper_heatmaps.py --plant paper --to-end puts them
+BASELINES = REPO / "out" / "heatmap"  # where paper_heatmaps.py --plant paper --to-end puts them
 SPHERE_CASCADE = COMMITTED / "sphere_cascade" / "settings.toml"
-RUNS = {   # name: (object, controller, alpha [m], the baseline run of paper_heatmaps.py, settings to start from)
+RUNS = {  # name: (object, controller, alpha [m], the baseline run of paper_heatmaps.py, settings to start from)
     "sphere_scheduled": ("sphere", "scheduled", 0.0, "sphere_manhattan_paper_to_end", None),
     "sphere_cascade": ("sphere", "cascade", 0.0, "sphere_manhattan_paper_to_end", None),
     # the cube and the bunny with the better of the two on the sphere's final checks (docs/results.md), their
@@ -42,8 +43,8 @@ RUNS = {   # name: (object, controller, alpha [m], the baseline run of paper_hea
     "cube_cascade_alpha0.1": ("cube", "cascade", 0.1, "cube_manhattan_alpha0.1_paper_to_end", SPHERE_CASCADE),
     "bunny_cascade_alpha0.05": ("bunny", "cascade", 0.05, "bunny_manhattan_alpha0.05_paper_to_end", SPHERE_CASCADE),
 }
-PAIRED_APART = ("controller", "settings", "gains")   # what a paired comparison may differ in: the controller only
-KEPT = ("settings.toml", "report.json", "history.png")   # beside study.db and the final check's trials
+PAIRED_APART = ("controller", "settings", "gains")  # what a paired comparison may differ in: the controller only
+KEPT = ("settings.toml", "report.json", "history.png")  # beside study.db and the final check's trials
 
 
 def out_dir(run: str) -> Path:
@@ -94,9 +95,14 @@ def edge_falls(a: dict, b: dict) -> dict:
     first (the reach rule counts those as successes), and the trials a keeps on the sheet where b fell."""
     band = [k for k in sorted(set(a) & set(b)) if max(abs(v) for v in a[k]["target_m"]) > 0.20]
     kept = [k for k in band if b[k]["fell_off"] and not a[k]["fell_off"]]
-    out = {"trials": len(band), "kept_on_by_tuned": len(kept),
-           "of_those_reached": {"tuned": sum(bool(a[k]["reached"]) for k in kept),
-                                "paper_manhattan": sum(bool(b[k]["reached"]) for k in kept)}}
+    out = {
+        "trials": len(band),
+        "kept_on_by_tuned": len(kept),
+        "of_those_reached": {
+            "tuned": sum(bool(a[k]["reached"]) for k in kept),
+            "paper_manhattan": sum(bool(b[k]["reached"]) for k in kept),
+        },
+    }
     for name, rec in (("tuned", a), ("paper_manhattan", b)):
         fell = [k for k in band if rec[k]["fell_off"]]
         out[f"fell_{name}"] = {"trials": len(fell), "reached_first": sum(bool(rec[k]["reached"]) for k in fell)}
@@ -116,39 +122,72 @@ def compare(run: str) -> dict | None:
     from mantaray.sim import summary as S
 
     tuned_path, base_path = out_dir(run) / "final" / "results.jsonl", baseline(run)
-    runs_it = {tuned_path: f"python3 benchmarks/beyond_paper.py --runs {run}",
-               base_path: "python3 benchmarks/paper_heatmaps.py --plant paper --to-end --runs "
-                          + RUNS[run][3].removesuffix("_paper_to_end")}
+    runs_it = {
+        tuned_path: f"python3 benchmarks/beyond_paper.py --runs {run}",
+        base_path: "python3 benchmarks/paper_heatmaps.py --plant paper --to-end --runs "
+        + RUNS[run][3].removesuffix("_paper_to_end"),
+    }
     loaded = {}
     for path, command in runs_it.items():
         loaded[path] = R.ResultsFile.load(path) if path.exists() else None
         if loaded[path] is None or loaded[path].missing():
-            print(f"{run}: not compared: {path.relative_to(REPO)} is {'missing' if loaded[path] is None else 'incomplete'}"
-                  f" (`{command}` runs it)", file=sys.stderr, flush=True)
+            print(
+                f"{run}: not compared: {path.relative_to(REPO)} is {'missing' if loaded[path] is None else 'incomplete'}"
+                f" (`{command}` runs it)",
+                file=sys.stderr,
+                flush=True,
+            )
             return None
     tuned, base = loaded[tuned_path], loaded[base_path]
-    differ = sorted(k for k, v in tuned.protocol.to_json().items()
-                    if k not in PAIRED_APART and base.protocol.to_json()[k] != v)
-    if differ:       # then trial k of a cell is not the same start, target and noise in both: no pairs
+    differ = sorted(
+        k for k, v in tuned.protocol.to_json().items() if k not in PAIRED_APART and base.protocol.to_json()[k] != v
+    )
+    if differ:  # then trial k of a cell is not the same start, target and noise in both: no pairs
         raise SystemExit(f"{run}: the final check and {base_path} differ in {', '.join(differ)}: not paired trials")
     st, sb = S.summarize(tuned), S.summarize(base)
-    out = {"tuned": {"score": round(st.score, 1), "reach_score": round(st.reach_score, 1),
-                     "fell_off": round(float(st.fell_rates.mean()), 3)},
-           "paper_manhattan": {"score": round(sb.score, 1), "reach_score": round(sb.reach_score, 1),
-                               "fell_off": round(float(sb.fell_rates.mean()), 3)},
-           "ratio": {"score": round(st.score / sb.score, 2) if sb.score else None,
-                     "reach_score": round(st.reach_score / sb.reach_score, 2) if sb.reach_score else None},
-           "mcnemar": {rule: mcnemar(tuned.records, base.records, rule) for rule in ("success", "reached", "fell_off")},
-           "zones": {"tuned": paper_heatmaps.zone_rates(tuned_path)["zones"],
-                     "paper_manhattan": paper_heatmaps.zone_rates(base_path)["zones"]},
-           "outer_band": edge_falls(tuned.records, base.records)}
+    out = {
+        "tuned": {
+            "score": round(st.score, 1),
+            "reach_score": round(st.reach_score, 1),
+            "fell_off": round(float(st.fell_rates.mean()), 3),
+        },
+        "paper_manhattan": {
+            "score": round(sb.score, 1),
+            "reach_score": round(sb.reach_score, 1),
+            "fell_off": round(float(sb.fell_rates.mean()), 3),
+        },
+        "ratio": {
+            "score": round(st.score / sb.score, 2) if sb.score else None,
+            "reach_score": round(st.reach_score / sb.reach_score, 2) if sb.reach_score else None,
+        },
+        "mcnemar": {rule: mcnemar(tuned.records, base.records, rule) for rule in ("success", "reached", "fell_off")},
+        "zones": {
+            "tuned": paper_heatmaps.zone_rates(tuned_path)["zones"],
+            "paper_manhattan": paper_heatmaps.zone_rates(base_path)["zones"],
+        },
+        "outer_band": edge_falls(tuned.records, base.records),
+    }
     for rule, flag in (("", []), ("_reach", ["--reached"])):
-        drawn = tuned_path.parent / f"heatmap{rule}.png"        # the tuned controller's own map (sim tune draws it)
+        drawn = tuned_path.parent / f"heatmap{rule}.png"  # the tuned controller's own map (sim tune draws it)
         if drawn.exists():
             shutil.copyfile(drawn, REPO / "docs" / "figures" / f"heatmap_{run}{rule}.png")
-        subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "compare", str(tuned_path), str(base_path),
-                        *flag, "--out", str(REPO / "docs" / "figures" / f"difference_{run}_minus_manhattan{rule}.png")],
-                       cwd=REPO, check=True, stdout=subprocess.DEVNULL)
+        subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "mantaray.cli",
+                "sim",
+                "compare",
+                str(tuned_path),
+                str(base_path),
+                *flag,
+                "--out",
+                str(REPO / "docs" / "figures" / f"difference_{run}_minus_manhattan{rule}.png"),
+            ],
+            cwd=REPO,
+            check=True,
+            stdout=subprocess.DEVNULL,
+        )
     return out
 
 
@@ -169,16 +208,37 @@ def main() -> int:
         if not args.collect:
             restore(run)
             start_from = ["--start-from", str(start.relative_to(REPO))] if start else []
-            proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "tune", "--controller", controller,
-                                     "--object", obj, "--alpha", str(alpha), "--plant", "paper", "--candidates",
-                                     str(args.candidates), "--jobs", str(args.jobs), *start_from,
-                                     "--out", str(out_dir(run).relative_to(REPO))], cwd=REPO)
+            proc = subprocess.Popen(
+                [
+                    sys.executable,
+                    "-m",
+                    "mantaray.cli",
+                    "sim",
+                    "tune",
+                    "--controller",
+                    controller,
+                    "--object",
+                    obj,
+                    "--alpha",
+                    str(alpha),
+                    "--plant",
+                    "paper",
+                    "--candidates",
+                    str(args.candidates),
+                    "--jobs",
+                    str(args.jobs),
+                    *start_from,
+                    "--out",
+                    str(out_dir(run).relative_to(REPO)),
+                ],
+                cwd=REPO,
+            )
             try:
                 returncode = proc.wait()
-            except KeyboardInterrupt:      # Ctrl-C reaches sim tune too: it ends keeping what it did
+            except KeyboardInterrupt:  # Ctrl-C reaches sim tune too: it ends keeping what it did
                 returncode = proc.wait()
             finally:
-                collect(run)              # and that is written back
+                collect(run)  # and that is written back
             if returncode != 0:
                 print(f"{run}: tune ended with exit {returncode}; what it did is kept", file=sys.stderr)
                 return returncode

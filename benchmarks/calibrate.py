@@ -9,6 +9,7 @@ Run:  python3 benchmarks/calibrate.py --set fabric.size_m=0.5,0.55,0.6 --set 'co
       over cores). `mantaray sim calibrate` searches the whole space; this sweeps a grid of a few parameters.
 Prints one line per grid point and controller, and writes them as JSON lines to --out.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -27,7 +28,7 @@ from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
 from mantaray.sim.model import SimulationUnstable
 from mantaray.sim.plant import Plant
 
-RADIUS_M = 0.10   # [m] starts and targets within this distance of the centre (the issue's central region)
+RADIUS_M = 0.10  # [m] starts and targets within this distance of the centre (the issue's central region)
 
 
 def central_trials(n: int, seed: int) -> list[tuple[tuple[float, float], tuple[float, float]]]:
@@ -60,27 +61,39 @@ def run_point(job: tuple) -> list[dict]:
         for controller in controllers:
             t = time.perf_counter()
             try:
-                results = [bridge.run(TrialSpec(s, g, controller=controller, duration_s=duration_s, seed=i + 1))
-                           for i, (s, g) in enumerate(trials)]
+                results = [
+                    bridge.run(TrialSpec(s, g, controller=controller, duration_s=duration_s, seed=i + 1))
+                    for i, (s, g) in enumerate(trials)
+                ]
             except SimulationUnstable as exc:
                 rows.append({"settings": dict(settings), "controller": controller, "unstable": str(exc)})
                 continue
-            rows.append({"settings": dict(settings), "controller": controller,
-                         "success": sum(r.success for r in results), "trials": len(results),
-                         "fell": sum(r.fell_off for r in results),
-                         "final_error_m": [round(r.final_error_m, 4) for r in results],
-                         "median_error_m": round(float(np.median([r.final_error_m for r in results])), 4),
-                         "reached": sum(r.time_to_reach_s is not None for r in results),
-                         "sim_per_wall": round(sum(r.sim_time_s for r in results)
-                                               / sum(r.wall_time_s for r in results), 2),
-                         "wall_s": round(time.perf_counter() - t, 1)})
+            rows.append(
+                {
+                    "settings": dict(settings),
+                    "controller": controller,
+                    "success": sum(r.success for r in results),
+                    "trials": len(results),
+                    "fell": sum(r.fell_off for r in results),
+                    "final_error_m": [round(r.final_error_m, 4) for r in results],
+                    "median_error_m": round(float(np.median([r.final_error_m for r in results])), 4),
+                    "reached": sum(r.time_to_reach_s is not None for r in results),
+                    "sim_per_wall": round(sum(r.sim_time_s for r in results) / sum(r.wall_time_s for r in results), 2),
+                    "wall_s": round(time.perf_counter() - t, 1),
+                }
+            )
     return rows
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=V1,V2",
-                        help="a parameter of sim/plant.toml and the values to try (e.g. fabric.size_m=0.5,0.55)")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=V1,V2",
+        help="a parameter of sim/plant.toml and the values to try (e.g. fabric.size_m=0.5,0.55)",
+    )
     parser.add_argument("--controllers", default="manhattan,euclidean")
     parser.add_argument("--trials", type=int, default=10)
     parser.add_argument("--seed", type=int, default=2026, help="seed of the start/target draw")
@@ -101,9 +114,12 @@ def main() -> int:
         except ValueError as exc:
             parser.error(str(exc))
     trials = central_trials(args.trials, args.seed)
-    jobs = [(list(combo), args.controllers.split(","), trials, args.duration, args.rate, args.latency)
-            for combo in itertools.product(*axes)]
+    jobs = [
+        (list(combo), args.controllers.split(","), trials, args.duration, args.rate, args.latency)
+        for combo in itertools.product(*axes)
+    ]
     from pathlib import Path
+
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     with open(args.out, "a") as out, multiprocessing.Pool(args.jobs) as pool:
         for rows in pool.imap_unordered(run_point, jobs):
@@ -112,9 +128,12 @@ def main() -> int:
                 if "unstable" in row:
                     print(f"{row['settings']} {row['controller']:9s} UNSTABLE: {row['unstable']}", flush=True)
                     continue
-                print(f"{row['settings']} {row['controller']:9s} {row['success']}/{row['trials']} "
-                      f"(reached {row['reached']}) fell {row['fell']} median error {row['median_error_m']:.3f} m "
-                      f"({row['sim_per_wall']} sim s/wall s, {row['wall_s']} s)", flush=True)
+                print(
+                    f"{row['settings']} {row['controller']:9s} {row['success']}/{row['trials']} "
+                    f"(reached {row['reached']}) fell {row['fell']} median error {row['median_error_m']:.3f} m "
+                    f"({row['sim_per_wall']} sim s/wall s, {row['wall_s']} s)",
+                    flush=True,
+                )
     return 0
 
 

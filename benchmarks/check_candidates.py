@@ -9,6 +9,7 @@ trials each, drawn from --seed (not the search's). --plants scores named plants 
 hold-out sample, beside them. Prints each one's F1-F5 (for a candidate, on both samples) and writes them as
 JSON to --out.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -44,18 +45,29 @@ def main() -> int:
     if config.get("kind") != "findings":
         parser.error(f"{args.study} is not a findings study")
     searched = C.FindingsEvidence(**{k: tuple(v) if isinstance(v, list) else v for k, v in config.items()})
-    check = dataclasses.replace(searched, cells_per_stratum=args.cells_per_stratum,
-                                trials_per_cell=args.trials_per_cell, seed=args.seed)
-    ranked = sorted((t for t in C.completed(study) if t.user_attrs["details"]["passed"] >= 0),
-                    key=lambda t: (-t.user_attrs["details"]["passed"], sum(t.values)))[:args.top]
+    check = dataclasses.replace(
+        searched, cells_per_stratum=args.cells_per_stratum, trials_per_cell=args.trials_per_cell, seed=args.seed
+    )
+    ranked = sorted(
+        (t for t in C.completed(study) if t.user_attrs["details"]["passed"] >= 0),
+        key=lambda t: (-t.user_attrs["details"]["passed"], sum(t.values)),
+    )[: args.top]
     rows = []
     with LocalPool(args.jobs) as pool:
         for name in filter(None, args.plants.split(",")):
             if name not in plant_names():
                 parser.error(f"unknown plant {name!r}; the plants are: {', '.join(plant_names())}")
             objectives, details = dataclasses.replace(check, plant=name).evaluate({}, pool)
-            rows.append({"plant": name, "check": {"objectives": list(objectives), "findings": details["findings"],
-                                                  "stats": details["stats"]}})
+            rows.append(
+                {
+                    "plant": name,
+                    "check": {
+                        "objectives": list(objectives),
+                        "findings": details["findings"],
+                        "stats": details["stats"],
+                    },
+                }
+            )
             print(f"plant {name} ({details['rule']} rule), hold-out sample:")
             for finding, f in details["findings"].items():
                 print(f"  {finding}: {'holds' if f['holds'] else 'fails'}   {f['measured']}")
@@ -63,18 +75,34 @@ def main() -> int:
         for t in ranked:
             t0 = time.perf_counter()
             objectives, details = check.evaluate(t.user_attrs["values"], pool)
-            rows.append({"number": t.number, "values": t.user_attrs["values"],
-                         "search": {"objectives": t.values, "findings": t.user_attrs["details"]["findings"]},
-                         "check": {"objectives": list(objectives), "findings": details["findings"],
-                                   "stats": details["stats"]}, "wall_s": round(time.perf_counter() - t0, 1)})
-            print(f"candidate #{t.number} ({details['rule']} rule), search sample -> hold-out sample "
-                  f"({check.cells_per_stratum} cells x {check.trials_per_cell} trials a stratum, seed {check.seed}):")
+            rows.append(
+                {
+                    "number": t.number,
+                    "values": t.user_attrs["values"],
+                    "search": {"objectives": t.values, "findings": t.user_attrs["details"]["findings"]},
+                    "check": {
+                        "objectives": list(objectives),
+                        "findings": details["findings"],
+                        "stats": details["stats"],
+                    },
+                    "wall_s": round(time.perf_counter() - t0, 1),
+                }
+            )
+            print(
+                f"candidate #{t.number} ({details['rule']} rule), search sample -> hold-out sample "
+                f"({check.cells_per_stratum} cells x {check.trials_per_cell} trials a stratum, seed {check.seed}):"
+            )
             for name, f in details["findings"].items():
                 before = t.user_attrs["details"]["findings"][name]
-                print(f"  {name}: {'holds' if before['holds'] else 'fails'} -> {'holds' if f['holds'] else 'fails'}"
-                      f"   {f['measured']}")
-            print(f"  objectives {[round(v, 3) for v in t.values]} -> {[round(v, 3) for v in objectives]}, "
-                  f"{rows[-1]['wall_s']} s", flush=True)
+                print(
+                    f"  {name}: {'holds' if before['holds'] else 'fails'} -> {'holds' if f['holds'] else 'fails'}"
+                    f"   {f['measured']}"
+                )
+            print(
+                f"  objectives {[round(v, 3) for v in t.values]} -> {[round(v, 3) for v in objectives]}, "
+                f"{rows[-1]['wall_s']} s",
+                flush=True,
+            )
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(rows, indent=1) + "\n")
     return 0

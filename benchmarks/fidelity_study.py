@@ -10,6 +10,7 @@ rewrites the reports; every run resumes where it stopped (a 21 x 21 run takes ho
 writes back what out/ holds (from a gate still running, say). The reports go to docs/results/fidelity/<gate>/ and
 the table of every verdict to docs/results/fidelity/convergence.md.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -28,28 +29,42 @@ COMMITTED = REPO / "docs" / "results" / "fidelity"
 TRIALS = REPO / "out" / "fidelity" / "trials"
 CASCADE = "docs/results/tune/sphere_cascade/settings.toml"
 ARMS = {"paper": ("manhattan", CASCADE), "polyester": ("manhattan", "euclidean")}
-GATES = {   # name: (plant, candidate, finer), in the order they run
+GATES = {  # name: (plant, candidate, finer), in the order they run
     "paper_15x15_2ms": ("paper", "15:0.002", "15:0.001"),
     "paper_11x11_2ms": ("paper", "11:0.002", "15:0.001"),
     "paper_11x11_1ms": ("paper", "11:0.001", "15:0.001"),
-    "paper_15x15_0.5ms": ("paper", "15:0.0005", "15:0.001"),   # is 1 ms itself converged in the step?
-    "paper_15x15_0.25ms_vs_0.5ms": ("paper", "15:0.00025", "15:0.0005"),   # ... and 0.5 ms?
+    "paper_15x15_0.5ms": ("paper", "15:0.0005", "15:0.001"),  # is 1 ms itself converged in the step?
+    "paper_15x15_0.25ms_vs_0.5ms": ("paper", "15:0.00025", "15:0.0005"),  # ... and 0.5 ms?
     "polyester_15x15_2ms": ("polyester", "15:0.002", "15:0.001"),
     "polyester_11x11_2ms": ("polyester", "11:0.002", "15:0.001"),
     "polyester_11x11_1ms": ("polyester", "11:0.001", "15:0.001"),
-    "polyester_15x15_0.5ms": ("polyester", "15:0.0005", "15:0.001"),   # is 1 ms converged for this plant too?
+    "polyester_15x15_0.5ms": ("polyester", "15:0.0005", "15:0.001"),  # is 1 ms converged for this plant too?
     "paper_15x15_1ms_vs_21x21": ("paper", "15:0.001", "21:0.001"),
-    "polyester_15x15_0.5ms_vs_21x21": ("polyester", "15:0.0005", "21:0.0005"),   # the reference's mesh (no clamp)
-    "polyester_15x15_0.25ms_vs_0.5ms": ("polyester", "15:0.00025", "15:0.0005"),   # the reference's step
+    "polyester_15x15_0.5ms_vs_21x21": ("polyester", "15:0.0005", "21:0.0005"),  # the reference's mesh (no clamp)
+    "polyester_15x15_0.25ms_vs_0.5ms": ("polyester", "15:0.00025", "15:0.0005"),  # the reference's step
 }
 
 
 def command(name: str, jobs: int | None) -> list[str]:
     plant, candidate, finer = GATES[name]
     arms = [a for arm in ARMS[plant] for a in ("--controller", arm)]
-    return ["mantaray", "sim", "fidelity", "--candidate", candidate, "--finer", finer, "--plant", plant, *arms,
-            "--trials-dir", str(TRIALS.relative_to(REPO)), "--out", f"out/fidelity/{name}",
-            *(["--jobs", str(jobs)] if jobs else [])]
+    return [
+        "mantaray",
+        "sim",
+        "fidelity",
+        "--candidate",
+        candidate,
+        "--finer",
+        finer,
+        "--plant",
+        plant,
+        *arms,
+        "--trials-dir",
+        str(TRIALS.relative_to(REPO)),
+        "--out",
+        f"out/fidelity/{name}",
+        *(["--jobs", str(jobs)] if jobs else []),
+    ]
 
 
 def restore() -> None:
@@ -76,13 +91,18 @@ def collect(name: str) -> None:
 
 def table() -> str:
     """Every committed gate's verdict and its numbers, one row each."""
-    rows = ["# The fidelity gate on each mesh and step (the sphere, to the end of T)", "",
-            "Written by `python3 benchmarks/fidelity_study.py`; each gate's report, with the command that reproduces "
-            "it, is in its folder here. Rates over the pooled sample of both controllers: candidate / finer. Flips: "
-            "trials whose outcome differs from the finer run's, for the candidate / for the finer run with every start "
-            "moved 0.1 mm (the noise floor).", "",
-            "| plant | candidate | finer | paired trials | reached | fell off | within ε at T | flips reached | "
-            "flips fell | flips within ε | verdict |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    rows = [
+        "# The fidelity gate on each mesh and step (the sphere, to the end of T)",
+        "",
+        "Written by `python3 benchmarks/fidelity_study.py`; each gate's report, with the command that reproduces "
+        "it, is in its folder here. Rates over the pooled sample of both controllers: candidate / finer. Flips: "
+        "trials whose outcome differs from the finer run's, for the candidate / for the finer run with every start "
+        "moved 0.1 mm (the noise floor).",
+        "",
+        "| plant | candidate | finer | paired trials | reached | fell off | within ε at T | flips reached | "
+        "flips fell | flips within ε | verdict |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for name, (plant, _, _) in GATES.items():
         path = COMMITTED / name / "report.json"
         if not path.exists():
@@ -97,9 +117,11 @@ def table() -> str:
             return f"{o[key]['candidate_vs_finer']['flips']} / {o[key]['floor_vs_finer']['flips']}"
 
         verdict = r["verdict"] or f"incomplete ({r['pairs']} of {r['expected_pairs']})"
-        rows.append(f"| {plant} | {r['candidate']} | {r['finer']} | {r['pairs']} | {rates('reached')} | "
-                    f"{rates('fell_off')} | {rates('success')} | {flips('reached')} | {flips('fell_off')} | "
-                    f"{flips('success')} | [{verdict}]({name}/report.md) |")
+        rows.append(
+            f"| {plant} | {r['candidate']} | {r['finer']} | {r['pairs']} | {rates('reached')} | "
+            f"{rates('fell_off')} | {rates('success')} | {flips('reached')} | {flips('fell_off')} | "
+            f"{flips('success')} | [{verdict}]({name}/report.md) |"
+        )
     return "\n".join(rows) + "\n"
 
 
@@ -119,15 +141,15 @@ def main() -> int:
             print(f"{name}: {' '.join(command(name, args.jobs))}", flush=True)
             try:
                 code = subprocess.run(command(name, args.jobs), cwd=REPO).returncode
-            except KeyboardInterrupt:     # the gate keeps every finished trial; write them back before stopping
+            except KeyboardInterrupt:  # the gate keeps every finished trial; write them back before stopping
                 collect(name)
                 (COMMITTED / "convergence.md").write_text(table())
                 print(f"\ninterrupted: {name}'s trials are kept; the same command continues", file=sys.stderr)
                 return 130
-            if code not in (0, 1):        # 0: keeps, 1: changes; 3: no verdict (incomplete, diverged); 2: misused
+            if code not in (0, 1):  # 0: keeps, 1: changes; 3: no verdict (incomplete, diverged); 2: misused
                 print(f"{name}: the gate gave no verdict (exit {code}; its message is above)", file=sys.stderr)
         collect(name)
-        (COMMITTED / "convergence.md").write_text(table())     # after every gate: a stop loses no row
+        (COMMITTED / "convergence.md").write_text(table())  # after every gate: a stop loses no row
     print(f"table: {(COMMITTED / 'convergence.md').relative_to(REPO)}")
     return 0
 

@@ -10,6 +10,7 @@ finding F6, draws the figure in the style of Fig. 3 (each object's paths with th
 above the phase plot of the tilts within the square of the controller's tilt limit, the paper's +-26.6 deg) to docs/figures/fig3_<plant>.png and writes
 the trials (paths and tilts included) to docs/results/fig3_<plant>.json.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -33,8 +34,9 @@ REPO = Path(__file__).resolve().parents[1]
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--plants", help="named plants of sim/plant.toml (default: every one, or the one --settings "
-                                          "was tuned for)")
+    parser.add_argument(
+        "--plants", help="named plants of sim/plant.toml (default: every one, or the one --settings was tuned for)"
+    )
     parser.add_argument("--seed", type=int, default=3, help="seed of the targets and the noise")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--figures", default="docs/figures")
@@ -44,7 +46,7 @@ def main() -> int:
     args.controller = None
     settings = controller_settings(parser, args)
     suffix = "" if settings.controller == "manhattan" and not settings.values else f"_{settings.controller}"
-    tilt_limit_deg = settings.configure(m.Configure()).tilt_limit       # [deg] the limit the controller runs with
+    tilt_limit_deg = settings.configure(m.Configure()).tilt_limit  # [deg] the limit the controller runs with
     plants = args.plants.split(",") if args.plants else [settings.plant] if settings.plant else plant_names()
     unknown = [p for p in plants if p not in plant_names()]
     if unknown:
@@ -62,19 +64,39 @@ def main() -> int:
             runs: dict[str, list[dict]] = {}
             for r in records:
                 runs.setdefault(r["object"], []).append(r)
-            figure = fig3_figure(runs, Experiment.tolerance_m, MODULE_M, tilt_limit_deg,
-                                 f"Fig. 3 in simulation, {plant} plant: {settings.controller}, 60 s, from the centre",
-                                 REPO / args.figures / f"fig3_{plant}{suffix}.png")
+            figure = fig3_figure(
+                runs,
+                Experiment.tolerance_m,
+                MODULE_M,
+                tilt_limit_deg,
+                f"Fig. 3 in simulation, {plant} plant: {settings.controller}, 60 s, from the centre",
+                REPO / args.figures / f"fig3_{plant}{suffix}.png",
+            )
             out = REPO / args.results / f"fig3_{plant}{suffix}.json"
             out.parent.mkdir(parents=True, exist_ok=True)
-            out.write_text(json.dumps({"plant": plant, "seed": args.seed, "controller": settings.controller,
-                                       "settings": dict(settings.values), "finding": vars(finding),
-                                       "trials": records}) + "\n")
-            print(f"{plant}: F6 {'holds' if finding.holds else 'fails'}: {finding.measured}; "
-                  + "; ".join(f"{name} fell {sum(t['fell_off'] for t in trials)}, median time to reach "
-                              f"{_median([t['time_to_reach_s'] for t in trials if t['reached']])}"
-                              for name, trials in runs.items())
-                  + f"; {time.perf_counter() - t0:.0f} s; {figure.relative_to(REPO)}", flush=True)
+            out.write_text(
+                json.dumps(
+                    {
+                        "plant": plant,
+                        "seed": args.seed,
+                        "controller": settings.controller,
+                        "settings": dict(settings.values),
+                        "finding": vars(finding),
+                        "trials": records,
+                    }
+                )
+                + "\n"
+            )
+            print(
+                f"{plant}: F6 {'holds' if finding.holds else 'fails'}: {finding.measured}; "
+                + "; ".join(
+                    f"{name} fell {sum(t['fell_off'] for t in trials)}, median time to reach "
+                    f"{_median([t['time_to_reach_s'] for t in trials if t['reached']])}"
+                    for name, trials in runs.items()
+                )
+                + f"; {time.perf_counter() - t0:.0f} s; {figure.relative_to(REPO)}",
+                flush=True,
+            )
     return 0
 
 

@@ -11,6 +11,7 @@ finer one's outcomes is the fidelity gate's question (`mantaray sim fidelity`), 
 in --out (one results file per config), so a rerun only adds what is missing: give a new --out to time again.
 --batched first measures mujoco.rollout's batched stepping against a plain mj_step loop.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -27,8 +28,8 @@ from mantaray.sim import fidelity as G
 from mantaray.sim import results_file as R
 from mantaray.sim.plant import DEFAULT_PLANT
 
-SAMPLE_IX = (2, 7, 12, 17)   # cells ix, iy of the sample: centres at -0.1875, -0.0625, 0.0625, 0.1875 m
-FULL_TRIALS = 4000           # the paper's protocol: 20 x 20 cells x 10 trials
+SAMPLE_IX = (2, 7, 12, 17)  # cells ix, iy of the sample: centres at -0.1875, -0.0625, 0.0625, 0.1875 m
+FULL_TRIALS = 4000  # the paper's protocol: 20 x 20 cells x 10 trials
 
 
 def sample_cells(cells: int = 20) -> tuple[int, ...]:
@@ -58,8 +59,12 @@ def batched_stepping(steps: int = 500) -> None:
     for copies, threads in ((1, 1), (4, 1), (4, 2), (8, 2)):
         with rollout.Rollout(nthread=threads) as r:
             t = time.perf_counter()
-            r.rollout([model] * copies, [mujoco.MjData(model) for _ in range(threads)], np.tile(state, (copies, 1)),
-                      np.zeros((copies, steps, model.nu)))
+            r.rollout(
+                [model] * copies,
+                [mujoco.MjData(model) for _ in range(threads)],
+                np.tile(state, (copies, 1)),
+                np.zeros((copies, steps, model.nu)),
+            )
             rate = copies * steps / (time.perf_counter() - t)
         print(f"  rollout of {copies} copies on {threads} thread(s): {rate:,.0f} steps/s ({rate / plain:.2f}x)")
 
@@ -79,9 +84,12 @@ def parse_configs(text: str) -> list[G.Fidelity]:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--configs", default="reference,15:0.001,15:0.002,fast",
-                        help="comma-separated fidelities: fast, reference or RESOLUTION:TIMESTEP; the first is the "
-                             "one the others' speeds are given against")
+    parser.add_argument(
+        "--configs",
+        default="reference,15:0.001,15:0.002,fast",
+        help="comma-separated fidelities: fast, reference or RESOLUTION:TIMESTEP; the first is the "
+        "one the others' speeds are given against",
+    )
     parser.add_argument("--controller", default="manhattan")
     parser.add_argument("--object", default="sphere")
     parser.add_argument("--alpha", type=float, default=0.0)
@@ -98,17 +106,28 @@ def main() -> int:
 
     cells = sample_cells()
     first = None
-    print(f"sample: {len(cells)} cells x 10 trials, {args.object}, {args.controller}, α = {args.alpha:g} m, "
-          f"{args.plant} plant, {args.jobs} workers")
-    print(f"{'config':>16s} {'trials/s':>9s} {'x first':>8s} {'sim s/wall s':>12s} {'outside mj_step':>15s} "
-          f"{'fell early':>10s} {'4,000 trials':>12s}")
+    print(
+        f"sample: {len(cells)} cells x 10 trials, {args.object}, {args.controller}, α = {args.alpha:g} m, "
+        f"{args.plant} plant, {args.jobs} workers"
+    )
+    print(
+        f"{'config':>16s} {'trials/s':>9s} {'x first':>8s} {'sim s/wall s':>12s} {'outside mj_step':>15s} "
+        f"{'fell early':>10s} {'4,000 trials':>12s}"
+    )
     for fidelity in configs:
-        protocol = E.Experiment(object_name=args.object, controller=args.controller, alpha_m=args.alpha,
-                                resolution=fidelity.resolution, timestep_s=fidelity.timestep_s, only_cells=cells,
-                                plant=args.plant)
+        protocol = E.Experiment(
+            object_name=args.object,
+            controller=args.controller,
+            alpha_m=args.alpha,
+            resolution=fidelity.resolution,
+            timestep_s=fidelity.timestep_s,
+            only_cells=cells,
+            plant=args.plant,
+        )
         results = R.ResultsFile.open(
             Path(args.out) / f"{args.object}_{args.controller}_alpha{args.alpha:g}_{args.plant}_{fidelity.slug}.jsonl",
-            protocol)
+            protocol,
+        )
         todo = results.missing()
         t0 = time.perf_counter()
         X.run(results, X.run_local(protocol, todo, args.jobs))
@@ -123,8 +142,11 @@ def main() -> int:
         first = first or per_s
         outside = 1 - sum(r["physics_wall_s"] for r in new) / sum(r["wall_time_s"] for r in new)
         fell = np.mean([r["fell_off"] for r in new])
-        print(f"{line} {per_s:9.3f} {per_s / first:7.2f}x {sum(r['sim_time_s'] for r in new) / wall:12.1f} "
-              f"{outside:15.1%} {fell:10.0%} {FULL_TRIALS / per_s / 60:8.1f} min", flush=True)
+        print(
+            f"{line} {per_s:9.3f} {per_s / first:7.2f}x {sum(r['sim_time_s'] for r in new) / wall:12.1f} "
+            f"{outside:15.1%} {fell:10.0%} {FULL_TRIALS / per_s / 60:8.1f} min",
+            flush=True,
+        )
     return 0
 
 

@@ -4,6 +4,7 @@ Run: python3 benchmarks/link_rtt.py [--frames N]
 Prints the frame sizes, the telemetry rate 115200 baud allows, and RTT percentiles for the virtual MCU
 on both clocks. Times are wall-clock on this machine: compare them only within one run.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -49,17 +50,24 @@ def main() -> None:
     position = len(encode_frame(m.ObjectPosition(), 0))
     print(f"telemetry frame: {telemetry} bytes on the wire ({m.Telemetry.SIZE}-byte payload)")
     print(f"object_position frame: {position} bytes on the wire")
-    print(f"highest telemetry rate at 115200 baud 8N1: {BAUD_BYTES_PER_S / telemetry:.1f} frames/s "
-          f"({telemetry / BAUD_BYTES_PER_S * 1e3:.2f} ms per frame)")
-    print(f"UART time of position + telemetry on a real 115200 link: "
-          f"{(telemetry + position) / BAUD_BYTES_PER_S * 1e3:.2f} ms")
+    print(
+        f"highest telemetry rate at 115200 baud 8N1: {BAUD_BYTES_PER_S / telemetry:.1f} frames/s "
+        f"({telemetry / BAUD_BYTES_PER_S * 1e3:.2f} ms per frame)"
+    )
+    print(
+        f"UART time of position + telemetry on a real 115200 link: "
+        f"{(telemetry + position) / BAUD_BYTES_PER_S * 1e3:.2f} ms"
+    )
     for clock in ("wall", "sim"):
         rtts = sorted(measure(clock, args.frames))
-        def q(p: float, rtts: list[float] = rtts) -> float:   # [us] the p-quantile
+
+        def q(p: float, rtts: list[float] = rtts) -> float:  # [us] the p-quantile
             return rtts[min(len(rtts) - 1, int(p * len(rtts)))] * 1e6
 
-        print(f"pty RTT, {clock} clock, {len(rtts)} frames: median {statistics.median(rtts) * 1e6:.0f} us, "
-              f"p90 {q(0.9):.0f} us, p99 {q(0.99):.0f} us, max {rtts[-1] * 1e6:.0f} us")
+        print(
+            f"pty RTT, {clock} clock, {len(rtts)} frames: median {statistics.median(rtts) * 1e6:.0f} us, "
+            f"p90 {q(0.9):.0f} us, p99 {q(0.99):.0f} us, max {rtts[-1] * 1e6:.0f} us"
+        )
 
 
 if __name__ == "__main__":

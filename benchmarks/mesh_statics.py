@@ -6,6 +6,7 @@ lets the bare sheet settle as every trial does (sim/model.py, load), and prints 
 [mm], the edges' mean and largest strain [%], and the time constant MuJoCo is given for the edges on that mesh
 (sim/rig.py, Fabric.edge_timeconst_s), marking one it runs longer than given (refsafe: two steps at least).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -26,13 +27,17 @@ def statics(plant: Plant, resolution: int) -> dict:
     flex = M._flex_id(model)
     v = M.fabric_vertices(model, data)
     adr, num = model.flex_edgeadr[flex], model.flex_edgenum[flex]
-    edges = model.flex_edge[adr:adr + num]
+    edges = model.flex_edge[adr : adr + num]
     length = np.linalg.norm(v[edges[:, 0]] - v[edges[:, 1]], axis=1)
-    rest = model.flexedge_length0[adr:adr + num]
+    rest = model.flexedge_length0[adr : adr + num]
     strain = (length - rest) / rest
-    return {"sag_mm": (rig.frame.z0_m - v[:, 2].min()) * 1000, "mean_strain_pct": strain.mean() * 100,
-            "max_strain_pct": strain.max() * 100, "edge_tau_ms": rig.fabric.edge_timeconst_s * 1000,
-            "lengthened": rig.fabric.edge_timeconst_s < MIN_STEPS_PER_TIMECONST * TIMESTEP_S}
+    return {
+        "sag_mm": (rig.frame.z0_m - v[:, 2].min()) * 1000,
+        "mean_strain_pct": strain.mean() * 100,
+        "max_strain_pct": strain.max() * 100,
+        "edge_tau_ms": rig.fabric.edge_timeconst_s * 1000,
+        "lengthened": rig.fabric.edge_timeconst_s < MIN_STEPS_PER_TIMECONST * TIMESTEP_S,
+    }
 
 
 def main() -> int:
@@ -46,17 +51,22 @@ def main() -> int:
         clamps = [None if c == "plant" else float(c) for c in args.clamps.split(",")]
     except ValueError:
         parser.error("--resolutions are whole numbers and --clamps 'plant' or metres, comma-separated")
-    print(f"{'plant':>10s} {'clamp':>9s} {'mesh':>8s} {'sag [mm]':>9s} {'strain mean / max [%]':>22s} "
-          f"{'edge tau [ms]':>14s}")
+    print(
+        f"{'plant':>10s} {'clamp':>9s} {'mesh':>8s} {'sag [mm]':>9s} {'strain mean / max [%]':>22s} "
+        f"{'edge tau [ms]':>14s}"
+    )
     for name in args.plants.split(","):
         own = Plant(name).values["fabric.corner_clamp_m"]
-        for clamp in dict.fromkeys(own if c is None else c for c in clamps):   # each length once
+        for clamp in dict.fromkeys(own if c is None else c for c in clamps):  # each length once
             plant = Plant(name).set({"fabric.corner_clamp_m": clamp})
             for n in resolutions:
                 s = statics(plant, n)
-                print(f"{name:>10s} {plant.values['fabric.corner_clamp_m'] * 100:7.2f} cm {n:>3d} x {n:<3d} "
-                      f"{s['sag_mm']:9.1f} {s['mean_strain_pct']:11.3f} / {s['max_strain_pct']:.3f} "
-                      f"{s['edge_tau_ms']:11.2f}{' (run at 2 steps)' if s['lengthened'] else ''}", flush=True)
+                print(
+                    f"{name:>10s} {plant.values['fabric.corner_clamp_m'] * 100:7.2f} cm {n:>3d} x {n:<3d} "
+                    f"{s['sag_mm']:9.1f} {s['mean_strain_pct']:11.3f} / {s['max_strain_pct']:.3f} "
+                    f"{s['edge_tau_ms']:11.2f}{' (run at 2 steps)' if s['lengthened'] else ''}",
+                    flush=True,
+                )
     return 0
 
 

@@ -17,6 +17,7 @@ rules. A plant that reads the paper's success rule as "reached" ends each trial 
 (--stop-when-reached), unless --to-end runs every trial to T (both success rules measured; the run's name gets
 _to_end).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -37,8 +38,8 @@ from mantaray.sim.plant import DEFAULT_PLANT, Plant
 from mantaray.sim.rig import FIDELITIES
 
 REPO = Path(__file__).resolve().parents[1]
-COMMITTED = REPO / "docs" / "results"   # every trial of each run, <run>.jsonl.gz
-RUNS = {   # name: (object, controller, alpha [m]) as in the paper's Fig. 2
+COMMITTED = REPO / "docs" / "results"  # every trial of each run, <run>.jsonl.gz
+RUNS = {  # name: (object, controller, alpha [m]) as in the paper's Fig. 2
     "sphere_manhattan": ("sphere", "manhattan", 0.0),
     "sphere_euclidean": ("sphere", "euclidean", 0.0),
     "cube_manhattan_alpha0.1": ("cube", "manhattan", 0.1),
@@ -47,7 +48,7 @@ RUNS = {   # name: (object, controller, alpha [m]) as in the paper's Fig. 2
 }
 
 
-ZONES = {   # name: which cells, from the cell centres' |x|, |y| [m] on the paper's 0.5 m module
+ZONES = {  # name: which cells, from the cell centres' |x|, |y| [m] on the paper's 0.5 m module
     "centre (|x|, |y| < 0.05 m)": lambda ax, ay: (ax < 0.05) & (ay < 0.05),
     "central (|x|, |y| < 0.10 m)": lambda ax, ay: (ax < CENTRAL_HALF_M) & (ay < CENTRAL_HALF_M),
     "outer 5 cm band": lambda ax, ay: np.maximum(ax, ay) > 0.20,
@@ -64,11 +65,18 @@ def zone_rates(results_path: Path) -> dict:
     s, p = S.summarize(results), results.protocol
     centres = -0.25 + (np.arange(p.cells) + 0.5) * 0.5 / p.cells
     ax, ay = np.meshgrid(np.abs(centres), np.abs(centres))
-    zones = {name: {kind: round(float(np.nanmean(rates[pick(ax, ay)])), 3)
-                    for kind, rates in (("success", s.rates), ("reach", s.reach_rates), ("fell", s.fell_rates))}
-             for name, pick in ZONES.items()}
+    zones = {
+        name: {
+            kind: round(float(np.nanmean(rates[pick(ax, ay)])), 3)
+            for kind, rates in (("success", s.rates), ("reach", s.reach_rates), ("fell", s.fell_rates))
+        }
+        for name, pick in ZONES.items()
+    }
     reach = s.reach_rates[np.isfinite(s.reach_rates)]
-    regions = {"success": int((reach >= S.SUCCESS_REGION_AT).sum()), "failure": int((reach <= S.FAILURE_REGION_AT).sum())}
+    regions = {
+        "success": int((reach >= S.SUCCESS_REGION_AT).sum()),
+        "failure": int((reach <= S.FAILURE_REGION_AT).sum()),
+    }
     regions["uncertain"] = len(reach) - regions["success"] - regions["failure"]
     return {"zones": zones, "reach_regions_cells": regions}
 
@@ -112,13 +120,22 @@ def main() -> int:
     parser.add_argument("--out", default="out/heatmap")
     parser.add_argument("--figures", default="docs/figures")
     parser.add_argument("--plant", default=DEFAULT_PLANT, help="the simulated plant (a [plant.NAME] of sim/plant.toml)")
-    parser.add_argument("--to-end", action="store_true",
-                        help="run every trial to T, also on a plant read with the paper's stopping rule, so that both "
-                             "success rules are measured (the baseline of docs/results.md, Beyond the paper)")
-    parser.add_argument("--collect", action="store_true",
-                        help="only write back the trials out/ holds (say, of a run still going) to docs/results/")
-    parser.add_argument("--fidelity", default="reference",
-                        help="fast, reference or RESOLUTION:TIMESTEP: the physics the runs are made at")
+    parser.add_argument(
+        "--to-end",
+        action="store_true",
+        help="run every trial to T, also on a plant read with the paper's stopping rule, so that both "
+        "success rules are measured (the baseline of docs/results.md, Beyond the paper)",
+    )
+    parser.add_argument(
+        "--collect",
+        action="store_true",
+        help="only write back the trials out/ holds (say, of a run still going) to docs/results/",
+    )
+    parser.add_argument(
+        "--fidelity",
+        default="reference",
+        help="fast, reference or RESOLUTION:TIMESTEP: the physics the runs are made at",
+    )
     args = parser.parse_args()
     try:
         fidelity = parse_fidelity(args.fidelity)
@@ -155,61 +172,119 @@ def main() -> int:
             print(f"{name}: continuing from the committed trials in {committed.relative_to(REPO)}", flush=True)
         if args.collect:
             held = keep(results_path, committed)
-            print(f"{name}: {held} trials kept in {committed.relative_to(REPO)}" if held else
-                  f"{name}: no trials in {results_path.relative_to(REPO)}", flush=True)
+            print(
+                f"{name}: {held} trials kept in {committed.relative_to(REPO)}"
+                if held
+                else f"{name}: no trials in {results_path.relative_to(REPO)}",
+                flush=True,
+            )
             continue
         out.mkdir(parents=True, exist_ok=True)
         before = trials_in(results_path)
         t0 = time.perf_counter()
-        proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--object", obj,
-                                 "--controller", controller, "--alpha", str(alpha), "--trials", str(args.trials),
-                                 "--jobs", str(args.jobs), "--plant", args.plant, *stop, "--resolution",
-                                 str(fidelity.resolution), "--timestep", str(fidelity.timestep_s), "--out", str(out),
-                                 "--json"],
-                                cwd=REPO, stdout=subprocess.PIPE)
+        proc = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "mantaray.cli",
+                "sim",
+                "heatmap",
+                "--object",
+                obj,
+                "--controller",
+                controller,
+                "--alpha",
+                str(alpha),
+                "--trials",
+                str(args.trials),
+                "--jobs",
+                str(args.jobs),
+                "--plant",
+                args.plant,
+                *stop,
+                "--resolution",
+                str(fidelity.resolution),
+                "--timestep",
+                str(fidelity.timestep_s),
+                "--out",
+                str(out),
+                "--json",
+            ],
+            cwd=REPO,
+            stdout=subprocess.PIPE,
+        )
         try:
             stdout, _ = proc.communicate()
-        except KeyboardInterrupt:        # Ctrl-C reaches sim heatmap too: it ends keeping every finished trial
+        except KeyboardInterrupt:  # Ctrl-C reaches sim heatmap too: it ends keeping every finished trial
             proc.wait()
-        finally:                         # and those, with this session's time, are written back
+        finally:  # and those, with this session's time, are written back
             wall = time.perf_counter() - t0
             if keep(results_path, committed) > before:
                 entry = table.setdefault(name, {})
                 entry["wall_s_sessions"] = [*entry.get("wall_s_sessions", []), round(wall, 1)]
                 table_path.write_text(json.dumps(table, indent=1) + "\n")
         if proc.returncode != 0:
-            print(f"{name}: heatmap ended with exit {proc.returncode} (its message is above); the trials it holds are "
-                  f"kept in {committed.relative_to(REPO)}", file=sys.stderr)
+            print(
+                f"{name}: heatmap ended with exit {proc.returncode} (its message is above); the trials it holds are "
+                f"kept in {committed.relative_to(REPO)}",
+                file=sys.stderr,
+            )
             return proc.returncode
         times = table[name].get("wall_s_sessions", []) if name in table else []
         summary = json.loads(stdout)
-        if not stop:                  # a run that stops at eps has no map of "ends within eps at T"
+        if not stop:  # a run that stops at eps has no map of "ends within eps at T"
             shutil.copyfile(out / "heatmap.png", figures / f"heatmap_{name}.png")
         shutil.copyfile(out / "heatmap_reach.png", figures / f"heatmap_{name}_reach.png")
-        table[name] = {"object": obj, "controller": controller, "alpha_m": alpha, "plant": args.plant,
-                       "score": summary["score"],
-                       "reach_score": summary["reach_score"], "regions": summary["regions"],
-                       "trials": summary["trials"], "trials_per_cell": args.trials, "wall_s_sessions": times, "jobs": args.jobs,
-                       **zone_rates(out / "results.jsonl")}
+        table[name] = {
+            "object": obj,
+            "controller": controller,
+            "alpha_m": alpha,
+            "plant": args.plant,
+            "score": summary["score"],
+            "reach_score": summary["reach_score"],
+            "regions": summary["regions"],
+            "trials": summary["trials"],
+            "trials_per_cell": args.trials,
+            "wall_s_sessions": times,
+            "jobs": args.jobs,
+            **zone_rates(out / "results.jsonl"),
+        }
         table_path.write_text(json.dumps(table, indent=1) + "\n")
-        print(f"{name}: score {summary['score']:.1f} (reach {summary['reach_score']:.1f}), "
-              f"{summary['trials']} trials, this session {wall / 60:.1f} min", flush=True)
+        print(
+            f"{name}: score {summary['score']:.1f} (reach {summary['reach_score']:.1f}), "
+            f"{summary['trials']} trials, this session {wall / 60:.1f} min",
+            flush=True,
+        )
     if args.collect:
         return 0
-    sphere_runs = [REPO / args.out / (run + suffix) / "results.jsonl" for run in ("sphere_euclidean", "sphere_manhattan")]
+    sphere_runs = [
+        REPO / args.out / (run + suffix) / "results.jsonl" for run in ("sphere_euclidean", "sphere_manhattan")
+    ]
     if all(path.exists() for path in sphere_runs):
         for rule, rule_suffix in ((["--reached"], "_reach"),) if stop else (([], ""), (["--reached"], "_reach")):
-            proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "compare",
-                                   *map(str, sphere_runs), *rule, "--out",
-                                   str(figures / f"heatmap_sphere_euclidean_minus_manhattan{rule_suffix}{suffix}.png")],
-                                  cwd=REPO)
+            proc = subprocess.run(
+                [
+                    sys.executable,
+                    "-m",
+                    "mantaray.cli",
+                    "sim",
+                    "compare",
+                    *map(str, sphere_runs),
+                    *rule,
+                    "--out",
+                    str(figures / f"heatmap_sphere_euclidean_minus_manhattan{rule_suffix}{suffix}.png"),
+                ],
+                cwd=REPO,
+            )
             if proc.returncode != 0:
                 return proc.returncode
         table[f"findings_{args.plant}"] = findings(*sphere_runs)
         table_path.write_text(json.dumps(table, indent=1) + "\n")
         for rule, found in table[f"findings_{args.plant}"].items():
-            print(f"findings on the {args.plant} plant, rule {rule}: "
-                  + "; ".join(f"{f['name']} {'holds' if f['holds'] else 'fails'} ({f['measured']})" for f in found))
+            print(
+                f"findings on the {args.plant} plant, rule {rule}: "
+                + "; ".join(f"{f['name']} {'holds' if f['holds'] else 'fails'} ({f['measured']})" for f in found)
+            )
     return 0
 
 
@@ -220,11 +295,13 @@ def findings(euclidean_path: Path, manhattan_path: Path) -> dict:
 
     runs = {c: R.ResultsFile.load(p) for c, p in (("euclidean", euclidean_path), ("manhattan", manhattan_path))}
     out = {}
-    stopped = any(r.protocol.stop_when_reached for r in runs.values())   # then "end" is not measured
+    stopped = any(r.protocol.stop_when_reached for r in runs.values())  # then "end" is not measured
     for rule in ("reached",) if stopped else F.RULES:
         stats = {c: F.map_stats(r.records.values(), r.protocol.cells, rule) for c, r in runs.items()}
-        out[rule] = [{"name": f.name, "holds": f.holds, "measured": f.measured}
-                     for f in F.heatmap_findings(stats["manhattan"], stats["euclidean"])]
+        out[rule] = [
+            {"name": f.name, "holds": f.holds, "measured": f.measured}
+            for f in F.heatmap_findings(stats["manhattan"], stats["euclidean"])
+        ]
     return out
 
 

@@ -18,6 +18,7 @@ the study is OUT/study.db. From it, with no trial run again:
   OUT/screen.json), the rank correlation of the two scores (Spearman) and where the reference's best ranks there.
 Prints the numbers, writes OUT/report.json and OUT/budget.png (best so far against trials run, both searches).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -38,7 +39,7 @@ from mantaray.sim.fidelity import parse_fidelity
 from mantaray.sim.parameters import plant_names
 from mantaray.sim.results_file import write_whole
 
-HOLDOUT_SEED = 77   # [-] the held-out sample's seed: not the search's (31)
+HOLDOUT_SEED = 77  # [-] the held-out sample's seed: not the search's (31)
 
 
 def kept_scores(path: Path, evidence: T.TuningEvidence, candidates: list, pool, label: str) -> dict[str, float]:
@@ -48,8 +49,11 @@ def kept_scores(path: Path, evidence: T.TuningEvidence, candidates: list, pool, 
         if str(t.number) not in scores:
             scores[str(t.number)] = evidence.evaluate(t.user_attrs["values"], pool)[0][0]
             write_whole(path, json.dumps(scores, indent=1).encode())
-            print(f"{label}: candidate #{t.number} ({i + 1} of {len(candidates)}): misses "
-                  f"{scores[str(t.number)]:.3f}", file=sys.stderr, flush=True)
+            print(
+                f"{label}: candidate #{t.number} ({i + 1} of {len(candidates)}): misses {scores[str(t.number)]:.3f}",
+                file=sys.stderr,
+                flush=True,
+            )
     return scores
 
 
@@ -77,6 +81,7 @@ def trials_until(order: list[dict], number: int) -> int | None:
 
 def figure(unpruned: list[dict], pruned: list[dict], path: Path) -> None:
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -114,9 +119,16 @@ def main() -> int:
     try:
         at = parse_fidelity(args.fidelity)
         screen = parse_fidelity(args.screen_at) if args.screen_at else None
-        evidence = T.TuningEvidence(controller=args.controller, object_name=args.object, plant=args.plant,
-                                    cells_per_stratum=args.cells_per_stratum, trials_per_cell=args.trials_per_cell,
-                                    duration_s=args.duration, resolution=at.resolution, timestep_s=at.timestep_s)
+        evidence = T.TuningEvidence(
+            controller=args.controller,
+            object_name=args.object,
+            plant=args.plant,
+            cells_per_stratum=args.cells_per_stratum,
+            trials_per_cell=args.trials_per_cell,
+            duration_s=args.duration,
+            resolution=at.resolution,
+            timestep_s=at.timestep_s,
+        )
         evidence.experiment(T.settings_of(args.controller, T.boot_values(args.controller)))
     except ValueError as exc:
         parser.error(str(exc))
@@ -127,53 +139,94 @@ def main() -> int:
         parser.error(str(exc))
     study.sampler = optuna.samplers.RandomSampler(seed=evidence.seed * 100_003 + len(study.trials))
     with LocalPool(args.jobs) as pool:
+
         def progress(n: int, total: int, info: dict) -> None:
             print(f"search: candidate {n} of {total}: misses {info['objectives'][0]:.3f}", file=sys.stderr, flush=True)
 
         C.run_study(study, evidence, T.knobs(args.controller), {}, args.candidates, pool, progress)
         done = sorted(C.completed(study), key=lambda t: t.number)
-        unpruned = [{"number": t.number, "trials": t.user_attrs["details"]["trials"], "misses": t.values[0]}
-                    for t in done]
+        unpruned = [
+            {"number": t.number, "trials": t.user_attrs["details"]["trials"], "misses": t.values[0]} for t in done
+        ]
         pruned = T.replay_pruned(dataclasses.replace(evidence, prune=True), done)
         budget = int(sum(r["trials"] for r in unpruned) / args.ratio)
         winners = {name: best_within(order, budget) for name, order in (("unpruned", unpruned), ("pruned", pruned))}
         by_number = {t.number: t for t in done}
         holdout = dataclasses.replace(evidence, cells_per_stratum=args.holdout_cells, seed=HOLDOUT_SEED)
-        held = kept_scores(out / "holdout.json", holdout,
-                           [by_number[n] for n in sorted({w[0]["number"] for w in winners.values() if w[0]})],
-                           pool, "held-out")
-        screened = (kept_scores(out / f"screen_{screen.slug}.json",
-                                dataclasses.replace(evidence, resolution=screen.resolution,
-                                                    timestep_s=screen.timestep_s), done, pool, f"screen {screen.label}")
-                    if screen else None)
+        held = kept_scores(
+            out / "holdout.json",
+            holdout,
+            [by_number[n] for n in sorted({w[0]["number"] for w in winners.values() if w[0]})],
+            pool,
+            "held-out",
+        )
+        screened = (
+            kept_scores(
+                out / f"screen_{screen.slug}.json",
+                dataclasses.replace(evidence, resolution=screen.resolution, timestep_s=screen.timestep_s),
+                done,
+                pool,
+                f"screen {screen.label}",
+            )
+            if screen
+            else None
+        )
     cpu_per_trial_s = sum(t.user_attrs["wall_s"] for t in done) * args.jobs / sum(r["trials"] for r in unpruned)
     overall = min(unpruned, key=lambda r: r["misses"])
     report = {
-        "search": {"controller": args.controller, "plant": args.plant, "object": args.object, "fidelity": at.label,
-                   "candidates": len(done), "cells_per_stratum": args.cells_per_stratum,
-                   "trials_per_cell": args.trials_per_cell, "seed": evidence.seed, "sampler": "random"},
-        "trials": {"unpruned": sum(r["trials"] for r in unpruned), "pruned": sum(r["trials"] for r in pruned),
-                   "stopped": sum(r["misses"] is None for r in pruned)},
-        "candidates_per_cpu_hour": {name: round(len(order) / (sum(r["trials"] for r in order) * cpu_per_trial_s)
-                                                * 3600, 2) for name, order in (("unpruned", unpruned),
-                                                                              ("pruned", pruned))},
+        "search": {
+            "controller": args.controller,
+            "plant": args.plant,
+            "object": args.object,
+            "fidelity": at.label,
+            "candidates": len(done),
+            "cells_per_stratum": args.cells_per_stratum,
+            "trials_per_cell": args.trials_per_cell,
+            "seed": evidence.seed,
+            "sampler": "random",
+        },
+        "trials": {
+            "unpruned": sum(r["trials"] for r in unpruned),
+            "pruned": sum(r["trials"] for r in pruned),
+            "stopped": sum(r["misses"] is None for r in pruned),
+        },
+        "candidates_per_cpu_hour": {
+            name: round(len(order) / (sum(r["trials"] for r in order) * cpu_per_trial_s) * 3600, 2)
+            for name, order in (("unpruned", unpruned), ("pruned", pruned))
+        },
         "cpu_per_trial_s": round(cpu_per_trial_s, 2),
-        "best": {"number": overall["number"], "misses": overall["misses"],
-                 "trials_until": {"unpruned": trials_until(unpruned, overall["number"]),
-                                  "pruned": trials_until(pruned, overall["number"])}},
-        "budget": {"trials": budget, **{name: {"candidates": seen, "trials": spent,
-                                               "best": None if best is None else best["number"],
-                                               "misses": None if best is None else best["misses"],
-                                               "held_out_misses": None if best is None else held[str(best["number"])]}
-                                        for name, (best, seen, spent) in winners.items()},
-                   "held_out": {"cells_per_stratum": args.holdout_cells, "seed": HOLDOUT_SEED}},
+        "best": {
+            "number": overall["number"],
+            "misses": overall["misses"],
+            "trials_until": {
+                "unpruned": trials_until(unpruned, overall["number"]),
+                "pruned": trials_until(pruned, overall["number"]),
+            },
+        },
+        "budget": {
+            "trials": budget,
+            **{
+                name: {
+                    "candidates": seen,
+                    "trials": spent,
+                    "best": None if best is None else best["number"],
+                    "misses": None if best is None else best["misses"],
+                    "held_out_misses": None if best is None else held[str(best["number"])],
+                }
+                for name, (best, seen, spent) in winners.items()
+            },
+            "held_out": {"cells_per_stratum": args.holdout_cells, "seed": HOLDOUT_SEED},
+        },
     }
     if screened is not None:
         numbers = [r["number"] for r in unpruned]
         cheap = np.array([screened[str(n)] for n in numbers])
-        report["screen"] = {"fidelity": screen.label, "candidates": len(numbers),
-                            "rank_correlation": F.rank_correlation(np.array([r["misses"] for r in unpruned]), cheap),
-                            "rank_of_best_there": int(1 + np.sum(cheap < screened[str(overall["number"])]))}
+        report["screen"] = {
+            "fidelity": screen.label,
+            "candidates": len(numbers),
+            "rank_correlation": F.rank_correlation(np.array([r["misses"] for r in unpruned]), cheap),
+            "rank_of_best_there": int(1 + np.sum(cheap < screened[str(overall["number"])])),
+        }
     out.mkdir(parents=True, exist_ok=True)
     write_whole(out / "report.json", json.dumps(report, indent=1).encode())
     figure(unpruned, pruned, out / "budget.png")

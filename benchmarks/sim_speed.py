@@ -6,6 +6,7 @@ for the irregular objects) and prints its speed and how the wall time splits bet
 the protocol exchange with the firmware, and the rest (Python bookkeeping, fall checks). Figures move
 with the machine's load: compare rows of one run, not runs.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -31,12 +32,16 @@ def main() -> int:
         link = Link(SerialTransport(vmcu.path))
         for name in args.objects.split(","):
             bridge = Bridge(link, Rig().with_object(name))
-            r = bridge.run(TrialSpec((0.05, -0.05), (-0.05, 0.05), duration_s=args.duration,
-                                     alpha_m=ALPHA_M.get(name, 0.0)))
+            r = bridge.run(
+                TrialSpec((0.05, -0.05), (-0.05, 0.05), duration_s=args.duration, alpha_m=ALPHA_M.get(name, 0.0))
+            )
             other = 1 - r.physics_share - r.link_wall_s / r.wall_time_s
             outcome = "fell off" if r.fell_off else f"final error {r.final_error_m * 100:.1f} cm"
-            print(f"{name:9s} {r.sim_time_s / r.wall_time_s:12.2f} {r.physics_share:8.1%} "
-                  f"{r.link_wall_s / r.wall_time_s:6.1%} {other:6.1%}  {outcome}", flush=True)
+            print(
+                f"{name:9s} {r.sim_time_s / r.wall_time_s:12.2f} {r.physics_share:8.1%} "
+                f"{r.link_wall_s / r.wall_time_s:6.1%} {other:6.1%}  {outcome}",
+                flush=True,
+            )
     return 0
 
 

@@ -15,6 +15,7 @@ command] and their tilt at the end [deg]; the object's slide relative to the she
 downhill; the sheet itself moves as the corners do, carrying the object), when it first exceeded 2 cm and its
 value at the end [cm]; and whether and when it fell off.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -32,10 +33,10 @@ from mantaray.sim.parameters import plant_names
 from mantaray.sim.plant import parse_setting
 from mantaray.sim.rig import Rig
 
-SLID_M = 0.02           # [m] a slide this long counts as the object set going (the protocol's ε)
-AT_TILT_DEG = 1.0       # [deg] the carriages count as at the commanded tilt within this
-SHEET_VERTICES = 4      # the sheet under the object: the mean of this many vertices nearest it at placement
-STEP_S = 0.01           # [s] how often the probe looks
+SLID_M = 0.02  # [m] a slide this long counts as the object set going (the protocol's ε)
+AT_TILT_DEG = 1.0  # [deg] the carriages count as at the commanded tilt within this
+SHEET_VERTICES = 4  # the sheet under the object: the mean of this many vertices nearest it at placement
+STEP_S = 0.01  # [s] how often the probe looks
 
 
 def carriage_tilt_deg(model, data, size_x_m: float) -> float:
@@ -49,11 +50,12 @@ def hold_tilt(model, data, rig, x0_m: float, tilt_deg: float, hold_s: float) -> 
     M.place_object(model, data, x0_m, 0.0, rule=rig.fall)
     t0_s = data.time
     half_x_m = rig.frame.size_x_m / 2
-    M.set_commands(model, data, [math.tan(math.radians(tilt_deg)) * (half_x_m if i & 1 else -half_x_m)
-                                 for i in range(4)])
+    M.set_commands(
+        model, data, [math.tan(math.radians(tilt_deg)) * (half_x_m if i & 1 else -half_x_m) for i in range(4)]
+    )
     under = np.argsort(np.hypot(*(M.fabric_vertices(model, data)[:, :2] - M.object_xy(model, data)).T))[:SHEET_VERTICES]
 
-    def offset_x_m() -> float:        # the object's x relative to the sheet under it
+    def offset_x_m() -> float:  # the object's x relative to the sheet under it
         return float(M.object_xy(model, data)[0] - M.fabric_vertices(model, data)[under, 0].mean())
 
     start_m = offset_x_m()
@@ -84,15 +86,28 @@ def main() -> int:
     parser.add_argument("--plants", default="paper,polyester", help="comma-separated, of: " + ", ".join(plant_names()))
     parser.add_argument("--object", choices=sorted(OBJECTS), default="cube")
     parser.add_argument("--starts", type=floats, default=[0.0, 0.1], help="start x [m], y = 0; within ±0.2 m")
-    parser.add_argument("--tilts", type=floats, default=[10.0, 20.0, 26.565, 35.0],
-                        help="x-tilts θ [deg], 0 up to where a corner leaves its range (45° on the paper's module)")
+    parser.add_argument(
+        "--tilts",
+        type=floats,
+        default=[10.0, 20.0, 26.565, 35.0],
+        help="x-tilts θ [deg], 0 up to where a corner leaves its range (45° on the paper's module)",
+    )
     parser.add_argument("--hold", type=float, default=6.0, help="how long each tilt is held [s, simulated], 0.1..30")
     parser.add_argument("--resolution", type=int, default=E.Experiment.resolution, help="fabric vertices per side")
     parser.add_argument("--timestep", type=float, default=E.Experiment.timestep_s, help="physics step [s]")
-    parser.add_argument("--integrator", choices=("Euler", "discrete"), default=None,
-                        help="MuJoCo's integrator (default: the rig's, sim/rig.py Solver)")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="set a plant parameter over each plant (a key of sim/plant.toml, in its range); repeatable")
+    parser.add_argument(
+        "--integrator",
+        choices=("Euler", "discrete"),
+        default=None,
+        help="MuJoCo's integrator (default: the rig's, sim/rig.py Solver)",
+    )
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="set a plant parameter over each plant (a key of sim/plant.toml, in its range); repeatable",
+    )
     args = parser.parse_args()
     try:
         setting = tuple(parse_setting(text) for text in args.set)
@@ -112,15 +127,23 @@ def main() -> int:
         parser.error("--hold must be 0.1..30 s")
     for plant in plants:
         try:
-            rig = E.Experiment(object_name=args.object, plant=plant, resolution=args.resolution,
-                               timestep_s=args.timestep, plant_set=setting).rig()
+            rig = E.Experiment(
+                object_name=args.object,
+                plant=plant,
+                resolution=args.resolution,
+                timestep_s=args.timestep,
+                plant_set=setting,
+            ).rig()
         except ValueError as exc:
             parser.error(str(exc))
         if args.integrator:
             rig = dataclasses.replace(rig, solver=dataclasses.replace(rig.solver, integrator=args.integrator))
         model, data = M.load(rig)
-        print(f"{plant}: carriages at most {rig.actuators.speed_m_per_s:.3f} m/s; fabric {args.resolution} x "
-              f"{args.resolution} at {args.timestep:g} s, {rig.solver.integrator}", flush=True)
+        print(
+            f"{plant}: carriages at most {rig.actuators.speed_m_per_s:.3f} m/s; fabric {args.resolution} x "
+            f"{args.resolution} at {args.timestep:g} s, {rig.solver.integrator}",
+            flush=True,
+        )
         for x0_m in args.starts:
             for tilt_deg in args.tilts:
                 head = f"  {args.object} from x = {x0_m:+.2f} m, tilt {tilt_deg:5.1f} deg:"
@@ -132,8 +155,11 @@ def main() -> int:
                 at_tilt = f"at {r['at_tilt_s']:.2f} s" if r["at_tilt_s"] is not None else "never"
                 slid = f"at {r['slid_s']:.2f} s" if r["slid_s"] is not None else "never"
                 fell = f", fell off at {r['fell_s']:.2f} s" if r["fell_s"] is not None else ""
-                print(f"{head} carriages at the tilt {at_tilt} ({r['tilt_deg']:.1f} deg at the end);"
-                      f" slid 2 cm {slid}, {r['slid_m'] * 100:+.1f} cm in all{fell}", flush=True)
+                print(
+                    f"{head} carriages at the tilt {at_tilt} ({r['tilt_deg']:.1f} deg at the end);"
+                    f" slid 2 cm {slid}, {r['slid_m'] * 100:+.1f} cm in all{fell}",
+                    flush=True,
+                )
     return 0
 
 

@@ -9,6 +9,7 @@ Run: python3 benchmarks/tracker_speed.py [--frames 100]
   mode with a tilted, off-centre camera), frames rendered by the MuJoCo scene (the cube's marker), and
   vision in the loop (the tracker's positions against the simulated truth during trials).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -20,7 +21,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))   # the tests' synthetic camera
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the tests' synthetic camera
 
 from synthetic_camera import camera, intrinsics, render  # noqa: E402
 
@@ -59,14 +60,15 @@ def main() -> int:
     truths = rng.uniform(-0.22, 0.22, (args.frames, 2))
     frames = [render(xy, rng=rng) for xy in truths]
     colour = [cv2.cvtColor(f, cv2.COLOR_GRAY2BGR) for f in frames]
-    for f, xy in zip(colour, truths, strict=True):   # a yellow blob where the object is, for the blob mode
+    for f, xy in zip(colour, truths, strict=True):  # a yellow blob where the object is, for the blob mode
         c, _ = cv2.projectPoints(np.array([[xy[0], xy[1], 0.0]]), *camera(1.0), intrinsics(), None)
         cv2.circle(f, tuple(int(round(v)) for v in c.ravel()), 20, (40, 200, 240), -1)
 
     print("tracker at 1280 x 720, one OpenCV thread:")
-    for name, tracker, images in (("ArUco", T.Tracker(), frames),
-                                  ("colour blob", T.Tracker(blob=T.BlobColour((20, 120, 120), (35, 255, 255))),
-                                   colour)):
+    for name, tracker, images in (
+        ("ArUco", T.Tracker(), frames),
+        ("colour blob", T.Tracker(blob=T.BlobColour((20, 120, 120), (35, 255, 255))), colour),
+    ):
         tracker.observe(images[0], 0.0)
         t = time.perf_counter()
         for k, image in enumerate(images):
@@ -83,21 +85,28 @@ def main() -> int:
         for k, image in enumerate(frames):
             t0 = time.perf_counter()
             obs = tracker.observe(image, time.monotonic())
-            link.position(m.ObjectPosition(frame=k + 1, capture_time=(k + 1) * 83333, x=obs.xy_m[0], y=obs.xy_m[1]),
-                          timeout=1.0)
+            link.position(
+                m.ObjectPosition(frame=k + 1, capture_time=(k + 1) * 83333, x=obs.xy_m[0], y=obs.xy_m[1]), timeout=1.0
+            )
             rtts.append(time.perf_counter() - t0)
             spans.append(transport.written_at - t0)
         link.close()
-    print(f"latency, frame in memory -> object_position written: median {statistics.median(spans) * 1000:.1f} ms, "
-          f"max {max(spans) * 1000:.1f} ms; -> its telemetry back: median {statistics.median(rtts) * 1000:.1f} ms")
+    print(
+        f"latency, frame in memory -> object_position written: median {statistics.median(spans) * 1000:.1f} ms, "
+        f"max {max(spans) * 1000:.1f} ms; -> its telemetry back: median {statistics.median(rtts) * 1000:.1f} ms"
+    )
 
     print("accuracy against ground truth [mm RMS]:")
-    errors = [np.hypot(*(np.asarray(T.Tracker().observe(f, 0).xy_m) - xy)) for f, xy in zip(frames, truths, strict=True)]
+    errors = [
+        np.hypot(*(np.asarray(T.Tracker().observe(f, 0).xy_m) - xy)) for f, xy in zip(frames, truths, strict=True)
+    ]
     print(f"  synthetic, homography mode, camera 1 m straight above: {rms_mm(errors):.2f} ({len(errors)} frames)")
     cam = camera(1.2, xy_m=(0.04, -0.05), tilt_deg=3.0)
     pose = T.Tracker(marker_height_m=0.04, calibration=T.Calibration(intrinsics(), np.zeros(5)))
-    errors = [np.hypot(*(np.asarray(pose.observe(render(xy, marker_height_m=0.04, cam=cam), 0).xy_m) - xy))
-              for xy in truths[:30]]
+    errors = [
+        np.hypot(*(np.asarray(pose.observe(render(xy, marker_height_m=0.04, cam=cam), 0).xy_m) - xy))
+        for xy in truths[:30]
+    ]
     print(f"  synthetic, pose mode, tilted off-centre camera, marker 4 cm up: {rms_mm(errors):.2f} (30 frames)")
 
     import mujoco
@@ -121,20 +130,30 @@ def main() -> int:
         vision.tracker.marker_height_m = float(top[2] - rig.frame.z0_m)
         errors.append(np.hypot(*(vision.measure(data, data.time) - top[:2])))
     print(f"  MuJoCo frames, the cube's marker, its true height: {rms_mm(errors):.2f} (20 frames)")
-    for name, obj, mode, alpha in (("cube, ArUco", "cube", "aruco", 0.1), ("sphere, colour blob", "sphere", "blob", 0.0)):
-        bridge = Bridge(Link(InProcessTransport(simulated_clock=True)), Rig().with_object(obj).with_vision(mode),
-                        Tracking(vision=mode))
+    for name, obj, mode, alpha in (
+        ("cube, ArUco", "cube", "aruco", 0.1),
+        ("sphere, colour blob", "sphere", "blob", 0.0),
+    ):
+        bridge = Bridge(
+            Link(InProcessTransport(simulated_clock=True)),
+            Rig().with_object(obj).with_vision(mode),
+            Tracking(vision=mode),
+        )
         r = bridge.run(TrialSpec((0.08, -0.06), (-0.05, 0.05), duration_s=6.0, alpha_m=alpha))
         seen = np.all(np.isfinite(r.measured_xy_m), axis=1)
         err = np.hypot(*(r.measured_xy_m[seen] - r.true_xy_m[seen]).T)
-        print(f"  vision in the loop, {name}, against the object's centre: {rms_mm(err):.2f} "
-              f"({seen.sum()} of {len(seen)} frames seen; the marker height calibrated once at rest)")
+        print(
+            f"  vision in the loop, {name}, against the object's centre: {rms_mm(err):.2f} "
+            f"({seen.sum()} of {len(seen)} frames seen; the marker height calibrated once at rest)"
+        )
         if mode == "aruco":
             up = bridge.data.geom("object_marker").xmat.reshape(3, 3)[2, 2]
             half = len(err) // 2
-            print(f"    first half {rms_mm(err[:half]):.2f}, second half {rms_mm(err[half:]):.2f}; the marker's face "
-                  f"is {np.degrees(np.arccos(up)):.0f} deg off level at the end: a marker on top stands off the "
-                  "centre of a tilted object")
+            print(
+                f"    first half {rms_mm(err[:half]):.2f}, second half {rms_mm(err[half:]):.2f}; the marker's face "
+                f"is {np.degrees(np.arccos(up)):.0f} deg off level at the end: a marker on top stands off the "
+                "centre of a tilted object"
+            )
     return 0
 
 

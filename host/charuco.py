@@ -1,4 +1,5 @@
 """Camera calibration with a ChArUco board: the board to print, and the intrinsics from views of it."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -6,7 +7,7 @@ import numpy as np
 from .markers import MarkerLayout, dictionary
 from .tracker import Calibration
 
-PRINT_DPI = 300          # [1/inch] the printable board's resolution
+PRINT_DPI = 300  # [1/inch] the printable board's resolution
 
 
 def charuco_board(squares: tuple[int, int], square_mm: float, marker_mm: float):

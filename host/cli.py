@@ -1,4 +1,5 @@
 """The rig's commands: `mantaray rig` (the closed loop on the bench), `monitor`, `markers` and `calibrate`."""
+
 from __future__ import annotations
 
 import argparse
@@ -34,13 +35,18 @@ def controller_settings(parser: argparse.ArgumentParser, args: argparse.Namespac
     from .controller_settings import ControllerSettings, SettingsError
 
     try:
-        settings = (ControllerSettings.load(args.settings) if args.settings else
-                    ControllerSettings(args.controller or "manhattan"))
+        settings = (
+            ControllerSettings.load(args.settings)
+            if args.settings
+            else ControllerSettings(args.controller or "manhattan")
+        )
     except SettingsError as exc:
         parser.error(str(exc))
     if args.controller and args.controller != settings.controller:
-        parser.error(f"--controller {args.controller} contradicts {args.settings}, which sets up the "
-                     f"{settings.controller} controller")
+        parser.error(
+            f"--controller {args.controller} contradicts {args.settings}, which sets up the "
+            f"{settings.controller} controller"
+        )
     args.controller = settings.controller
     if getattr(args, "gains", None) is not None and any(k.startswith("pid.") for k, _ in settings.values):
         parser.error(f"--gains and {args.settings} both set the PIDs' gains: give them in one place")
@@ -49,10 +55,16 @@ def controller_settings(parser: argparse.ArgumentParser, args: argparse.Namespac
 
 def add_controller_arguments(parser: argparse.ArgumentParser) -> None:
     """--controller and --settings, as every command that runs a controller takes them."""
-    parser.add_argument("--controller", choices=choices(m.Controller),
-                        help="the tilt controller (default: manhattan, or the one --settings names)")
-    parser.add_argument("--settings", metavar="FILE",
-                        help="a controller's settings (TOML, as mantaray sim tune writes: host/controller_settings.py)")
+    parser.add_argument(
+        "--controller",
+        choices=choices(m.Controller),
+        help="the tilt controller (default: manhattan, or the one --settings names)",
+    )
+    parser.add_argument(
+        "--settings",
+        metavar="FILE",
+        help="a controller's settings (TOML, as mantaray sim tune writes: host/controller_settings.py)",
+    )
 
 
 def _half_module_m() -> tuple[float, float]:
@@ -79,8 +91,9 @@ def _hsv_range(text: str):
         if not len(low) == len(high) == 3:
             raise ValueError
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected H,S,V:H,S,V (OpenCV's H 0..179, S and V 0..255), got {text!r}") \
-            from None
+        raise argparse.ArgumentTypeError(
+            f"expected H,S,V:H,S,V (OpenCV's H 0..179, S and V 0..255), got {text!r}"
+        ) from None
     return BlobColour(low, high)
 
 
@@ -102,9 +115,16 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     course = _course(args, parser)
     setup, source, tracker, out = _rig_inputs(args, parser, course.at(0.0))
     log = RunLog.new(out, "rig", {"args": {k: v for k, v in vars(args).items() if k != "func"}})
-    run = RigRun(args.port, setup, source, tracker, log, course,
-                 StopRules(args.tolerance, args.hold, args.timeout, _half_module_m()),
-                 reconnect_timeout_s=args.reconnect_timeout)
+    run = RigRun(
+        args.port,
+        setup,
+        source,
+        tracker,
+        log,
+        course,
+        StopRules(args.tolerance, args.hold, args.timeout, _half_module_m()),
+        reconnect_timeout_s=args.reconnect_timeout,
+    )
     outcome = run.run()
     figure = run.figure(log.path.with_suffix(".png"))
     print(f"{outcome}: {len(run.loop.t_s)} frames; log {log.path}; figure {figure}")
@@ -121,8 +141,10 @@ def _course(args: argparse.Namespace, parser: argparse.ArgumentParser):
         parser.error("--path circle needs --radius > 0 and --period > 0")
     (cx, cy), (hx, hy) = args.target, _half_module_m()
     if abs(cx) + args.radius > hx or abs(cy) + args.radius > hy:
-        parser.error(f"the circle of radius {args.radius:g} m about {cx:g},{cy:g} is not on the fabric "
-                     f"(|x| <= {hx:g} m, |y| <= {hy:g} m)")
+        parser.error(
+            f"the circle of radius {args.radius:g} m about {cx:g},{cy:g} is not on the fabric "
+            f"(|x| <= {hx:g} m, |y| <= {hy:g} m)"
+        )
     return Course(args.target, args.radius, args.period)
 
 
@@ -133,21 +155,25 @@ def _rig_inputs(args: argparse.Namespace, parser: argparse.ArgumentParser, targe
     from .tracker import Calibration, FrameSource, Tracker
 
     if args.marker_height >= args.camera_height:
-        parser.error(f"--marker-height ({args.marker_height:g} m) must be below the camera (--camera-height "
-                     f"{args.camera_height:g} m)")
+        parser.error(
+            f"--marker-height ({args.marker_height:g} m) must be below the camera (--camera-height "
+            f"{args.camera_height:g} m)"
+        )
     settings = controller_settings(parser, args)
     try:
-        configure = settings.configure(m.Configure(tolerance=args.tolerance, noise_amplitude=args.alpha,
-                                                   telemetry_period=0)).check()
+        configure = settings.configure(
+            m.Configure(tolerance=args.tolerance, noise_amplitude=args.alpha, telemetry_period=0)
+        ).check()
         gains = settings.gains(_gains(args))
         calibration = Calibration.load(args.calibration) if args.calibration else None
-        source = FrameSource(args.camera)            # a camera that does not open is the user's to fix, before work
+        source = FrameSource(args.camera)  # a camera that does not open is the user's to fix, before work
         check_port(args.port)
         out = writable_dir(args.out)
     except (ValueError, OSError, KeyError) as exc:
         parser.error(str(exc))
-    tracker = Tracker(marker_height_m=args.marker_height, camera_height_m=args.camera_height,
-                      calibration=calibration, blob=args.blob)
+    tracker = Tracker(
+        marker_height_m=args.marker_height, camera_height_m=args.camera_height, calibration=calibration, blob=args.blob
+    )
     return Setup(configure, gains, target_m, settings.commands()), source, tracker, out
 
 
@@ -166,7 +192,7 @@ def _gains(args: argparse.Namespace) -> dict:
 # ------------------------------------------------------------------------------------------- the board's state
 def _board_state(telemetry: m.Telemetry) -> str:
     """The state telemetry reports, with its faults: IDLE, FAULT (position_timeout), ESTOP."""
-    faults = [f.name.lower() for f in m.Faults if telemetry.faults & f and f != m.Faults.ESTOP]   # its own state
+    faults = [f.name.lower() for f in m.Faults if telemetry.faults & f and f != m.Faults.ESTOP]  # its own state
     return m.State(telemetry.state).name + (f" ({', '.join(faults)})" if faults else "")
 
 
@@ -203,11 +229,16 @@ def _attach(args: argparse.Namespace, parser: argparse.ArgumentParser, reconnect
         check_port(args.port)
     except PortError as exc:
         parser.error(str(exc))
-    session = RigSession(args.port, reconnect_timeout_s=reconnect_timeout_s,
-                         report=lambda text: print(f"mantaray {args.command}: {text}", file=sys.stderr)).attach()
+    session = RigSession(
+        args.port,
+        reconnect_timeout_s=reconnect_timeout_s,
+        report=lambda text: print(f"mantaray {args.command}: {text}", file=sys.stderr),
+    ).attach()
     identity = session.identity
-    print(f"{args.port}: protocol {identity.protocol_version}, firmware {identity.firmware_major}."
-          f"{identity.firmware_minor}.{identity.firmware_patch}, clock {m.Clock(identity.clock).name.lower()}")
+    print(
+        f"{args.port}: protocol {identity.protocol_version}, firmware {identity.firmware_major}."
+        f"{identity.firmware_minor}.{identity.firmware_patch}, clock {m.Clock(identity.clock).name.lower()}"
+    )
     return session
 
 
@@ -245,17 +276,23 @@ def cmd_monitor(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     finally:
         session.close()
     if shown == 0:
-        print("no telemetry arrived: the firmware's telemetry_period is 0 (set by a host), or nothing is running",
-              file=sys.stderr)
+        print(
+            "no telemetry arrived: the firmware's telemetry_period is 0 (set by a host), or nothing is running",
+            file=sys.stderr,
+        )
     return 0
 
 
 def _telemetry_line(msg: m.Telemetry) -> str:
     faults = ",".join(f.name.lower() for f in m.Faults if msg.faults & f) or "-"
-    return (f"{msg.time / 1000:9.3f} s  {m.State(msg.state).name.lower():8s} faults {faults:16s} "
-            f"tilt {msg.tilt_zx:+6.2f} {msg.tilt_zy:+6.2f} deg  cmd " + " ".join(f"{a:+.4f}" for a in msg.command)
-            + "  meas " + " ".join(f"{a:+.4f}" for a in msg.measured)
-            + f"  frame {msg.position_frame} age {msg.position_age} ms  errors {msg.crc_errors}/{msg.frame_errors}")
+    return (
+        f"{msg.time / 1000:9.3f} s  {m.State(msg.state).name.lower():8s} faults {faults:16s} "
+        f"tilt {msg.tilt_zx:+6.2f} {msg.tilt_zy:+6.2f} deg  cmd "
+        + " ".join(f"{a:+.4f}" for a in msg.command)
+        + "  meas "
+        + " ".join(f"{a:+.4f}" for a in msg.measured)
+        + f"  frame {msg.position_frame} age {msg.position_age} ms  errors {msg.crc_errors}/{msg.frame_errors}"
+    )
 
 
 # ------------------------------------------------------------------------------------------- stop, estop
@@ -293,7 +330,7 @@ def _stop(args: argparse.Namespace, parser: argparse.ArgumentParser, emergency: 
 
 
 # ------------------------------------------------------------------------------------------- jog, zero
-JOG_SETTLE_M = 1e-3     # [m] a carriage this close to its jog target has arrived
+JOG_SETTLE_M = 1e-3  # [m] a carriage this close to its jog target has arrived
 
 
 def cmd_jog(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
@@ -305,9 +342,11 @@ def cmd_jog(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from .link import CommandRefused
 
     jog = _checked(parser, m.Jog(actuator=args.actuator, position=args.position))
-    if abs(args.position) > ACTUATOR_RANGE_M:      # the firmware refuses it too, but only once connected
-        parser.error(f"--position must be within ±{ACTUATOR_RANGE_M:g} m (the actuators' travel, protocol/rig.toml), "
-                     f"got {args.position:g}")
+    if abs(args.position) > ACTUATOR_RANGE_M:  # the firmware refuses it too, but only once connected
+        parser.error(
+            f"--position must be within ±{ACTUATOR_RANGE_M:g} m (the actuators' travel, protocol/rig.toml), "
+            f"got {args.position:g}"
+        )
     session = _attach(args, parser)
     try:
         session.command(jog)
@@ -316,9 +355,14 @@ def cmd_jog(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         return _refused("jog", session, exc)
     finally:
         session.close()
-    print(f"actuator {args.actuator}: commanded {args.position:+.4f} m, measured {measured:+.4f} m "
-          + (f"after {waited_s:.1f} s" if arrived else f"after {args.wait:g} s: NOT ARRIVED "
-             f"(check the motor's and the encoder's direction, and the wiring)"))
+    print(
+        f"actuator {args.actuator}: commanded {args.position:+.4f} m, measured {measured:+.4f} m "
+        + (
+            f"after {waited_s:.1f} s"
+            if arrived
+            else f"after {args.wait:g} s: NOT ARRIVED (check the motor's and the encoder's direction, and the wiring)"
+        )
+    )
     return 0 if arrived else 1
 
 
@@ -326,7 +370,7 @@ def _settle(session, actuator: int, position_m: float, wait_s: float) -> tuple[f
     """The carriage's encoder read until it is within JOG_SETTLE_M of position_m [m] or wait_s [s] have passed:
     (measured [m], waited [s], arrived)."""
     t0 = time.monotonic()
-    while True:       # telemetry on demand: a not-visible frame steps nothing and feeds no deadman
+    while True:  # telemetry on demand: a not-visible frame steps nothing and feeds no deadman
         measured = session.probe().measured[actuator]
         waited_s = time.monotonic() - t0
         arrived = abs(measured - position_m) < JOG_SETTLE_M
@@ -378,7 +422,7 @@ def cmd_markers(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
         parser.error(str(exc))
     try:
         count = write_marker_sheet(out, args.dpi)
-    except OutputError as exc:            # the write itself failed (a full disk): nothing is left at out
+    except OutputError as exc:  # the write itself failed (a full disk): nothing is left at out
         print(f"mantaray markers: {exc}", file=sys.stderr)
         return 2
     print(f"{out}: {count} markers on A4 at true size" + (f", {args.dpi} dpi" if out.suffix == ".png" else ""))
@@ -415,16 +459,20 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
         return 1
     calibration.save(args.out)
     k = calibration.camera_matrix
-    print(f"{args.out}: fx {k[0, 0]:.1f} fy {k[1, 1]:.1f} cx {k[0, 2]:.1f} cy {k[1, 2]:.1f} px, "
-          f"reprojection RMS {rms:.3f} px from {used} of {len(frames)} frames")
+    print(
+        f"{args.out}: fx {k[0, 0]:.1f} fy {k[1, 1]:.1f} cx {k[0, 2]:.1f} cy {k[1, 2]:.1f} px, "
+        f"reprojection RMS {rms:.3f} px from {used} of {len(frames)} frames"
+    )
     return 0
 
 
 def _check_calibrate_arguments(args: argparse.Namespace, parser: argparse.ArgumentParser) -> None:
     """The board's sizes, something to do, and the outputs writable, before any work."""
     if not 0 < args.marker_mm < args.square_mm:
-        parser.error(f"the marker ({args.marker_mm:g} mm) must be smaller than its square ({args.square_mm:g} mm) "
-                     f"and larger than 0")
+        parser.error(
+            f"the marker ({args.marker_mm:g} mm) must be smaller than its square ({args.square_mm:g} mm) "
+            f"and larger than 0"
+        )
     if args.camera is None and not args.board_out:
         parser.error("give --camera (index or video file) to calibrate, or --board-out to print the board")
     try:
@@ -461,93 +509,166 @@ def _read_frames(camera: str, most: int) -> list:
 # ------------------------------------------------------------------------------------------- parsers
 def add_port_argument(parser: argparse.ArgumentParser) -> None:
     """--port, as every command that talks to a board takes it (checked by ports.check_port before any work)."""
-    parser.add_argument("--port", required=True, default=argparse.SUPPRESS, help="serial device path of the firmware: a board (/dev/ttyACM0, "
-                        "/dev/ttyUSB0), or the /dev/pts/N that mantaray vmcu or simavr prints")
+    parser.add_argument(
+        "--port",
+        required=True,
+        default=argparse.SUPPRESS,
+        help="serial device path of the firmware: a board (/dev/ttyACM0, "
+        "/dev/ttyUSB0), or the /dev/pts/N that mantaray vmcu or simavr prints",
+    )
 
 
 def add_reconnect_argument(parser: argparse.ArgumentParser, what: str) -> None:
     """--reconnect-timeout: rig and monitor wait the same way for a board that went away."""
-    parser.add_argument("--reconnect-timeout", type=number(0, above=True), default=30.0,
-                        help=f"how long to wait for a board that went away (unplugged, reset) before {what} ends [s]")
+    parser.add_argument(
+        "--reconnect-timeout",
+        type=number(0, above=True),
+        default=30.0,
+        help=f"how long to wait for a board that went away (unplugged, reset) before {what} ends [s]",
+    )
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
     fmt = argparse.ArgumentDefaultsHelpFormatter
-    rig = sub.add_parser("rig", help="the closed loop on the real rig: camera, tracker, Uno",
-                         description=cmd_rig.__doc__, formatter_class=fmt)
+    rig = sub.add_parser(
+        "rig",
+        help="the closed loop on the real rig: camera, tracker, Uno",
+        description=cmd_rig.__doc__,
+        formatter_class=fmt,
+    )
     add_port_argument(rig)
     rig.add_argument("--camera", required=True, help="camera index (0, 1, ...) or a video file")
-    rig.add_argument("--target", type=_xy, required=True, metavar="X,Y",
-                     help="target [m] in the fabric frame (with --path: the circle's centre); write "
-                          "--target=-0.1,0.1 when X is negative")
+    rig.add_argument(
+        "--target",
+        type=_xy,
+        required=True,
+        metavar="X,Y",
+        help="target [m] in the fabric frame (with --path: the circle's centre); write "
+        "--target=-0.1,0.1 when X is negative",
+    )
     rig.add_argument("--path", choices=["circle"], help="follow a path instead of a fixed target (paper Fig. 1A)")
     rig.add_argument("--radius", type=float, default=0.1, help="circle radius [m]")
     rig.add_argument("--period", type=float, default=30.0, help="time for one lap of the circle [s]")
     add_controller_arguments(rig)
-    rig.add_argument("--alpha", type=float, default=0.05, help=f"noise amplitude α [m], {bounds_text(m.Configure, 'noise_amplitude')} (paper's hardware: 0.05)")
+    rig.add_argument(
+        "--alpha",
+        type=float,
+        default=0.05,
+        help=f"noise amplitude α [m], {bounds_text(m.Configure, 'noise_amplitude')} (paper's hardware: 0.05)",
+    )
     rig.add_argument("--tolerance", type=float, default=0.02, help=f"ε [m], {bounds_text(m.Configure, 'tolerance')}")
-    rig.add_argument("--gains", type=parse_gains, metavar="KP,KI,KD[,ILIM]",
-                     help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's")
+    rig.add_argument(
+        "--gains",
+        type=parse_gains,
+        metavar="KP,KI,KD[,ILIM]",
+        help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's",
+    )
     rig.add_argument("--hold", type=number(0), default=1.0, help="seconds within ε that count as reached")
     add_reconnect_argument(rig, "the run")
-    rig.add_argument("--timeout", type=number(0, above=True), default=60.0, help="give up after this many seconds (paper: 60)")
-    rig.add_argument("--marker-height", type=number(0), default=0.0,
-                     help="height [m] of the object's marker (or blob) above the corner markers' plane")
-    rig.add_argument("--camera-height", type=number(0, above=True), default=1.0, help="camera above that plane [m], without "
-                     "--calibration")
+    rig.add_argument(
+        "--timeout", type=number(0, above=True), default=60.0, help="give up after this many seconds (paper: 60)"
+    )
+    rig.add_argument(
+        "--marker-height",
+        type=number(0),
+        default=0.0,
+        help="height [m] of the object's marker (or blob) above the corner markers' plane",
+    )
+    rig.add_argument(
+        "--camera-height",
+        type=number(0, above=True),
+        default=1.0,
+        help="camera above that plane [m], without --calibration",
+    )
     rig.add_argument("--calibration", help="camera calibration (.npz from mantaray calibrate): full pose")
-    rig.add_argument("--blob", type=_hsv_range, metavar="H,S,V:H,S,V",
-                     help="track a colour blob in this HSV range instead of the object's marker (the egg)")
+    rig.add_argument(
+        "--blob",
+        type=_hsv_range,
+        metavar="H,S,V:H,S,V",
+        help="track a colour blob in this HSV range instead of the object's marker (the egg)",
+    )
     rig.add_argument("--out", default="out/rig", help="directory for the run log and the figure")
     rig.set_defaults(func=lambda args: cmd_rig(args, rig))
 
-    monitor = sub.add_parser("monitor", help="live decoded telemetry from a firmware", description=cmd_monitor.__doc__,
-                             formatter_class=fmt)
+    monitor = sub.add_parser(
+        "monitor", help="live decoded telemetry from a firmware", description=cmd_monitor.__doc__, formatter_class=fmt
+    )
     add_port_argument(monitor)
     add_reconnect_argument(monitor, "the monitor")
-    monitor.add_argument("--count", type=number(0, integer=True), default=0, help="stop after this many telemetry frames (0: never)")
+    monitor.add_argument(
+        "--count", type=number(0, integer=True), default=0, help="stop after this many telemetry frames (0: never)"
+    )
     monitor.add_argument("--seconds", type=number(0), default=0.0, help="stop after this long (0: never)")
     monitor.set_defaults(func=lambda args: cmd_monitor(args, monitor))
 
-    stop = sub.add_parser("stop", help="stop the board: level, stop driving, stay usable (clears a fault or an e-stop)",
-                          description=cmd_stop.__doc__, formatter_class=fmt)
+    stop = sub.add_parser(
+        "stop",
+        help="stop the board: level, stop driving, stay usable (clears a fault or an e-stop)",
+        description=cmd_stop.__doc__,
+        formatter_class=fmt,
+    )
     add_port_argument(stop)
     stop.set_defaults(func=lambda args: cmd_stop(args, stop))
 
-    estop = sub.add_parser("estop", help="emergency stop: the actuators' power cut, latched until mantaray stop",
-                           description=cmd_estop.__doc__, formatter_class=fmt)
+    estop = sub.add_parser(
+        "estop",
+        help="emergency stop: the actuators' power cut, latched until mantaray stop",
+        description=cmd_estop.__doc__,
+        formatter_class=fmt,
+    )
     add_port_argument(estop)
     estop.set_defaults(func=lambda args: cmd_estop(args, estop))
 
     actuator = next(f for f in m.Jog.FIELDS if f.name == "actuator")
-    jog = sub.add_parser("jog", help="move one carriage and read its encoder (bring-up)", description=cmd_jog.__doc__,
-                         formatter_class=fmt)
+    jog = sub.add_parser(
+        "jog",
+        help="move one carriage and read its encoder (bring-up)",
+        description=cmd_jog.__doc__,
+        formatter_class=fmt,
+    )
     add_port_argument(jog)
-    jog.add_argument("--actuator", type=int, required=True, choices=range(int(actuator.min), int(actuator.max) + 1),
-                     help="which carriage (PROTOCOL.md, geometry: 0 -x-y, 1 +x-y, 2 -x+y, 3 +x+y)")
+    jog.add_argument(
+        "--actuator",
+        type=int,
+        required=True,
+        choices=range(int(actuator.min), int(actuator.max) + 1),
+        help="which carriage (PROTOCOL.md, geometry: 0 -x-y, 1 +x-y, 2 -x+y, 3 +x+y)",
+    )
     jog.add_argument("--position", type=float, required=True, help="where to [m], + lowers the corner")
-    jog.add_argument("--wait", type=number(0, above=True), default=10.0, help="give up waiting for the carriage after this [s]")
+    jog.add_argument(
+        "--wait", type=number(0, above=True), default=10.0, help="give up waiting for the carriage after this [s]"
+    )
     jog.set_defaults(func=lambda args: cmd_jog(args, jog))
 
-    zero = sub.add_parser("zero", help="take the carriages' present positions as 0 m (homing)",
-                          description=cmd_zero.__doc__, formatter_class=fmt)
+    zero = sub.add_parser(
+        "zero",
+        help="take the carriages' present positions as 0 m (homing)",
+        description=cmd_zero.__doc__,
+        formatter_class=fmt,
+    )
     add_port_argument(zero)
     zero.add_argument("--actuators", type=_actuators, default="all", metavar="I,J|all", help="which carriages")
     zero.set_defaults(func=lambda args: cmd_zero(args, zero))
 
-    markers = sub.add_parser("markers", help="a printable marker sheet at true size", description=cmd_markers.__doc__,
-                             formatter_class=fmt)
+    markers = sub.add_parser(
+        "markers", help="a printable marker sheet at true size", description=cmd_markers.__doc__, formatter_class=fmt
+    )
     markers.add_argument("--out", default="out/markers.pdf", help="the sheet: .pdf or .png")
     markers.add_argument("--dpi", type=int, default=300, help="resolution of a PNG sheet")
     markers.set_defaults(func=lambda args: cmd_markers(args, markers))
 
-    calibrate = sub.add_parser("calibrate", help="camera calibration with a ChArUco board",
-                               description=cmd_calibrate.__doc__, formatter_class=fmt)
+    calibrate = sub.add_parser(
+        "calibrate",
+        help="camera calibration with a ChArUco board",
+        description=cmd_calibrate.__doc__,
+        formatter_class=fmt,
+    )
     calibrate.add_argument("--camera", help="camera index or video file showing the board")
     calibrate.add_argument("--out", default="out/camera.npz", help="the calibration (for mantaray rig --calibration)")
     calibrate.add_argument("--board-out", help="write the board to print (PNG at 300 dpi)")
-    calibrate.add_argument("--squares", type=_squares, default=(7, 5), metavar="NXxNY",
-                           help="board squares, at least 2 x 2")
+    calibrate.add_argument(
+        "--squares", type=_squares, default=(7, 5), metavar="NXxNY", help="board squares, at least 2 x 2"
+    )
     calibrate.add_argument("--square-mm", type=number(0, above=True), default=30.0, help="square side [mm]")
     calibrate.add_argument("--marker-mm", type=number(0, above=True), default=22.0, help="marker side [mm]")
     calibrate.add_argument("--frames", type=number(1, integer=True), default=200, help="read at most this many frames")

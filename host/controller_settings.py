@@ -13,6 +13,7 @@ key is a field of protocol/schema.toml, so the file says nothing the firmware do
     [pid.x]                 # the PIDs the controller runs (host/session.py, controller_axes)
     kp = 40.0
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -28,15 +29,17 @@ from mantaray.protocol.codec import FieldRefused
 
 from .session import controller_axes
 
-CONFIGURE_KEYS = ("tilt_limit", "velocity_filter")   # what a controller's settings may change of configure
+CONFIGURE_KEYS = ("tilt_limit", "velocity_filter")  # what a controller's settings may change of configure
 SETTINGS_MESSAGES = {cls.NAME: cls for cls in (m.ConfigureSchedule, m.ConfigureCascade)}
-OWN = {m.Controller.SCHEDULED: ("configure_schedule", "velocity_filter"),   # what only some controllers read
-       m.Controller.CASCADE: ("configure_cascade", "velocity_filter")}
+OWN = {
+    m.Controller.SCHEDULED: ("configure_schedule", "velocity_filter"),  # what only some controllers read
+    m.Controller.CASCADE: ("configure_cascade", "velocity_filter"),
+}
 PID_KEYS = tuple(spec.name for spec in m.ConfigurePid.FIELDS if spec.name != "axis")
 
 
-PLANT_NAME = re.compile(r"[A-Za-z0-9_.-]+")   # a plant's name as sim/plant.toml's [plant.NAME] tables give it
-TILT_SLACK_DEG = 1e-4   # [deg] the firmware's slack on the derived limit (float rounding)
+PLANT_NAME = re.compile(r"[A-Za-z0-9_.-]+")  # a plant's name as sim/plant.toml's [plant.NAME] tables give it
+TILT_SLACK_DEG = 1e-4  # [deg] the firmware's slack on the derived limit (float rounding)
 
 
 def max_tilt_deg(module_x_m: float, module_y_m: float) -> float:
@@ -53,14 +56,16 @@ class ControllerSettings:
     """controller and flat (key, value) pairs, kept sorted: "configure.tilt_limit", "configure_schedule.edge_zone",
     "pid.x.kp"; plant, when given, names the simulated plant (sim/plant.toml) the values were tuned for: the gains
     are the firmware's numbers, which a plant reading the paper's gains per radian needs 180/pi times larger."""
+
     controller: str = "manhattan"
     values: tuple[tuple[str, float], ...] = ()
     plant: str | None = None
 
     def __post_init__(self) -> None:
         if self.controller.upper() not in m.Controller.__members__:
-            raise SettingsError(f"controller must be one of {', '.join(c.name.lower() for c in m.Controller)}, "
-                                f"got {self.controller!r}")
+            raise SettingsError(
+                f"controller must be one of {', '.join(c.name.lower() for c in m.Controller)}, got {self.controller!r}"
+            )
         object.__setattr__(self, "controller", self.controller.lower())
         if self.plant is not None and not PLANT_NAME.fullmatch(self.plant):
             raise SettingsError(f"plant must be a plant's name (letters, digits, _ . -), got {self.plant!r}")
@@ -74,29 +79,36 @@ class ControllerSettings:
         sections = [name for name in SETTINGS_MESSAGES if name in own]
         for key in keys:
             section, _, name = key.rpartition(".")
-            allowed = (section == "configure" and name in configure_keys) or \
-                (section in sections and name in {s.name for s in SETTINGS_MESSAGES[section].FIELDS}) or \
-                (section.startswith("pid.") and section[4:] in axes and name in PID_KEYS)
-            if not allowed:     # a key the controller would not read is a mistake, not a setting
-                raise SettingsError(f"{key!r} is no setting of the {self.controller} controller; its settings are "
-                                    f"configure.{{{','.join(configure_keys)}}}, "
-                                    + "".join(f"{name} fields, " for name in sections)
-                                    + f"pid.{{{','.join(sorted(axes))}}}.{{{','.join(PID_KEYS)}}}")
+            allowed = (
+                (section == "configure" and name in configure_keys)
+                or (section in sections and name in {s.name for s in SETTINGS_MESSAGES[section].FIELDS})
+                or (section.startswith("pid.") and section[4:] in axes and name in PID_KEYS)
+            )
+            if not allowed:  # a key the controller would not read is a mistake, not a setting
+                raise SettingsError(
+                    f"{key!r} is no setting of the {self.controller} controller; its settings are "
+                    f"configure.{{{','.join(configure_keys)}}}, "
+                    + "".join(f"{name} fields, " for name in sections)
+                    + f"pid.{{{','.join(sorted(axes))}}}.{{{','.join(PID_KEYS)}}}"
+                )
         pids = [m.ConfigurePid(axis=axis, **fields) for axis, fields in self.gains({}).items()]
-        for command in [*self.commands(), *pids]:   # every value within the schema's bounds, before a firmware sees it
+        for command in [*self.commands(), *pids]:  # every value within the schema's bounds, before a firmware sees it
             try:
                 command.check()
             except FieldRefused as refused:
-                raise SettingsError(f"{self._key_of(command, refused.field)}: {refused.reason} "
-                                    f"(protocol/schema.toml)") from None
+                raise SettingsError(
+                    f"{self._key_of(command, refused.field)}: {refused.reason} (protocol/schema.toml)"
+                ) from None
         try:
             configure = self.configure(m.Configure()).check()
         except FieldRefused as refused:
             raise SettingsError(f"configure.{refused.field}: {refused.reason} (protocol/schema.toml)") from None
         steepest = max_tilt_deg(configure.module_x, configure.module_y)
         if configure.tilt_limit > steepest + TILT_SLACK_DEG:
-            raise SettingsError(f"configure.tilt_limit: {configure.tilt_limit:g} deg is steeper than the module allows "
-                                f"({steepest:.6f} deg = atan(range / ((m + n) / 2)), PROTOCOL.md section 5)")
+            raise SettingsError(
+                f"configure.tilt_limit: {configure.tilt_limit:g} deg is steeper than the module allows "
+                f"({steepest:.6f} deg = atan(range / ((m + n) / 2)), PROTOCOL.md section 5)"
+            )
 
     def _key_of(self, command: m.Message, field: str) -> str:
         if isinstance(command, m.ConfigurePid):
@@ -110,8 +122,9 @@ class ControllerSettings:
     def configure(self, base: m.Configure) -> m.Configure:
         """base with this controller and its configure fields."""
         fields = {name: self.get(f"configure.{name}") for name in CONFIGURE_KEYS}
-        return dataclasses.replace(base, controller=m.Controller[self.controller.upper()],
-                                   **{k: v for k, v in fields.items() if v is not None})
+        return dataclasses.replace(
+            base, controller=m.Controller[self.controller.upper()], **{k: v for k, v in fields.items() if v is not None}
+        )
 
     def gains(self, base: dict[m.Axis, dict]) -> dict[m.Axis, dict]:
         """base (axis -> configure_pid fields) with this controller's PID keys set over it."""
@@ -125,8 +138,10 @@ class ControllerSettings:
 
     def commands(self) -> list[m.Message]:
         """configure_schedule and configure_cascade with these values over their boot values (the PIDs: gains())."""
-        return [cls(**{s.name: v for s in cls.FIELDS if (v := self.get(f"{name}.{s.name}")) is not None})
-                for name, cls in SETTINGS_MESSAGES.items()]
+        return [
+            cls(**{s.name: v for s in cls.FIELDS if (v := self.get(f"{name}.{s.name}")) is not None})
+            for name, cls in SETTINGS_MESSAGES.items()
+        ]
 
     # ------------------------------------------------------------------------------------- a file
     def dumps(self, comment: str = "") -> str:
@@ -151,7 +166,7 @@ class ControllerSettings:
             raise SettingsError(f"{source}: not TOML ({exc})") from None
         controller = data.pop("controller", None)
         if not isinstance(controller, str):
-            raise SettingsError(f"{source}: needs controller = \"NAME\"")
+            raise SettingsError(f'{source}: needs controller = "NAME"')
         plant = data.pop("plant", None)
         if plant is not None and not isinstance(plant, str):
             raise SettingsError(f"{source}: plant must be a plant's name (letters, digits, _ . -), got {plant!r}")

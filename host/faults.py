@@ -1,4 +1,5 @@
 """A fault-injecting transport between the link and any other: dropped bytes, bit flips and noise bursts, both ways."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -19,6 +20,7 @@ class FaultCounts:
 class FaultInjector:
     """Wraps a transport; every byte either way is dropped with p_drop, gets one bit flipped with p_flip, and
     with p_burst per write or read a burst of 1..burst_max random bytes is inserted. Seeded: reproducible."""
+
     inner: Transport
     p_drop: float = 0.0
     p_flip: float = 0.0

@@ -1,6 +1,7 @@
 """Keys pressed during a run (`mantaray rig`): single keys from the terminal, no Enter needed, read without waiting.
 
 None at all where stdin is no terminal (nohup, a pipe, a test) or the run is in the background, which then goes on."""
+
 from __future__ import annotations
 
 import os
@@ -14,7 +15,7 @@ class Keys:
 
     def __init__(self, fd: int = 0) -> None:
         self.fd = fd
-        self._saved = None                   # the terminal's settings to restore; None: keys are not read
+        self._saved = None  # the terminal's settings to restore; None: keys are not read
         if os.name == "posix" and self._foreground():
             import termios
             import tty
@@ -41,7 +42,7 @@ class Keys:
         while select.select([self.fd], [], [], 0)[0]:
             try:
                 chunk = os.read(self.fd, 64)
-            except OSError:                  # the terminal hung up
+            except OSError:  # the terminal hung up
                 break
             if not chunk:
                 break
@@ -57,7 +58,7 @@ class Keys:
         previous = signal.signal(signal.SIGTTOU, signal.SIG_IGN)
         try:
             termios.tcsetattr(self.fd, termios.TCSADRAIN, self._saved)
-        except termios.error:                # the terminal is gone: nothing to restore
+        except termios.error:  # the terminal is gone: nothing to restore
             pass
         finally:
             signal.signal(signal.SIGTTOU, previous)

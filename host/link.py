@@ -1,4 +1,5 @@
 """The host end of the protocol: handshake, acknowledged commands with retransmission, position frames, telemetry."""
+
 from __future__ import annotations
 
 import collections
@@ -53,7 +54,7 @@ class CommandRefused(LinkError):
         super().__init__(f"{command.NAME} refused: {name}{field}: {doc}")
 
 
-SEQ_WINDOW = 128   # a sequence number 1..127 ahead of the newest is newer (lost between), the rest is older: wraps
+SEQ_WINDOW = 128  # a sequence number 1..127 ahead of the newest is newer (lost between), the rest is older: wraps
 
 
 class Link:
@@ -65,8 +66,13 @@ class Link:
     boot) go to `on_message` and are kept in `received` (the last 1000).
     """
 
-    def __init__(self, transport: Transport, ack_timeout_s: float = 0.2, retries: int = 3,
-                 on_message: Callable[[Message], None] | None = None) -> None:
+    def __init__(
+        self,
+        transport: Transport,
+        ack_timeout_s: float = 0.2,
+        retries: int = 3,
+        on_message: Callable[[Message], None] | None = None,
+    ) -> None:
         self.transport = transport
         self.ack_timeout_s = ack_timeout_s
         self.retries = retries
@@ -77,8 +83,8 @@ class Link:
         self.last_rx_seq: int | None = None
         self.lost_frames = 0  # firmware frames missing from the firmware's sequence
         self.stale_frames = 0  # firmware frames that came twice or after a newer one (a duplicating or reordering link)
-        self.rig_differences: list[str] = []   # rig constants the firmware reported otherwise (identify)
-        self.resyncs = 0     # times a frame came behind the firmware's count and the link identified again
+        self.rig_differences: list[str] = []  # rig constants the firmware reported otherwise (identify)
+        self.resyncs = 0  # times a frame came behind the firmware's count and the link identified again
         self.resets = 0  # boot messages seen
         self._pending: collections.deque[Message] = collections.deque()
 
@@ -92,7 +98,7 @@ class Link:
 
     def _accept(self, frame: Frame) -> None:
         ahead = None if self.last_rx_seq is None or frame.id == m.Boot.ID else (frame.seq - self.last_rx_seq) & 0xFF
-        if ahead is not None and not 0 < ahead < SEQ_WINDOW:     # a copy, or older than the newest: out of order
+        if ahead is not None and not 0 < ahead < SEQ_WINDOW:  # a copy, or older than the newest: out of order
             self.stale_frames += 1
         else:
             if ahead is not None:
@@ -175,10 +181,12 @@ class Link:
         while (remaining := deadline - time.monotonic()) > 0:
             reply = self.receive(remaining)
             if isinstance(reply, m.Nack) and reply.ref_id == msg.ID and reply.ref_seq == seq:
-                if reply.code == m.ErrorCode.STALE_SEQUENCE:     # never applied; the next frame will be
+                if reply.code == m.ErrorCode.STALE_SEQUENCE:  # never applied; the next frame will be
                     self._resync()
-                    raise LinkError(f"position frame {msg.frame} came behind the firmware's count: identified "
-                                    f"again, the next frame counts")
+                    raise LinkError(
+                        f"position frame {msg.frame} came behind the firmware's count: identified "
+                        f"again, the next frame counts"
+                    )
                 raise CommandRefused(msg, reply)
             if isinstance(reply, m.Telemetry) and reply.position_frame == msg.frame:
                 return reply
@@ -196,13 +204,15 @@ class Link:
             raise IncompatibleFirmware(
                 f"firmware speaks protocol {reply.protocol_version} (schema 0x{reply.schema_hash:08X}); this host "
                 f"speaks {m.PROTOCOL_VERSION} (schema 0x{m.SCHEMA_HASH:08X}): flash the firmware built from "
-                f"this checkout, or use the host that matches the firmware")
+                f"this checkout, or use the host that matches the firmware"
+            )
         differences = rig_differences(reply)
         binding = [text for name, text in differences.items() if name in BINDING_CONSTANTS]
         if binding:
             raise IncompatibleFirmware(
                 f"the firmware was built for another rig ({'; '.join(binding)}): describe your rig in "
-                f"protocol/rig.toml, run python3 protocol/generate.py, and flash the firmware built from it")
+                f"protocol/rig.toml, run python3 protocol/generate.py, and flash the firmware built from it"
+            )
         self.rig_differences = list(differences.values())
         return reply
 

@@ -5,6 +5,7 @@ What differs between the two is outside it: where a frame comes from (`frames`: 
 plant in the simulation) and how a position frame reaches the firmware (`send`: a RigSession on the rig, a Link in
 lock-step in the simulation). Times are trial time [s] from the start; positions [m] in the fabric frame.
 """
+
 from __future__ import annotations
 
 import math
@@ -23,10 +24,11 @@ US_PER_S = 1_000_000
 @dataclass
 class Tolerance:
     """Within epsilon of the target: since when, and whether for long enough (hold_s; 0: the first frame within)."""
-    tolerance_m: float              # [m] epsilon
-    hold_s: float = 0.0             # [s] how long the object must stay within before it counts as reached
-    first_s: float | None = None    # [s] the first frame within (the paper's reach), None until then
-    _since_s: float | None = None   # [s] start of the present stay within
+
+    tolerance_m: float  # [m] epsilon
+    hold_s: float = 0.0  # [s] how long the object must stay within before it counts as reached
+    first_s: float | None = None  # [s] the first frame within (the paper's reach), None until then
+    _since_s: float | None = None  # [s] start of the present stay within
 
     def update(self, t_s: float, xy_m, target_m) -> bool:
         """One frame's position: True once the object has stayed within for hold_s."""
@@ -40,15 +42,16 @@ class Tolerance:
 @dataclass
 class Frame:
     """One camera frame, as a source gives it to ClosedLoop.run."""
-    capture_s: float                # [s] trial time it was taken
-    measured_xy_m: object           # (x, y) [m] what the firmware is sent; None: not seen (sent as not visible)
-    target_m: tuple[float, float]   # [m] the target at this frame
-    judged_xy_m: object = None      # (x, y) [m] where the tolerance is judged (None: not judged at this frame)
-    dropped: bool = False           # taken, but never reaches the firmware
-    deliver: Callable[[], bool] | None = None   # called before it is sent (the simulation's latency); False ends the run
+
+    capture_s: float  # [s] trial time it was taken
+    measured_xy_m: object  # (x, y) [m] what the firmware is sent; None: not seen (sent as not visible)
+    target_m: tuple[float, float]  # [m] the target at this frame
+    judged_xy_m: object = None  # (x, y) [m] where the tolerance is judged (None: not judged at this frame)
+    dropped: bool = False  # taken, but never reaches the firmware
+    deliver: Callable[[], bool] | None = None  # called before it is sent (the simulation's latency); False ends the run
 
 
-STOPPED_REACHED, STOPPED_BY_SOURCE = "reached", "source"   # why ClosedLoop.run ended
+STOPPED_REACHED, STOPPED_BY_SOURCE = "reached", "source"  # why ClosedLoop.run ended
 
 
 @dataclass
@@ -58,33 +61,43 @@ class ClosedLoop:
     send(msg) delivers one position frame and returns its telemetry, or None when none answered it.
     capture_time goes out as time_base_us + the frame's trial time, on the firmware's clock.
     """
+
     send: Callable[[m.ObjectPosition], m.Telemetry | None]
-    time_base_us: int = 0           # [us] the firmware's clock at trial time 0
-    frame: int = 0                  # the last frame number sent (u16, runs on across trials)
-    on_telemetry: Callable[[m.Telemetry], None] | None = None   # each answer, as it comes (the plant applies it)
-    t_s: list = field(default_factory=list)           # [s] capture times
+    time_base_us: int = 0  # [us] the firmware's clock at trial time 0
+    frame: int = 0  # the last frame number sent (u16, runs on across trials)
+    on_telemetry: Callable[[m.Telemetry], None] | None = None  # each answer, as it comes (the plant applies it)
+    t_s: list = field(default_factory=list)  # [s] capture times
     measured_xy_m: list = field(default_factory=list)  # [m] what the firmware was sent (NaN: not seen, dropped)
-    target_m: list = field(default_factory=list)      # [m] the target at each frame
-    tilt_deg: list = field(default_factory=list)      # [deg] theta_zx, theta_zy from telemetry (NaN: no answer)
-    command_m: list = field(default_factory=list)     # [m] a_0..a_3 from telemetry
-    state: list = field(default_factory=list)         # supervisor state (-1: no answer)
+    target_m: list = field(default_factory=list)  # [m] the target at each frame
+    tilt_deg: list = field(default_factory=list)  # [deg] theta_zx, theta_zy from telemetry (NaN: no answer)
+    command_m: list = field(default_factory=list)  # [m] a_0..a_3 from telemetry
+    state: list = field(default_factory=list)  # supervisor state (-1: no answer)
 
     def step(self, capture_s: float, measured_xy_m, target_m) -> m.Telemetry | None:
         """One camera frame captured at trial time capture_s: measured_xy_m None (or NaN) is sent as not visible."""
         visible = measured_xy_m is not None and bool(np.all(np.isfinite(measured_xy_m)))
         self.frame = (self.frame + 1) & U16
-        msg = m.ObjectPosition(frame=self.frame, capture_time=(self.time_base_us + round(capture_s * US_PER_S)) & U32,
-                               x=float(measured_xy_m[0]) if visible else 0.0,
-                               y=float(measured_xy_m[1]) if visible else 0.0,
-                               flags=0 if visible else m.PositionFlags.NOT_VISIBLE)
+        msg = m.ObjectPosition(
+            frame=self.frame,
+            capture_time=(self.time_base_us + round(capture_s * US_PER_S)) & U32,
+            x=float(measured_xy_m[0]) if visible else 0.0,
+            y=float(measured_xy_m[1]) if visible else 0.0,
+            flags=0 if visible else m.PositionFlags.NOT_VISIBLE,
+        )
         telemetry = self.send(msg)
         if telemetry is not None and self.on_telemetry is not None:
             self.on_telemetry(telemetry)
         self._record(capture_s, measured_xy_m if visible else None, target_m, telemetry)
         return telemetry
 
-    def run(self, frames: Iterable[Frame], judge: Tolerance, *, stop_when_reached: bool,
-            on_frame: Callable[[Frame, m.Telemetry | None], None] | None = None) -> str:
+    def run(
+        self,
+        frames: Iterable[Frame],
+        judge: Tolerance,
+        *,
+        stop_when_reached: bool,
+        on_frame: Callable[[Frame, m.Telemetry | None], None] | None = None,
+    ) -> str:
         """Drive the loop with a source's frames until a stop rule ends it; returns why (STOPPED_*).
 
         Each frame, in order: the tolerance is judged, and once it holds a run with stop_when_reached ends there
@@ -92,8 +105,11 @@ class ClosedLoop:
         is sent (or recorded as dropped); on_frame sees it with its answer. A source that ends (camera stopped,
         timeout, object fell) ends the run by its own reason."""
         for frame in frames:
-            if frame.judged_xy_m is not None and judge.update(frame.capture_s, frame.judged_xy_m, frame.target_m) \
-                    and stop_when_reached:
+            if (
+                frame.judged_xy_m is not None
+                and judge.update(frame.capture_s, frame.judged_xy_m, frame.target_m)
+                and stop_when_reached
+            ):
                 return STOPPED_REACHED
             if frame.deliver is not None and not frame.deliver():
                 return STOPPED_BY_SOURCE
@@ -127,9 +143,11 @@ class ClosedLoop:
     def arrays(self) -> dict[str, np.ndarray]:
         """The rows as arrays: t_s (n,), measured_xy_m (n, 2), target_m (n, 2), tilt_deg (n, 2), command_m (n, 4),
         state (n,)."""
-        return {"t_s": np.asarray(self.t_s, dtype=float),
-                "measured_xy_m": np.asarray(self.measured_xy_m, dtype=float).reshape(-1, 2),
-                "target_m": np.asarray(self.target_m, dtype=float).reshape(-1, 2),
-                "tilt_deg": np.asarray(self.tilt_deg, dtype=float).reshape(-1, 2),
-                "command_m": np.asarray(self.command_m, dtype=float).reshape(-1, 4),
-                "state": np.asarray(self.state, dtype=int)}
+        return {
+            "t_s": np.asarray(self.t_s, dtype=float),
+            "measured_xy_m": np.asarray(self.measured_xy_m, dtype=float).reshape(-1, 2),
+            "target_m": np.asarray(self.target_m, dtype=float).reshape(-1, 2),
+            "tilt_deg": np.asarray(self.tilt_deg, dtype=float).reshape(-1, 2),
+            "command_m": np.asarray(self.command_m, dtype=float).reshape(-1, 4),
+            "state": np.asarray(self.state, dtype=int),
+        }

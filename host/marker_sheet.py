@@ -1,4 +1,5 @@
 """The printable A4 sheet of the rig's ArUco markers at true size (PDF or PNG), with a ruler to check the print."""
+
 from __future__ import annotations
 
 import os
@@ -10,10 +11,10 @@ from mantaray.outputs import OutputError
 from .markers import MarkerLayout, marker_image, quiet_scale
 
 A4_MM = (210.0, 297.0)
-DPI_RANGE = (72, 2400)    # [1/inch] a PNG sheet's resolution: from screen to the finest printers
+DPI_RANGE = (72, 2400)  # [1/inch] a PNG sheet's resolution: from screen to the finest printers
 
 
-PRINTED = MarkerLayout()   # the layout this sheet prints unless told another
+PRINTED = MarkerLayout()  # the layout this sheet prints unless told another
 
 
 def write_marker_sheet(out: Path, dpi: int, layout: MarkerLayout = PRINTED) -> int:
@@ -31,16 +32,27 @@ def write_marker_sheet(out: Path, dpi: int, layout: MarkerLayout = PRINTED) -> i
     ax.set_ylim(0, A4_MM[1])
     ax.set_axis_off()
     for n, (label, marker_id, size_m) in enumerate(items):
-        side = size_m * 1000 * quiet_scale(layout)           # [mm] with the white quiet zone
+        side = size_m * 1000 * quiet_scale(layout)  # [mm] with the white quiet zone
         x = 25 + (n % 2) * 90
         y = A4_MM[1] - 40 - (n // 2) * 80 - side
-        ax.imshow(marker_image(layout, marker_id, 480), cmap="gray", vmin=0, vmax=255, interpolation="nearest",
-                  extent=(x, x + side, y, y + side))
+        ax.imshow(
+            marker_image(layout, marker_id, 480),
+            cmap="gray",
+            vmin=0,
+            vmax=255,
+            interpolation="nearest",
+            extent=(x, x + side, y, y + side),
+        )
         ax.text(x, y - 6, f"{label}: black square {size_m * 1000:.0f} mm", fontsize=8)
     ax.plot([25, 125], [15, 15], color="black", lw=1)
     ax.text(25, 18, "100 mm: check this after printing (print at 100 %, no fit-to-page)", fontsize=8)
-    ax.text(25, 8, f"{layout.dictionary}; corner markers at (±{layout.corner_offset_m[0]}, ±{layout.corner_offset_m[1]})"
-                   " m in the fabric frame, their tops toward +y", fontsize=7)
+    ax.text(
+        25,
+        8,
+        f"{layout.dictionary}; corner markers at (±{layout.corner_offset_m[0]}, ±{layout.corner_offset_m[1]})"
+        " m in the fabric frame, their tops toward +y",
+        fontsize=7,
+    )
     try:
         write_then_replace(out, lambda tmp: fig.savefig(tmp, dpi=dpi))
     finally:
@@ -63,7 +75,7 @@ def write_then_replace(out: Path, write: Callable[[Path], None]) -> None:
             raise
         raise OutputError(f"cannot write {out}: {cause.strerror or cause}") from None
     finally:
-        tmp.unlink(missing_ok=True)       # gone already when the write went through
+        tmp.unlink(missing_ok=True)  # gone already when the write went through
 
 
 def _chain(exc: BaseException | None):

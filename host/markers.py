@@ -1,4 +1,5 @@
 """The ArUco marker layout of the rig (dictionary, ids, sizes, where the corner markers sit) and marker images."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -14,13 +15,14 @@ CORNER_SIGNS = ((-1, -1), (1, -1), (-1, 1), (1, 1))
 @dataclass(frozen=True)
 class MarkerLayout:
     """What the tracker looks for and where: every length in metres, in the fabric frame."""
-    dictionary: str = "DICT_4X4_50"          # cv2.aruco predefined dictionary
-    corner_ids: tuple[int, int, int, int] = (0, 1, 2, 3)   # marker id at corner 0..3
-    corner_offset_m: tuple[float, float] = (0.33, 0.20)   # [m] corner marker centres at (+-x, +-y)
-    corner_size_m: float = 0.04              # [m] black square's side
+
+    dictionary: str = "DICT_4X4_50"  # cv2.aruco predefined dictionary
+    corner_ids: tuple[int, int, int, int] = (0, 1, 2, 3)  # marker id at corner 0..3
+    corner_offset_m: tuple[float, float] = (0.33, 0.20)  # [m] corner marker centres at (+-x, +-y)
+    corner_size_m: float = 0.04  # [m] black square's side
     object_id: int = 10
-    object_size_m: float = 0.03              # [m] black square's side, on the object's top
-    border_bits: int = 1                     # ArUco's black border, in cells
+    object_size_m: float = 0.03  # [m] black square's side, on the object's top
+    border_bits: int = 1  # ArUco's black border, in cells
 
     def corner_centres_m(self) -> np.ndarray:
         """(4, 2) centres of the corner markers in the fabric frame, corner 0..3."""
@@ -50,7 +52,7 @@ def marker_image(layout: MarkerLayout, marker_id: int, pixels: int, quiet_cells:
     marker = cv2.aruco.generateImageMarker(dictionary(layout), marker_id, inner, borderBits=layout.border_bits)
     out = np.full((pixels, pixels), 255, np.uint8)
     offset = (pixels - inner) // 2
-    out[offset:offset + inner, offset:offset + inner] = marker
+    out[offset : offset + inner, offset : offset + inner] = marker
     return out
 
 

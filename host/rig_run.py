@@ -1,6 +1,7 @@
 """One closed-loop run on the rig, what `mantaray rig` runs: the rig's counterpart of the simulation's Bridge.run.
 
 Camera -> tracker -> firmware through a RigSession, logged frame by frame, until a stop rule, a key or Ctrl-C ends it."""
+
 from __future__ import annotations
 
 import math
@@ -19,18 +20,19 @@ from .runlog import RunLog
 from .session import BoardLost, RigSession, Setup
 from .tracker import FrameSource, Tracker
 
-STOP, EMERGENCY_STOP = "stopped", "emergency stop"              # the outcomes of the keys
-KEYS = {"s": STOP, "e": EMERGENCY_STOP, " ": EMERGENCY_STOP}    # key (either case) -> how it ends the run
+STOP, EMERGENCY_STOP = "stopped", "emergency stop"  # the outcomes of the keys
+KEYS = {"s": STOP, "e": EMERGENCY_STOP, " ": EMERGENCY_STOP}  # key (either case) -> how it ends the run
 KEYS_HELP = "keys: s stops (levels the surface), e or space is the emergency stop (latched), Ctrl-C ends (levels)"
-EXIT_STATUS = {"reached": 0, "interrupted": 130}                # every other outcome: 1
+EXIT_STATUS = {"reached": 0, "interrupted": 130}  # every other outcome: 1
 
 
 @dataclass(frozen=True)
 class Course:
     """Where the object is sent: a fixed target, or round a circle about it (--path circle, the paper's Fig. 1A)."""
-    centre_m: tuple[float, float]   # [m] the target, or the circle's centre
-    radius_m: float = 0.0           # [m] 0: a fixed target
-    period_s: float = 30.0          # [s] one lap of the circle
+
+    centre_m: tuple[float, float]  # [m] the target, or the circle's centre
+    radius_m: float = 0.0  # [m] 0: a fixed target
+    period_s: float = 30.0  # [s] one lap of the circle
 
     @property
     def moving(self) -> bool:
@@ -47,10 +49,11 @@ class Course:
 @dataclass(frozen=True)
 class StopRules:
     """When a run ends by itself."""
-    tolerance_m: float              # [m] epsilon about a fixed target
-    hold_s: float                   # [s] within epsilon this long: reached
-    timeout_s: float                # [s] run time after which it gives up
-    half_module_m: tuple[float, float]   # [m] seen beyond twice these (half a module off the fabric): fell off
+
+    tolerance_m: float  # [m] epsilon about a fixed target
+    hold_s: float  # [s] within epsilon this long: reached
+    timeout_s: float  # [s] run time after which it gives up
+    half_module_m: tuple[float, float]  # [m] seen beyond twice these (half a module off the fabric): fell off
 
 
 class RigRun:
@@ -60,15 +63,25 @@ class RigRun:
     keep (board lost, refused). Then the surface is levelled and the motors stopped, or an emergency stop stays
     latched. What happens is reported on stderr and in the log's event lines."""
 
-    def __init__(self, port: str, setup: Setup, source: FrameSource, tracker: Tracker, log: RunLog, course: Course,
-                 rules: StopRules, *, reconnect_timeout_s: float = 30.0) -> None:
+    def __init__(
+        self,
+        port: str,
+        setup: Setup,
+        source: FrameSource,
+        tracker: Tracker,
+        log: RunLog,
+        course: Course,
+        rules: StopRules,
+        *,
+        reconnect_timeout_s: float = 30.0,
+    ) -> None:
         self.source, self.tracker, self.log, self.course, self.rules = source, tracker, log, course, rules
         self.session = RigSession(port, setup, report=self.report, reconnect_timeout_s=reconnect_timeout_s)
         self.loop = ClosedLoop(self.session.position)
         self.outcome = "timeout"
         self._interrupted = False
         self._keys: Keys | None = None
-        self._seen = None            # the tracker's last observation, for the log
+        self._seen = None  # the tracker's last observation, for the log
 
     def report(self, text: str) -> None:
         self.log.write("event", {"text": text})
@@ -79,21 +92,29 @@ class RigRun:
         previous = signal.getsignal(signal.SIGINT)
         try:
             self.session.open()
-            self.log.write("identify", {k: v if isinstance(v, float) else int(v)
-                                        for k, v in vars(self.session.identity).items()})
+            self.log.write(
+                "identify", {k: v if isinstance(v, float) else int(v) for k, v in vars(self.session.identity).items()}
+            )
             signal.signal(signal.SIGINT, self._on_sigint)
             self._keys = Keys()
             if self._keys.active:
                 print(f"mantaray rig: {KEYS_HELP}", file=sys.stderr)
             self.session.start()
-            if self.loop.run(self._frames(), Tolerance(self.rules.tolerance_m, self.rules.hold_s),
-                             stop_when_reached=True, on_frame=self._record) == STOPPED_REACHED:
+            if (
+                self.loop.run(
+                    self._frames(),
+                    Tolerance(self.rules.tolerance_m, self.rules.hold_s),
+                    stop_when_reached=True,
+                    on_frame=self._record,
+                )
+                == STOPPED_REACHED
+            ):
                 self.outcome = "reached"
             if self._interrupted:
                 self.outcome = "interrupted"
-        except KeyboardInterrupt:                    # while connecting, or a second Ctrl-C
+        except KeyboardInterrupt:  # while connecting, or a second Ctrl-C
             self.outcome = "interrupted"
-        except LinkError as exc:                     # what the session's retries could not absorb: the run ends
+        except LinkError as exc:  # what the session's retries could not absorb: the run ends
             self.report(f"the run ended: {exc}")
             self.outcome = "board lost" if isinstance(exc, BoardLost) else "refused"
         finally:
@@ -122,32 +143,39 @@ class RigRun:
             if t0 is None:
                 t0, wall0 = capture_s, time.monotonic()
             run_s = capture_s - t0
-            if self.source.is_file:                  # a recording plays at its own pace, as a camera would
+            if self.source.is_file:  # a recording plays at its own pace, as a camera would
                 time.sleep(max(0.0, run_s - (time.monotonic() - wall0)))
             if run_s > self.rules.timeout_s:
                 return
             obs = self._seen = self.tracker.observe(image, capture_s)
             if obs.visible and (abs(obs.xy_m[0]) > 2 * half[0] or abs(obs.xy_m[1]) > 2 * half[1]):
-                self.report(f"the object was seen at {obs.xy_m[0]:+.3f},{obs.xy_m[1]:+.3f} m, off the fabric by "
-                            f"more than half a module")  # what the firmware refuses
+                self.report(
+                    f"the object was seen at {obs.xy_m[0]:+.3f},{obs.xy_m[1]:+.3f} m, off the fabric by "
+                    f"more than half a module"
+                )  # what the firmware refuses
                 self.outcome = "fell off"
                 return
             target = self.course.at(run_s)
-            judged = obs.xy_m if not self.course.moving and obs.visible else None   # what the camera sees: the rig
-            yield Frame(run_s, obs.xy_m if obs.visible else None, target, judged_xy_m=judged,   # knows no better
-                        deliver=(lambda target=target: self._move_target(target)) if self.course.moving else None)
+            judged = obs.xy_m if not self.course.moving and obs.visible else None  # what the camera sees: the rig
+            yield Frame(
+                run_s,
+                obs.xy_m if obs.visible else None,
+                target,
+                judged_xy_m=judged,  # knows no better
+                deliver=(lambda target=target: self._move_target(target)) if self.course.moving else None,
+            )
 
     def _stopped_by_key(self) -> bool:
         """A key pressed since the last frame, or an emergency stop the board reported: True when the run ends."""
         for key in self._keys.read():
             outcome = KEYS.get(key.lower())
             if outcome == EMERGENCY_STOP:
-                self.session.emergency_stop()        # at once, through the session: latched across reconnections
+                self.session.emergency_stop()  # at once, through the session: latched across reconnections
             if outcome is not None:
                 self.report(f"{outcome} (key {key!r})")
                 self.outcome = outcome
                 return True
-        if self.session.estopped:                    # sent from elsewhere: the run cannot go on
+        if self.session.estopped:  # sent from elsewhere: the run cannot go on
             self.outcome = EMERGENCY_STOP
             return True
         return False
@@ -159,11 +187,24 @@ class RigRun:
 
     def _record(self, frame: Frame, telemetry: m.Telemetry | None) -> None:
         obs = self._seen
-        self.log.write("position", {"frame": self.loop.frame, "capture_s": round(frame.capture_s, 6),
-                                    "status": obs.status, "xy_m": obs.xy_m, "corners_seen": list(obs.corners_seen)})
+        self.log.write(
+            "position",
+            {
+                "frame": self.loop.frame,
+                "capture_s": round(frame.capture_s, 6),
+                "status": obs.status,
+                "xy_m": obs.xy_m,
+                "corners_seen": list(obs.corners_seen),
+            },
+        )
         if telemetry is not None:
-            self.log.write("telemetry", {k: (list(v) if isinstance(v, tuple) else int(v) if isinstance(v, int)
-                                             else v) for k, v in vars(telemetry).items()})
+            self.log.write(
+                "telemetry",
+                {
+                    k: (list(v) if isinstance(v, tuple) else int(v) if isinstance(v, int) else v)
+                    for k, v in vars(telemetry).items()
+                },
+            )
 
     def _finish(self) -> None:
         """The board left safe: levelled and stopped (once, without recoveries, when the board was lost), or its
@@ -171,12 +212,13 @@ class RigRun:
         session = self.session
         try:
             if session.link is not None and session.estopped:
-                self.report(f"the emergency stop stays latched: `mantaray stop --port {shlex.quote(session.port)}` "
-                            f"clears it")
+                self.report(
+                    f"the emergency stop stays latched: `mantaray stop --port {shlex.quote(session.port)}` clears it"
+                )
             elif session.link is not None and self.outcome == "board lost":
-                session.link.command(m.Stop())       # once: the session's recoveries are spent
+                session.link.command(m.Stop())  # once: the session's recoveries are spent
             elif session.link is not None:
-                session.stop()                       # level the surface, controller off
+                session.stop()  # level the surface, controller off
         except LinkError as exc:
             self.report(f"could not level the surface and stop ({exc}): the firmware's deadman stops it")
         finally:
@@ -193,8 +235,17 @@ class RigRun:
         rows = self.loop.arrays()
         xy = rows["measured_xy_m"]
         configure = self.session.setup.configure
-        targets = rows["target_m"] if self.course.moving and len(xy) else [self.course.centre_m]   # a path, or one
-        return path_phase_figure(xy, rows["tilt_deg"], xy[0] if len(xy) and math.isfinite(xy[0][0]) else None,
-                                 targets, self.rules.tolerance_m, f"rig: {self.outcome}",
-                                 (configure.module_x, configure.module_y), configure.tilt_limit, path,
-                                 t_s=rows["t_s"] if len(xy) else None, command_m=rows["command_m"] if len(xy) else None)
+        targets = rows["target_m"] if self.course.moving and len(xy) else [self.course.centre_m]  # a path, or one
+        return path_phase_figure(
+            xy,
+            rows["tilt_deg"],
+            xy[0] if len(xy) and math.isfinite(xy[0][0]) else None,
+            targets,
+            self.rules.tolerance_m,
+            f"rig: {self.outcome}",
+            (configure.module_x, configure.module_y),
+            configure.tilt_limit,
+            path,
+            t_s=rows["t_s"] if len(xy) else None,
+            command_m=rows["command_m"] if len(xy) else None,
+        )

@@ -1,4 +1,5 @@
 """The log of a rig run (what `mantaray rig` writes): one JSON-lines file, written as it runs and read back for fitting."""
+
 from __future__ import annotations
 
 import itertools
@@ -49,11 +50,12 @@ class RunLogError(ValueError):
 @dataclass(frozen=True)
 class LoggedRun:
     """A rig log as arrays, one row per position frame (in the order they were sent)."""
+
     path: Path
-    args: dict                   # the run's options as logged (controller, target, alpha, object, ...)
-    t_s: np.ndarray              # [s] capture time of each frame from the run's start
-    xy_m: np.ndarray             # [m] tracked position; NaN where the object was not seen
-    command_m: np.ndarray        # [m] a_0..a_3 of the telemetry that answered the frame; NaN where none came
+    args: dict  # the run's options as logged (controller, target, alpha, object, ...)
+    t_s: np.ndarray  # [s] capture time of each frame from the run's start
+    xy_m: np.ndarray  # [m] tracked position; NaN where the object was not seen
+    command_m: np.ndarray  # [m] a_0..a_3 of the telemetry that answered the frame; NaN where none came
 
     @property
     def start_m(self) -> tuple[float, float]:
@@ -78,7 +80,7 @@ def read_run_log(path: str | Path) -> LoggedRun:
         try:
             record = json.loads(line)
         except json.JSONDecodeError:
-            if n == len(lines):             # a last line cut off by an interruption
+            if n == len(lines):  # a last line cut off by an interruption
                 break
             raise RunLogError(f"{path}:{n} is not JSON: not a rig log") from None
         if not isinstance(record, dict):
@@ -106,5 +108,6 @@ def read_run_log(path: str | Path) -> LoggedRun:
     if not np.isfinite(xy_m[:, 0]).any():
         raise RunLogError(f"{path} holds no frame in which the object was seen")
     args = records[0][1].get("args")
-    return LoggedRun(path, args if isinstance(args, dict) else {}, np.asarray(t, float), xy_m,
-                     np.asarray(cmd, float).reshape(-1, 4))
+    return LoggedRun(
+        path, args if isinstance(args, dict) else {}, np.asarray(t, float), xy_m, np.asarray(cmd, float).reshape(-1, 4)
+    )

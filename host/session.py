@@ -7,6 +7,7 @@ the port as soon as it is back, identifies the firmware again, and re-sends the 
 and the target, and `start` if it was running: the user restarts nothing. A session that only attached (monitor,
 jog, zero, stop, estop) reconnects the same way and sends nothing again: it set nothing up.
 """
+
 from __future__ import annotations
 
 import os
@@ -24,14 +25,16 @@ class EmergencyStopLatched(RuntimeError):
     """A start while the session's emergency stop is latched: the user clears it with stop() first."""
 
 
-PROBE_STEP_US = 50_000       # [us] capture time between two probes' not-visible frames (any step forward will do)
+PROBE_STEP_US = 50_000  # [us] capture time between two probes' not-visible frames (any step forward will do)
 MISSES_BEFORE_RECONNECT = 3  # camera frames in a row without telemetry that mean a lost board, not a lost frame
-SETUP_ATTEMPTS = 5           # times a session sets a board up (reconnecting between tries) before it counts as lost
+SETUP_ATTEMPTS = 5  # times a session sets a board up (reconnecting between tries) before it counts as lost
 
 
 class BoardLost(LinkError):
     """The session could not reach its board, or set it up again, within its retries: the run cannot go on."""
-UNO_RESET_WAIT_S = 2.5      # [s] the stock bootloader's delay after the DTR reset, with margin
+
+
+UNO_RESET_WAIT_S = 2.5  # [s] the stock bootloader's delay after the DTR reset, with margin
 
 
 def is_pty(port: str) -> bool:
@@ -45,13 +48,23 @@ def controller_axes(controller: str) -> tuple[m.Axis, ...]:
     return CONTROLLER_AXES[m.Controller[controller.upper()]]
 
 
-CONTROLLER_AXES = {m.Controller.MANHATTAN: (m.Axis.X, m.Axis.Y), m.Controller.EUCLIDEAN: (m.Axis.RADIAL,),
-                   m.Controller.SCHEDULED: (m.Axis.X, m.Axis.Y), m.Controller.CASCADE: (m.Axis.VX, m.Axis.VY)}
-PAPER_AXES = (m.Axis.X, m.Axis.Y, m.Axis.RADIAL)   # the PIDs whose gains the paper gives (a plant may read them per rad)
+CONTROLLER_AXES = {
+    m.Controller.MANHATTAN: (m.Axis.X, m.Axis.Y),
+    m.Controller.EUCLIDEAN: (m.Axis.RADIAL,),
+    m.Controller.SCHEDULED: (m.Axis.X, m.Axis.Y),
+    m.Controller.CASCADE: (m.Axis.VX, m.Axis.VY),
+}
+PAPER_AXES = (m.Axis.X, m.Axis.Y, m.Axis.RADIAL)  # the PIDs whose gains the paper gives (a plant may read them per rad)
 
 
-def connect(port: str, *, reset_wait_s: float | None = None, timeout_s: float = 30.0, ack_timeout_s: float = 0.2,
-            open_transport: Callable[[str], Transport] = SerialTransport) -> tuple[Link, m.IdentifyReply]:
+def connect(
+    port: str,
+    *,
+    reset_wait_s: float | None = None,
+    timeout_s: float = 30.0,
+    ack_timeout_s: float = 0.2,
+    open_transport: Callable[[str], Transport] = SerialTransport,
+) -> tuple[Link, m.IdentifyReply]:
     """Opens the port (waiting up to timeout_s for it to appear), waits out the Uno's reset, identifies.
 
     Changes nothing on the firmware: a monitor can attach to a running rig. IncompatibleFirmware is raised
@@ -64,7 +77,7 @@ def connect(port: str, *, reset_wait_s: float | None = None, timeout_s: float = 
             # judged once the port is there: a replugged pty is briefly missing, and is no Uno that resets
             wait_s = reset_wait_s if reset_wait_s is not None else 0.0 if is_pty(port) else UNO_RESET_WAIT_S
             boot_deadline = time.monotonic() + wait_s
-            while (remaining := boot_deadline - time.monotonic()) > 0:   # the Uno's bootloader runs first
+            while (remaining := boot_deadline - time.monotonic()) > 0:  # the Uno's bootloader runs first
                 if isinstance(link.receive(remaining), m.Boot):
                     break
             while True:
@@ -75,7 +88,7 @@ def connect(port: str, *, reset_wait_s: float | None = None, timeout_s: float = 
                 except LinkError:
                     if time.monotonic() > deadline:
                         raise LinkError(f"{port}: the firmware does not answer identify") from None
-        except OSError:                 # the port went away (unplugged) after it opened: open it again
+        except OSError:  # the port went away (unplugged) after it opened: open it again
             _close_quietly(link)
             if time.monotonic() > deadline:
                 raise LinkError(f"{port}: the port went away and did not come back") from None
@@ -89,7 +102,7 @@ def _open(port: str, deadline: float, open_transport: Callable[[str], Transport]
     while True:
         try:
             return open_transport(port)
-        except OSError as exc:          # serial.SerialException is an OSError: no such port (yet)
+        except OSError as exc:  # serial.SerialException is an OSError: no such port (yet)
             if time.monotonic() > deadline:
                 raise LinkError(f"{port}: cannot open it ({exc}); is the board plugged in?") from None
             time.sleep(0.2)
@@ -106,10 +119,11 @@ def _close_quietly(link: Link) -> None:
 class Setup:
     """A firmware's set-up for a run: what the session re-applies after every (re)connection, and what the
     simulation sends before each trial."""
+
     configure: m.Configure = field(default_factory=m.Configure)
-    gains: dict[m.Axis, dict] = field(default_factory=dict)      # axis -> configure_pid fields (the rest: as booted)
-    target: tuple[float, float] | None = None                     # [m]
-    controller_commands: list[m.Message] = field(default_factory=list)   # configure_schedule, configure_cascade
+    gains: dict[m.Axis, dict] = field(default_factory=dict)  # axis -> configure_pid fields (the rest: as booted)
+    target: tuple[float, float] | None = None  # [m]
+    controller_commands: list[m.Message] = field(default_factory=list)  # configure_schedule, configure_cascade
 
     def commands(self) -> list[m.Message]:
         """In the order the firmware takes them (in idle): configure, the controller's own settings, each PID's
@@ -124,28 +138,35 @@ class Setup:
 class RigSession:
     """One firmware on one serial path; use as a context manager."""
 
-    def __init__(self, port: str, setup: Setup | None = None, *, reset_wait_s: float | None = None,
-                 reconnect_timeout_s: float = 30.0, ack_timeout_s: float = 0.2,
-                 report: Callable[[str], None] = lambda text: None,
-                 open_transport: Callable[[str], Transport] = SerialTransport) -> None:
+    def __init__(
+        self,
+        port: str,
+        setup: Setup | None = None,
+        *,
+        reset_wait_s: float | None = None,
+        reconnect_timeout_s: float = 30.0,
+        ack_timeout_s: float = 0.2,
+        report: Callable[[str], None] = lambda text: None,
+        open_transport: Callable[[str], Transport] = SerialTransport,
+    ) -> None:
         self.port = port
         self.setup = setup or Setup()
-        self.reset_wait_s = reset_wait_s        # [s] None: connect() decides by the kind of port
+        self.reset_wait_s = reset_wait_s  # [s] None: connect() decides by the kind of port
         self.reconnect_timeout_s = reconnect_timeout_s
         self.ack_timeout_s = ack_timeout_s
         self.report = report
         self._open_transport = open_transport
         self.link: Link | None = None
         self.identity: m.IdentifyReply | None = None
-        self.sets_up = True          # open() set the board up, and a reconnection sets it up again; attach(): not
+        self.sets_up = True  # open() set the board up, and a reconnection sets it up again; attach(): not
         self.running = False
-        self.estopped = False        # emergency_stop() latched it; only stop() clears it
+        self.estopped = False  # emergency_stop() latched it; only stop() clears it
         self._setup_pending = False  # a (re)connection during the emergency stop sent only the stop
-        self._last_position: m.ObjectPosition | None = None   # the last frame sent: a probe's comes after it
-        self.reconnects = 0          # times the link was reopened
-        self.lost_telemetry = 0      # camera frames whose telemetry never came (skipped)
+        self._last_position: m.ObjectPosition | None = None  # the last frame sent: a probe's comes after it
+        self.reconnects = 0  # times the link was reopened
+        self.lost_telemetry = 0  # camera frames whose telemetry never came (skipped)
         self._missed_in_a_row = 0
-        self.restores = 0            # times the setup was re-applied after a reset or reconnection
+        self.restores = 0  # times the setup was re-applied after a reset or reconnection
         self._resets_seen = 0
 
     # ----------------------------------------------------------------------------------- connection
@@ -169,19 +190,24 @@ class RigSession:
         as it is)."""
         first = self.identity is None
         try:
-            self.link, self.identity = connect(self.port, reset_wait_s=self.reset_wait_s, timeout_s=timeout_s,
-                                               ack_timeout_s=self.ack_timeout_s, open_transport=self._open_transport)
+            self.link, self.identity = connect(
+                self.port,
+                reset_wait_s=self.reset_wait_s,
+                timeout_s=timeout_s,
+                ack_timeout_s=self.ack_timeout_s,
+                open_transport=self._open_transport,
+            )
         except IncompatibleFirmware:
             raise
         except (LinkError, OSError) as exc:
-            raise BoardLost(str(exc)) from None   # it names the port
+            raise BoardLost(str(exc)) from None  # it names the port
         self._resets_seen = self.link.resets
         if first:
             for text in self.link.rig_differences:
                 self.report(f"warning: {text}")
 
     def _apply(self) -> None:
-        if self.estopped:            # latched across resets and replugs: nothing is powered until stop() clears it
+        if self.estopped:  # latched across resets and replugs: nothing is powered until stop() clears it
             self.link.command(m.EmergencyStop())
             self._setup_pending = True
             return
@@ -196,6 +222,7 @@ class RigSession:
 
         A refused command (CommandRefused) is the user's setup, not the link: it is raised at once. A board that
         does not come back within reconnect_timeout_s, or a setup lost every time, raises BoardLost."""
+
         def apply() -> None:
             self._apply()
             self._resets_seen = self.link.resets
@@ -216,8 +243,9 @@ class RigSession:
                 raise
             except (LinkError, OSError) as exc:
                 if attempt == SETUP_ATTEMPTS:
-                    raise BoardLost(f"{self.port}: {what} did not get through in {SETUP_ATTEMPTS} tries "
-                                    f"(the last: {exc})") from None
+                    raise BoardLost(
+                        f"{self.port}: {what} did not get through in {SETUP_ATTEMPTS} tries (the last: {exc})"
+                    ) from None
                 between(exc)
 
     def _reconnect(self) -> None:
@@ -248,8 +276,9 @@ class RigSession:
     def command(self, msg) -> m.Message:
         """A command through the session: on a failed link it reconnects, restores and sends it again, SETUP_ATTEMPTS
         times in all; then BoardLost. A nack (CommandRefused) is raised as it is."""
-        return self._retried(lambda: self.link.command(msg), msg.NAME,
-                             lambda exc: self._recover(f"link failed ({exc})"))
+        return self._retried(
+            lambda: self.link.command(msg), msg.NAME, lambda exc: self._recover(f"link failed ({exc})")
+        )
 
     def set_target(self, x_m: float, y_m: float) -> None:
         self.setup.target = (x_m, y_m)
@@ -265,7 +294,7 @@ class RigSession:
         """Levels the surface and stops the controller; also how the user clears an emergency stop."""
         self.running = False
         self.estopped = False
-        if self._setup_pending:      # a board met during the emergency stop has not had its setup yet
+        if self._setup_pending:  # a board met during the emergency stop has not had its setup yet
             self._setup_pending = False
             self._apply()
         else:
@@ -290,9 +319,11 @@ class RigSession:
         """The board's telemetry now, asked for with a not-visible position after the last frame sent: it steps
         nothing and feeds no deadman. LinkError when none answers."""
         last = self._last_position or m.ObjectPosition(frame=0, capture_time=0)
-        self._last_position = m.ObjectPosition(frame=(last.frame + 1) & 0xFFFF,
-                                               capture_time=(last.capture_time + PROBE_STEP_US) & 0xFFFFFFFF,
-                                               flags=m.PositionFlags.NOT_VISIBLE)
+        self._last_position = m.ObjectPosition(
+            frame=(last.frame + 1) & 0xFFFF,
+            capture_time=(last.capture_time + PROBE_STEP_US) & 0xFFFFFFFF,
+            flags=m.PositionFlags.NOT_VISIBLE,
+        )
         return self.link.position(self._last_position)
 
     def position(self, msg: m.ObjectPosition) -> m.Telemetry | None:
@@ -317,9 +348,9 @@ class RigSession:
                 self._recover(f"{MISSES_BEFORE_RECONNECT} camera frames in a row got no telemetry ({exc})")
             return None
         self._missed_in_a_row = 0
-        if self.link.resets != self._resets_seen and self.sets_up:   # the board restarted (its boot came in)
+        if self.link.resets != self._resets_seen and self.sets_up:  # the board restarted (its boot came in)
             self.report("the firmware reset")
-            self._restore("after the reset")          # BoardLost when the board cannot be set up again
+            self._restore("after the reset")  # BoardLost when the board cannot be set up again
         elif m.State(telemetry.state) == m.State.ESTOP and not self.estopped:
             self.running, self.estopped = False, True
             self.report("the board reports an emergency stop this host did not send: latched; stop() clears it")

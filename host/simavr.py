@@ -1,4 +1,5 @@
 """Starts the Uno's ELF in simavr (mantaray-simavr) with its UART on a pty, and reads its timing report on exit."""
+
 from __future__ import annotations
 
 import json
@@ -15,7 +16,7 @@ from mantaray.paths import REPO, native_artifact
 
 from .vmcu import _die_with_parent
 
-DEFAULT_ELF = REPO / "build" / "avr" / "firmware.elf"   # where scripts/avr_build.py puts the Uno image
+DEFAULT_ELF = REPO / "build" / "avr" / "firmware.elf"  # where scripts/avr_build.py puts the Uno image
 
 
 def end_of_data(elf: Path) -> int:
@@ -24,7 +25,7 @@ def end_of_data(elf: Path) -> int:
     for line in out.splitlines():
         parts = line.split()
         if len(parts) == 3 and parts[2] == "_end":
-            return int(parts[0], 16) & 0xFFFF    # data addresses carry avr-gcc's 0x800000 offset
+            return int(parts[0], 16) & 0xFFFF  # data addresses carry avr-gcc's 0x800000 offset
     raise RuntimeError(f"{elf} has no _end symbol")
 
 
@@ -39,20 +40,39 @@ class SimulatedUno:
     `stats` holds the probe timings in cycles and the RAM the stack never reached.
     """
 
-    def __init__(self, elf: Path = DEFAULT_ELF, bench: bool = True, realtime: bool = False,
-                 run_for_s: float | None = None, start_timeout_s: float = 10.0) -> None:
+    def __init__(
+        self,
+        elf: Path = DEFAULT_ELF,
+        bench: bool = True,
+        realtime: bool = False,
+        run_for_s: float | None = None,
+        start_timeout_s: float = 10.0,
+    ) -> None:
         self.elf = Path(elf)
         if not self.elf.exists():
             raise FileNotFoundError(f"{self.elf} does not exist; build it first: python3 scripts/avr_build.py")
         self._dir = tempfile.TemporaryDirectory(prefix="mantaray-simavr-")
         self._stats_path = Path(self._dir.name) / "stats.json"
         self.stats: dict | None = None
-        command = [str(native_artifact("mantaray-simavr")), str(self.elf), "--stats", str(self._stats_path),
-                   "--paint-from", hex(end_of_data(self.elf))] + (["--bench"] if bench else []) + \
-                  (["--realtime"] if realtime else []) + \
-                  (["--run-for", str(run_for_s)] if run_for_s is not None else [])
-        self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                        preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None)
+        command = (
+            [
+                str(native_artifact("mantaray-simavr")),
+                str(self.elf),
+                "--stats",
+                str(self._stats_path),
+                "--paint-from",
+                hex(end_of_data(self.elf)),
+            ]
+            + (["--bench"] if bench else [])
+            + (["--realtime"] if realtime else [])
+            + (["--run-for", str(run_for_s)] if run_for_s is not None else [])
+        )
+        self.process = subprocess.Popen(
+            command,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None,
+        )
         self.path = self._read_pty(start_timeout_s)
 
     def _read_pty(self, timeout_s: float) -> str:
@@ -66,12 +86,13 @@ class SimulatedUno:
             for line in seen.decode(errors="replace").splitlines():
                 if line.startswith("pty ") and seen.endswith(b"\n"):
                     return line.split()[1]
-            if ready and not chunk:    # end of file: the harness exited
+            if ready and not chunk:  # end of file: the harness exited
                 break
         err = self.process.stderr.read() if self.process.poll() is not None else b""
         self.close()
-        raise RuntimeError(f"mantaray-simavr did not report its pty within {timeout_s} s: "
-                           f"{err.decode(errors='replace').strip()}")
+        raise RuntimeError(
+            f"mantaray-simavr did not report its pty within {timeout_s} s: {err.decode(errors='replace').strip()}"
+        )
 
     def wait(self, timeout_s: float) -> None:
         """Waits for a run_for_s simulation to end by itself, then closes."""

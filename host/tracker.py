@@ -8,6 +8,7 @@ solves the camera's full pose from the corner markers and intersects the ray thr
 marker with the plane of the marker's height. Either way nothing is guessed: a frame without all four
 corner markers, or without the object, is reported as such (Observation.status).
 """
+
 from __future__ import annotations
 
 import time
@@ -19,13 +20,14 @@ import numpy as np
 from .markers import MarkerLayout, dictionary
 
 OK = "ok"
-NO_FRAME = "no fabric frame"        # fewer than the four corner markers, and no earlier frame fit to reuse
+NO_FRAME = "no fabric frame"  # fewer than the four corner markers, and no earlier frame fit to reuse
 NO_OBJECT = "object not seen"
 
 
 @dataclass(frozen=True)
 class Calibration:
     """A pinhole camera: intrinsics K (3 x 3) [px] and OpenCV's distortion coefficients."""
+
     camera_matrix: np.ndarray
     distortion: np.ndarray
 
@@ -41,11 +43,12 @@ class Calibration:
 @dataclass(frozen=True)
 class Observation:
     """One camera frame's verdict: the object's (x, y) [m] in the fabric frame, or why there is none."""
-    capture_time_s: float                   # [s] when the frame was captured (monotonic clock or video time)
-    status: str                             # OK, NO_FRAME or NO_OBJECT
+
+    capture_time_s: float  # [s] when the frame was captured (monotonic clock or video time)
+    status: str  # OK, NO_FRAME or NO_OBJECT
     xy_m: tuple[float, float] | None = None
-    corners_seen: tuple[int, ...] = ()      # which corner markers (0..3) this frame showed
-    reused_frame_fit: bool = False          # the fabric frame came from an earlier image (a corner was hidden)
+    corners_seen: tuple[int, ...] = ()  # which corner markers (0..3) this frame showed
+    reused_frame_fit: bool = False  # the fabric frame came from an earlier image (a corner was hidden)
 
     @property
     def visible(self) -> bool:
@@ -55,6 +58,7 @@ class Observation:
 @dataclass
 class BlobColour:
     """A marker-less object (the egg): the largest blob within an HSV range (OpenCV's H 0..179, S, V 0..255)."""
+
     hsv_low: tuple[int, int, int]
     hsv_high: tuple[int, int, int]
     min_area_px: int = 30
@@ -64,13 +68,14 @@ class BlobColour:
 class Tracker:
     """Finds the fabric frame and the object in BGR or grey images. Reuse one per camera: it keeps the last
     fabric-frame fit so that a frame with a corner marker hidden (a hand, the object) still measures, flagged."""
+
     layout: MarkerLayout = field(default_factory=MarkerLayout)
-    marker_height_m: float = 0.0            # [m] object marker (or blob) above the corner markers' plane
-    camera_height_m: float = 1.0            # [m] camera above that plane (homography mode's parallax)
-    camera_xy_m: tuple[float, float] = (0.0, 0.0)   # [m] the point the camera stands above
+    marker_height_m: float = 0.0  # [m] object marker (or blob) above the corner markers' plane
+    camera_height_m: float = 1.0  # [m] camera above that plane (homography mode's parallax)
+    camera_xy_m: tuple[float, float] = (0.0, 0.0)  # [m] the point the camera stands above
     calibration: Calibration | None = None
-    blob: BlobColour | None = None          # track a colour blob instead of the object's marker
-    max_frame_age_s: float = 5.0            # [s] how long a fabric-frame fit may be reused
+    blob: BlobColour | None = None  # track a colour blob instead of the object's marker
+    max_frame_age_s: float = 5.0  # [s] how long a fabric-frame fit may be reused
 
     def __post_init__(self) -> None:
         import cv2
@@ -78,7 +83,7 @@ class Tracker:
         params = cv2.aruco.DetectorParameters()
         params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
         self._detector = cv2.aruco.ArucoDetector(dictionary(self.layout), params)
-        self._fit = None                    # (image -> plane homography, or (rvec, tvec)), fit time [s]
+        self._fit = None  # (image -> plane homography, or (rvec, tvec)), fit time [s]
 
     # ------------------------------------------------------------------------------------------- frames
     def observe(self, image: np.ndarray, capture_time_s: float | None = None) -> Observation:
@@ -115,8 +120,9 @@ class Tracker:
             homography, _ = cv2.findHomography(pixels, plane, 0)
             return homography
         objects = np.hstack([plane, np.zeros((len(plane), 1))])
-        ok, rvec, tvec = cv2.solvePnP(objects, pixels, self.calibration.camera_matrix, self.calibration.distortion,
-                                      flags=cv2.SOLVEPNP_ITERATIVE)
+        ok, rvec, tvec = cv2.solvePnP(
+            objects, pixels, self.calibration.camera_matrix, self.calibration.distortion, flags=cv2.SOLVEPNP_ITERATIVE
+        )
         if not ok:
             raise RuntimeError("solvePnP failed on the four corner markers")
         return rvec, tvec
@@ -132,10 +138,11 @@ class Tracker:
             return tuple(c + (p - c) * (self.camera_height_m - h) / self.camera_height_m)
         rvec, tvec = fit
         rotation, _ = cv2.Rodrigues(rvec)
-        ray_cam = cv2.undistortPoints(pixel.reshape(1, 1, 2).astype(np.float64), self.calibration.camera_matrix,
-                                      self.calibration.distortion).reshape(2)
-        direction = rotation.T @ np.array([ray_cam[0], ray_cam[1], 1.0])   # in the fabric frame
-        centre = (-rotation.T @ tvec).ravel()                              # the camera, fabric frame
+        ray_cam = cv2.undistortPoints(
+            pixel.reshape(1, 1, 2).astype(np.float64), self.calibration.camera_matrix, self.calibration.distortion
+        ).reshape(2)
+        direction = rotation.T @ np.array([ray_cam[0], ray_cam[1], 1.0])  # in the fabric frame
+        centre = (-rotation.T @ tvec).ravel()  # the camera, fabric frame
         s = (h - centre[2]) / direction[2]
         point = centre + s * direction
         return float(point[0]), float(point[1])

@@ -1,4 +1,5 @@
 """Byte transports under the link: a serial device path (real board, pty, simulator) or the in-process core."""
+
 from __future__ import annotations
 
 import ctypes

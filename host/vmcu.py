@@ -1,4 +1,5 @@
 """Starts the native virtual MCU on a fresh pty and hands back the device path the host opens."""
+
 from __future__ import annotations
 
 import ctypes
@@ -30,8 +31,10 @@ class VirtualMcu:
         self.clock = clock
         self.process = subprocess.Popen(
             [str(native_artifact("mantaray-vmcu")), "--pty", self.path, "--clock", clock],
-            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-            preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None)
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None,
+        )
         deadline = time.monotonic() + start_timeout_s
         while not Path(self.path).exists():
             if self.process.poll() is not None:

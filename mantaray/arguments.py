@@ -1,4 +1,5 @@
 """Argument types the command lines share: a number within its bounds, refused by argparse (exit 2) in one line."""
+
 from __future__ import annotations
 
 import argparse
@@ -6,8 +7,9 @@ import math
 from collections.abc import Callable
 
 
-def number(low: float | None = None, high: float | None = None, *, above: bool = False,
-           integer: bool = False) -> Callable[[str], float]:
+def number(
+    low: float | None = None, high: float | None = None, *, above: bool = False, integer: bool = False
+) -> Callable[[str], float]:
     """A type for add_argument: a finite number (an integer with integer=True) with low <= x <= high (low < x with
     above=True); either bound may be None."""
     kind = int if integer else float
@@ -16,8 +18,9 @@ def number(low: float | None = None, high: float | None = None, *, above: bool =
         try:
             value = kind(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"expected {'an integer' if integer else 'a number'}, got {text!r}") \
-                from None
+            raise argparse.ArgumentTypeError(
+                f"expected {'an integer' if integer else 'a number'}, got {text!r}"
+            ) from None
         below_low = low is not None and (value <= low if above else value < low)
         if not math.isfinite(value) or below_low or (high is not None and value > high):
             raise argparse.ArgumentTypeError(f"must be {_span(low, high, above)}, got {text}")

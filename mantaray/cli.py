@@ -1,4 +1,5 @@
 """Command-line entry point: `mantaray <command>`; run `mantaray --help` for the list."""
+
 from __future__ import annotations
 
 import argparse
@@ -16,7 +17,7 @@ class Parser(argparse.ArgumentParser):
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
-        self._negative_number_matcher = self.NEGATIVE_VALUES   # argparse's own hook for "looks like a number"
+        self._negative_number_matcher = self.NEGATIVE_VALUES  # argparse's own hook for "looks like a number"
 
 
 def cmd_vmcu(args: argparse.Namespace) -> int:
@@ -29,19 +30,21 @@ def cmd_vmcu(args: argparse.Namespace) -> int:
     from mantaray.host.vmcu import VirtualMcu
 
     def stop(signum, frame):
-        raise KeyboardInterrupt   # as Ctrl-C: the virtual MCU stops and its temporary folder goes
+        raise KeyboardInterrupt  # as Ctrl-C: the virtual MCU stops and its temporary folder goes
 
     signal.signal(signal.SIGTERM, stop)
     with VirtualMcu(clock=args.clock) as vmcu:
         link = Link(SerialTransport(vmcu.path))
         reply = link.identify()
         link.close()
-        print(f"virtual MCU on {vmcu.path}: protocol {reply.protocol_version}, firmware "
-              f"{reply.firmware_major}.{reply.firmware_minor}.{reply.firmware_patch}, "
-              f"schema 0x{reply.schema_hash:08X} (matches this host), clock {reply.clock.name.lower()}")
+        print(
+            f"virtual MCU on {vmcu.path}: protocol {reply.protocol_version}, firmware "
+            f"{reply.firmware_major}.{reply.firmware_minor}.{reply.firmware_patch}, "
+            f"schema 0x{reply.schema_hash:08X} (matches this host), clock {reply.clock.name.lower()}"
+        )
         if args.identify_only:
             return 0
-        try:                      # from the line that says so on, a stop is the normal end (exit 0)
+        try:  # from the line that says so on, a stop is the normal end (exit 0)
             print("running; Ctrl-C stops it", flush=True)
             while vmcu.process.poll() is None:
                 time.sleep(0.2)
@@ -60,8 +63,15 @@ def cmd_conformance(args: argparse.Namespace, parser: argparse.ArgumentParser) -
         check_port(args.port)
     except PortError as exc:
         parser.error(str(exc))
-    pytest_args = ["--pyargs", "mantaray.protocol.conformance", "-p", "mantaray.protocol.conformance.plugin",
-                   "-q", "-p", "no:cacheprovider"]
+    pytest_args = [
+        "--pyargs",
+        "mantaray.protocol.conformance",
+        "-p",
+        "mantaray.protocol.conformance.plugin",
+        "-q",
+        "-p",
+        "no:cacheprovider",
+    ]
     if args.port:
         pytest_args += ["--port", args.port]
     extra = args.pytest_args[1:] if args.pytest_args[:1] == ["--"] else args.pytest_args
@@ -69,27 +79,38 @@ def cmd_conformance(args: argparse.Namespace, parser: argparse.ArgumentParser) -
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = Parser(
-        prog="mantaray", description="MANTA-RAY control stack: firmware link, simulation and tools.")
+    parser = Parser(prog="mantaray", description="MANTA-RAY control stack: firmware link, simulation and tools.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
-    vmcu = sub.add_parser("vmcu", help="start the native virtual MCU on a pty and check the handshake",
-                          description=cmd_vmcu.__doc__)
-    vmcu.add_argument("--clock", choices=["wall", "sim"], default="wall",
-                      help="wall: real time (default); sim: time advances only by sim_clock messages")
+    vmcu = sub.add_parser(
+        "vmcu", help="start the native virtual MCU on a pty and check the handshake", description=cmd_vmcu.__doc__
+    )
+    vmcu.add_argument(
+        "--clock",
+        choices=["wall", "sim"],
+        default="wall",
+        help="wall: real time (default); sim: time advances only by sim_clock messages",
+    )
     vmcu.add_argument("--identify-only", action="store_true", help="exit after the handshake")
     vmcu.set_defaults(func=cmd_vmcu)
 
-    conf = sub.add_parser("conformance", help="run the protocol conformance suite against a firmware",
-                          description=cmd_conformance.__doc__ + " Without --port, a virtual MCU is started "
-                          "on a pty. Arguments after -- go to pytest.")
+    conf = sub.add_parser(
+        "conformance",
+        help="run the protocol conformance suite against a firmware",
+        description=cmd_conformance.__doc__ + " Without --port, a virtual MCU is started "
+        "on a pty. Arguments after -- go to pytest.",
+    )
     conf.add_argument("--port", help="serial device path of the firmware (board, simulator or pty)")
-    conf.add_argument("pytest_args", nargs=argparse.REMAINDER,
-                      help="after --, options for pytest (e.g. -- -m 'not wall_timing' -k deadman)")
+    conf.add_argument(
+        "pytest_args",
+        nargs=argparse.REMAINDER,
+        help="after --, options for pytest (e.g. -- -m 'not wall_timing' -k deadman)",
+    )
     conf.set_defaults(func=lambda args: cmd_conformance(args, conf))
 
     from mantaray.host.cli import add_parsers as add_rig
     from mantaray.sim.cli import add_parser as add_sim
+
     add_rig(sub)
     add_sim(sub)
     return parser
@@ -109,9 +130,10 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:  # a user-facing tool: one clear line, no traceback
         from mantaray.host.link import LinkError
         from mantaray.paths import NotBuilt
+
         expected = [LinkError, NotBuilt, OSError]
-        simulation = sys.modules.get("mantaray.sim.model")   # only a command that loaded it can have failed in it
-        if simulation is not None:                           # (importing it here would load MuJoCo for the rig)
+        simulation = sys.modules.get("mantaray.sim.model")  # only a command that loaded it can have failed in it
+        if simulation is not None:  # (importing it here would load MuJoCo for the rig)
             expected.append(simulation.SimulationUnstable)
         if isinstance(exc, tuple(expected)):
             print(f"mantaray {args.command}: error: {exc}", file=sys.stderr)

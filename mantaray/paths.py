@@ -1,12 +1,13 @@
 """Where the natively built firmware artifacts live (the virtual MCU and its C library): a checkout's build, or the
 installed package's own."""
+
 from __future__ import annotations
 
 import os
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parent.parent     # the checkout, when this runs from one
-PACKAGED = Path(__file__).resolve().parent / "native"   # what `pip install .` built into the package
+REPO = Path(__file__).resolve().parent.parent  # the checkout, when this runs from one
+PACKAGED = Path(__file__).resolve().parent / "native"  # what `pip install .` built into the package
 
 
 class NotBuilt(FileNotFoundError):
@@ -24,5 +25,7 @@ def native_artifact(name: str) -> Path:
     for path in (build_dir() / name, PACKAGED / name):
         if path.exists():
             return path
-    raise NotBuilt(f"{build_dir() / name} does not exist and the installed package carries none; build the firmware "
-                   f"first: cmake -S {REPO} -B {build_dir()} -G Ninja && ninja -C {build_dir()} (or pip install .)")
+    raise NotBuilt(
+        f"{build_dir() / name} does not exist and the installed package carries none; build the firmware "
+        f"first: cmake -S {REPO} -B {build_dir()} -G Ninja && ninja -C {build_dir()} (or pip install .)"
+    )

@@ -1,4 +1,5 @@
 """The figures from plain arrays, shared by the rig and the simulation: Fig. 3 paths and phases, Fig. 2 heatmaps, Pareto fronts."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -11,9 +12,20 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Circle, Rectangle  # noqa: E402
 
 
-def path_phase_figure(xy_m: np.ndarray, tilt_deg: np.ndarray, start_m, targets_m, tolerance_m: float, title: str,
-                      module_m: tuple[float, float], tilt_limit_deg: float, path: str | Path, t_s=None,
-                      command_m=None, range_m: float | None = None) -> Path:
+def path_phase_figure(
+    xy_m: np.ndarray,
+    tilt_deg: np.ndarray,
+    start_m,
+    targets_m,
+    tolerance_m: float,
+    title: str,
+    module_m: tuple[float, float],
+    tilt_limit_deg: float,
+    path: str | Path,
+    t_s=None,
+    command_m=None,
+    range_m: float | None = None,
+) -> Path:
     """Save the object's path (start, targets with their tolerance circles, the module's outline) above the
     phase plot theta_zx vs theta_zy with the tilt-limit square, as the paper's Fig. 3 draws them. targets_m
     is one target, or each frame's target along a path. With t_s [s] (one per row of xy_m and tilt_deg; NaN rows
@@ -26,8 +38,18 @@ def path_phase_figure(xy_m: np.ndarray, tilt_deg: np.ndarray, start_m, targets_m
         fig = plt.figure(figsize=(9.6, 8.0))
         grid = fig.add_gridspec(6, 2, width_ratios=(1.0, 1.15))
         top, bottom = fig.add_subplot(grid[0:3, 0]), fig.add_subplot(grid[3:6, 0])
-        _draw_over_time(fig, grid, np.asarray(t_s, dtype=float), xy_m, targets_m, tolerance_m, tilt_deg,
-                        tilt_limit_deg, command_m, range_m)
+        _draw_over_time(
+            fig,
+            grid,
+            np.asarray(t_s, dtype=float),
+            xy_m,
+            targets_m,
+            tolerance_m,
+            tilt_deg,
+            tilt_limit_deg,
+            command_m,
+            range_m,
+        )
     _draw_paths(top, [(xy_m, start_m, targets_m)], tolerance_m, module_m)
     top.set_title(title, fontsize=9)
     top.legend(fontsize=7, loc="upper right")
@@ -36,8 +58,18 @@ def path_phase_figure(xy_m: np.ndarray, tilt_deg: np.ndarray, start_m, targets_m
     return _save(fig, path)
 
 
-def _draw_over_time(fig, grid, t_s: np.ndarray, xy_m, targets_m, tolerance_m: float, tilt_deg, tilt_limit_deg: float,
-                    command_m, range_m: float | None) -> None:
+def _draw_over_time(
+    fig,
+    grid,
+    t_s: np.ndarray,
+    xy_m,
+    targets_m,
+    tolerance_m: float,
+    tilt_deg,
+    tilt_limit_deg: float,
+    command_m,
+    range_m: float | None,
+) -> None:
     """The right-hand column of path_phase_figure: error, tilts and commands against time."""
     xy = np.asarray(xy_m, dtype=float).reshape(-1, 2)
     targets = np.asarray(targets_m, dtype=float).reshape(-1, 2)
@@ -49,20 +81,20 @@ def _draw_over_time(fig, grid, t_s: np.ndarray, xy_m, targets_m, tolerance_m: fl
     error.axhline(tolerance_m * 100, ls="--", color="tab:blue", lw=1.0, label=f"ε = {tolerance_m * 100:g} cm")
     error.set_ylabel("distance to target [cm]")
     error.legend(fontsize=7, loc="upper right")
-    tilts = fig.add_subplot(grid[span:2 * span, 1], sharex=error)
+    tilts = fig.add_subplot(grid[span : 2 * span, 1], sharex=error)
     tilt = np.asarray(tilt_deg, dtype=float).reshape(-1, 2)
-    tilts.plot(t_s[:len(tilt)], tilt[:, 0], lw=1.0, label="θ_zx")
-    tilts.plot(t_s[:len(tilt)], tilt[:, 1], lw=1.0, label="θ_zy")
+    tilts.plot(t_s[: len(tilt)], tilt[:, 0], lw=1.0, label="θ_zx")
+    tilts.plot(t_s[: len(tilt)], tilt[:, 1], lw=1.0, label="θ_zy")
     for sign in (1, -1):
         tilts.axhline(sign * tilt_limit_deg, ls=":", color="tab:red", lw=1.2)
     tilts.set_ylabel("tilt [deg]")
     tilts.legend(fontsize=7, loc="upper right", ncol=2)
     last = tilts
     if command_m is not None:
-        commands = fig.add_subplot(grid[2 * span:6, 1], sharex=error)
+        commands = fig.add_subplot(grid[2 * span : 6, 1], sharex=error)
         command = np.asarray(command_m, dtype=float).reshape(-1, 4)
         for i in range(4):
-            commands.plot(t_s[:len(command)], command[:, i] * 100, lw=1.0, label=f"a{i}")
+            commands.plot(t_s[: len(command)], command[:, i] * 100, lw=1.0, label=f"a{i}")
         if range_m is not None:
             for sign in (1, -1):
                 commands.axhline(sign * range_m * 100, ls=":", color="tab:red", lw=1.2)
@@ -72,8 +104,14 @@ def _draw_over_time(fig, grid, t_s: np.ndarray, xy_m, targets_m, tolerance_m: fl
     last.set_xlabel("time [s]")
 
 
-def fig3_figure(runs: dict[str, list[dict]], tolerance_m: float, module_m: tuple[float, float],
-                tilt_limit_deg: float, title: str, path: str | Path) -> Path:
+def fig3_figure(
+    runs: dict[str, list[dict]],
+    tolerance_m: float,
+    module_m: tuple[float, float],
+    tilt_limit_deg: float,
+    title: str,
+    path: str | Path,
+) -> Path:
     """Save the paper's Fig. 3 for several objects: per object (a column) every run's path to its target's
     tolerance circle above the phase plot of its tilts. runs: object -> [{path_m, tilt_deg, target_m, reached}]."""
     fig, axes = plt.subplots(2, len(runs), figsize=(2.6 * len(runs), 5.6), squeeze=False)
@@ -141,8 +179,9 @@ def _save(fig, path: str | Path) -> Path:
     return path
 
 
-def heatmap_figure(rates: np.ndarray, module_m: tuple[float, float], title: str, path: str | Path,
-                   difference: bool = False) -> Path:
+def heatmap_figure(
+    rates: np.ndarray, module_m: tuple[float, float], title: str, path: str | Path, difference: bool = False
+) -> Path:
     """Save a per-cell map like the paper's Fig. 2: success rate [%] per cell ([iy, ix], NaN: not run), or with
     difference=True a signed difference of two rates in percentage points; returns the file written."""
     hx, hy = module_m[0] / 2, module_m[1] / 2
@@ -150,8 +189,15 @@ def heatmap_figure(rates: np.ndarray, module_m: tuple[float, float], title: str,
     cmap = plt.get_cmap("RdBu" if difference else "viridis").copy()
     cmap.set_bad("0.85")
     limits = (-100, 100) if difference else (0, 100)
-    image = ax.imshow(rates * 100, origin="lower", extent=(-hx, hx, -hy, hy), cmap=cmap, vmin=limits[0],
-                      vmax=limits[1], interpolation="nearest")
+    image = ax.imshow(
+        rates * 100,
+        origin="lower",
+        extent=(-hx, hx, -hy, hy),
+        cmap=cmap,
+        vmin=limits[0],
+        vmax=limits[1],
+        interpolation="nearest",
+    )
     fig.colorbar(image, ax=ax, label="difference [percentage points]" if difference else "success rate [%]")
     ax.set_xlabel("target x [m]")
     ax.set_ylabel("target y [m]")
@@ -159,16 +205,18 @@ def heatmap_figure(rates: np.ndarray, module_m: tuple[float, float], title: str,
     return _save(fig, path)
 
 
-def pareto_figure(values: np.ndarray, on_front: np.ndarray, names: tuple[str, ...], title: str,
-                  path: str | Path) -> Path:
+def pareto_figure(
+    values: np.ndarray, on_front: np.ndarray, names: tuple[str, ...], title: str, path: str | Path
+) -> Path:
     """Save one panel per pair of objectives (values: [candidates, objectives], all minimised): every candidate a
     grey dot, those on the Pareto front (on_front) ringed."""
     pairs = [(i, j) for i in range(len(names)) for j in range(i + 1, len(names))]
     fig, axes = plt.subplots(1, len(pairs), figsize=(4.2 * len(pairs), 3.8), squeeze=False)
     for ax, (i, j) in zip(axes[0], pairs, strict=True):
         ax.scatter(values[:, i], values[:, j], s=12, c="0.6", label="candidate")
-        ax.scatter(values[on_front, i], values[on_front, j], s=40, facecolors="none", edgecolors="C3",
-                   label="Pareto front")
+        ax.scatter(
+            values[on_front, i], values[on_front, j], s=40, facecolors="none", edgecolors="C3", label="Pareto front"
+        )
         ax.set_xlabel(names[i], fontsize=8)
         ax.set_ylabel(names[j], fontsize=8)
     axes[0][0].legend(fontsize=7)

@@ -1,4 +1,5 @@
 """Payload codec: turns a message dataclass into payload bytes and back, driven by the generated FIELDS tables."""
+
 from __future__ import annotations
 
 import enum
@@ -32,7 +33,7 @@ class FieldRefused(ValueError):
     """A field the firmware would refuse by the schema's field-local rules; code and field as its nack would say."""
 
     def __init__(self, message: Message, field: str, code: str, text: str) -> None:
-        self.message_name, self.field, self.code = message.NAME, field, code   # code: not_finite | out_of_range
+        self.message_name, self.field, self.code = message.NAME, field, code  # code: not_finite | out_of_range
         self.reason = text
         super().__init__(f"{message.NAME}.{field}: {text}")
 
@@ -93,8 +94,11 @@ def _field_refusal(spec: FieldSpec, value: Any) -> tuple[str, str] | None:
     lo = None if spec.min is None else (_as_f32(spec.min) if spec.fmt == "f" else spec.min)
     hi = None if spec.max is None else (_as_f32(spec.max) if spec.fmt == "f" else spec.max)
     if (lo is not None and value < lo) or (hi is not None and value > hi):
-        bounds = f"{spec.min:g}..{spec.max:g}" if lo is not None and hi is not None else (
-            f">= {spec.min:g}" if lo is not None else f"<= {spec.max:g}")
+        bounds = (
+            f"{spec.min:g}..{spec.max:g}"
+            if lo is not None and hi is not None
+            else (f">= {spec.min:g}" if lo is not None else f"<= {spec.max:g}")
+        )
         return "out_of_range", f"{value:g}{unit} is outside {bounds}{unit}"
     return None
 
@@ -139,7 +143,7 @@ class Message:
         enum values); returns the message. Rules across fields (PROTOCOL.md) stay the firmware's to judge."""
         for spec in self.FIELDS:
             value = getattr(self, spec.name)
-            for element in (list(value) if spec.count > 1 else [value]):
+            for element in list(value) if spec.count > 1 else [value]:
                 refusal = _field_refusal(spec, element)
                 if refusal is not None:
                     raise FieldRefused(self, spec.name, *refusal)
@@ -152,7 +156,7 @@ class Message:
         raw = struct.unpack(cls.struct_format(), payload)
         kwargs, i = {}, 0
         for spec in cls.FIELDS:
-            elements = [_from_wire(spec, r) for r in raw[i:i + spec.count]]
+            elements = [_from_wire(spec, r) for r in raw[i : i + spec.count]]
             kwargs[spec.name] = tuple(elements) if spec.count > 1 else elements[0]
             i += spec.count
         return cls(**kwargs)

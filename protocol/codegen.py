@@ -1,4 +1,5 @@
 """What the two code generators (generate.py for the protocol, generate_rig.py for the rig) write alike: types, names, literals."""
+
 from __future__ import annotations
 
 import math

@@ -1,4 +1,5 @@
 """Frame layer: CRC-16/CCITT-FALSE, COBS, and a resynchronising stream decoder (PROTOCOL.md, "Framing")."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -47,7 +48,7 @@ def cobs_decode(data: bytes) -> bytes:
         code = data[i]
         if code == 0 or i + code > n:
             raise ValueError("malformed COBS block")
-        block = data[i + 1:i + code]
+        block = data[i + 1 : i + code]
         if 0 in block:
             raise ValueError("0x00 inside a COBS block")
         out += block

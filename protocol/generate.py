@@ -4,6 +4,7 @@ and the C++ test vectors from vectors.json.
 Usage:  python protocol/generate.py           write the generated files
         python protocol/generate.py --check   exit 1 if any generated file is stale (CI runs this)
 """
+
 from __future__ import annotations
 
 import argparse
@@ -14,7 +15,7 @@ import tomllib
 import zlib
 from pathlib import Path
 
-if __package__ in (None, ""):              # run as a script (CI, setup.sh), also from a copy of the tree
+if __package__ in (None, ""):  # run as a script (CI, setup.sh), also from a copy of the tree
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import generate_rig  # noqa: E402
     from codegen import TYPES, camel, f32_literal  # noqa: E402
@@ -42,12 +43,14 @@ def load_schema(path: Path = SCHEMA) -> dict:
 
 def canonical(schema: dict) -> bytes:
     """The schema without its prose: what two ends must agree on byte for byte."""
+
     def strip(obj):
         if isinstance(obj, dict):
             return {k: strip(v) for k, v in obj.items() if k not in ("doc", "unit", "reply", "default")}
         if isinstance(obj, list):
             return [strip(v) for v in obj]
         return obj
+
     return json.dumps(strip(schema), sort_keys=True, separators=(",", ":")).encode()
 
 
@@ -81,6 +84,7 @@ def field_comment(field: dict) -> str:
 
 # ------------------------------------------------------------------------------------------------ C++
 
+
 def cpp_scalar_put(field: dict, expr: str, offset: str) -> str:
     return f"put_{field['type']}(out + {offset}, {expr});"
 
@@ -91,19 +95,24 @@ def cpp_scalar_get(field: dict, expr: str, offset: str) -> str:
 
 def cpp_message(schema: dict, msg: dict) -> list[str]:
     name = camel(msg["name"])
-    lines = [f"// {msg['doc']}", f"struct {name} {{",
-             f"  static constexpr uint8_t kId = 0x{msg['id']:02X};",
-             f"  static constexpr uint8_t kSize = {payload_size(msg)};  // [bytes] payload"]
+    lines = [
+        f"// {msg['doc']}",
+        f"struct {name} {{",
+        f"  static constexpr uint8_t kId = 0x{msg['id']:02X};",
+        f"  static constexpr uint8_t kSize = {payload_size(msg)};  // [bytes] payload",
+    ]
     for field in msg["fields"]:
         ctype = TYPES[field["type"]][1]
         dim = f"[{field['count']}]" if "count" in field else ""
         lines.append(f"  {ctype} {field['name']}{dim};  // {field_comment(field)}")
-    for index, field in enumerate(msg["fields"]):   # what nack.field names, for the checks the schema cannot say
+    for index, field in enumerate(msg["fields"]):  # what nack.field names, for the checks the schema cannot say
         lines.append(f"  static constexpr uint8_t kField{camel(field['name'])} = {index};")
     for field in msg["fields"]:
         if "scale" in field:
-            lines.append(f"  static constexpr float k{camel(field['name'])}Scale = {f32_literal(field['scale'])};"
-                         f"  // [{field['unit']}] per wire unit")
+            lines.append(
+                f"  static constexpr float k{camel(field['name'])}Scale = {f32_literal(field['scale'])};"
+                f"  // [{field['unit']}] per wire unit"
+            )
     lines.append("};")
 
     enc, dec = [], []
@@ -148,7 +157,9 @@ def cpp_message(schema: dict, msg: dict) -> list[str]:
             if conds:
                 cond = " || ".join(f"({c})" for c in conds)
                 checks.append(f"  if ({cond}) {{ field = {index}; return ErrorCode::kOutOfRange; }}")
-        lines.append("// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.")
+        lines.append(
+            "// Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one."
+        )
         sig_m = " m" if checks else " /*m*/"
         sig_f = " field" if checks else " /*field*/"
         lines.append(f"inline ErrorCode validate(const {name}&{sig_m}, uint8_t&{sig_f}) {{")
@@ -172,32 +183,52 @@ def cpp_message(schema: dict, msg: dict) -> list[str]:
 
 def cpp_size_switch(schema: dict, direction: str, meaning: str) -> list[str]:
     """The C++ function {direction}_size(id): the payload size of each message travelling that way."""
-    lines = [f"// Payload size [bytes] of a message id travelling {meaning}.",
-             f"inline int8_t {direction}_size(uint8_t id) {{", "  switch (id) {"]
-    lines += [f"    case {camel(msg['name'])}::kId: return {camel(msg['name'])}::kSize;"
-              for msg in schema["messages"] if msg["direction"] == direction]
+    lines = [
+        f"// Payload size [bytes] of a message id travelling {meaning}.",
+        f"inline int8_t {direction}_size(uint8_t id) {{",
+        "  switch (id) {",
+    ]
+    lines += [
+        f"    case {camel(msg['name'])}::kId: return {camel(msg['name'])}::kSize;"
+        for msg in schema["messages"]
+        if msg["direction"] == direction
+    ]
     return lines + ["    default: return -1;", "  }", "}", ""]
 
 
 def render_cpp(schema: dict) -> str:
     proto = schema["protocol"]
-    out = [f"// {HEADER}", "#pragma once", "",
-           '#include <stdint.h>  // fixed-width wire types', "",
-           '#include "wire.h"  // put_*/get_* little-endian helpers, is_finite', "",
-           "namespace mr {", "namespace proto {", "",
-           f"constexpr uint16_t kProtocolVersion = {proto['version']};",
-           f"constexpr uint32_t kSchemaHash = 0x{schema_hash(schema):08X}u;",
-           f"constexpr uint8_t kMaxPacket = {proto['max_packet']};  // [bytes] id + seq + payload + CRC",
-           f"constexpr uint8_t kMaxWire = {proto['max_wire']};  // [bytes] COBS packet + delimiter",
-           "constexpr uint8_t kNoField = 255;  // nack.field when no single field is at fault", "",
-           "enum class ErrorCode : uint8_t {", "  kOk = 0,"]
+    out = [
+        f"// {HEADER}",
+        "#pragma once",
+        "",
+        "#include <stdint.h>  // fixed-width wire types",
+        "",
+        '#include "wire.h"  // put_*/get_* little-endian helpers, is_finite',
+        "",
+        "namespace mr {",
+        "namespace proto {",
+        "",
+        f"constexpr uint16_t kProtocolVersion = {proto['version']};",
+        f"constexpr uint32_t kSchemaHash = 0x{schema_hash(schema):08X}u;",
+        f"constexpr uint8_t kMaxPacket = {proto['max_packet']};  // [bytes] id + seq + payload + CRC",
+        f"constexpr uint8_t kMaxWire = {proto['max_wire']};  // [bytes] COBS packet + delimiter",
+        "constexpr uint8_t kNoField = 255;  // nack.field when no single field is at fault",
+        "",
+        "enum class ErrorCode : uint8_t {",
+        "  kOk = 0,",
+    ]
     for err in schema["errors"]:
         out.append(f"  k{camel(err['name'])} = {err['code']},  // {err['doc']}")
     out.append("};")
-    out.append(f"constexpr uint8_t kLastErrorCode = {max(e['code'] for e in schema['errors'])};  // nack.code is 1..this")
+    out.append(
+        f"constexpr uint8_t kLastErrorCode = {max(e['code'] for e in schema['errors'])};  // nack.code is 1..this"
+    )
     most = max(len(msg["fields"]) for msg in schema["messages"] if msg["direction"] == "host_to_mcu")
-    out.append(f"constexpr uint8_t kMostFields = {most};  // fields of the widest host -> MCU message: nack.field "
-               f"is below this or kNoField")
+    out.append(
+        f"constexpr uint8_t kMostFields = {most};  // fields of the widest host -> MCU message: nack.field "
+        f"is below this or kNoField"
+    )
     out.append("")
     for name, enum in schema["enums"].items():
         out.append(f"// {enum['doc']}")
@@ -205,7 +236,9 @@ def render_cpp(schema: dict) -> str:
         for vname, value in enum["values"].items():
             out.append(f"  k{camel(vname)} = {value},")
         out.append("};")
-        out.append(f"constexpr uint8_t k{camel(name)}Count = {max(enum['values'].values()) + 1};  // values 0..this - 1")
+        out.append(
+            f"constexpr uint8_t k{camel(name)}Count = {max(enum['values'].values()) + 1};  // values 0..this - 1"
+        )
         out.append("")
     for name, flags in schema["flags"].items():
         out.append(f"// {flags['doc']}")
@@ -214,13 +247,17 @@ def render_cpp(schema: dict) -> str:
             out.append(f"constexpr uint16_t k{camel(vname)} = 1u << {bit};")
         out.append(f"}}  // namespace {name}")
         out.append("")
-    out.append("// Boot gains of each PID, indexed by Axis: {kp [deg/m], ki [deg/(m s)], kd [deg s/m], integral_limit [deg]}.")
+    out.append(
+        "// Boot gains of each PID, indexed by Axis: {kp [deg/m], ki [deg/(m s)], kd [deg s/m], integral_limit [deg]}."
+    )
     out.append("struct PidDefaults { float kp, ki, kd, integral_limit; };")
     out.append("constexpr PidDefaults kPidDefaults[] = {")
     for axis, _ in sorted(schema["enums"]["axis"]["values"].items(), key=lambda kv: kv[1]):
         g = schema["pid_defaults"][axis]
-        out.append(f"    {{{f32_literal(g['kp'])}, {f32_literal(g['ki'])}, {f32_literal(g['kd'])}, "
-                   f"{f32_literal(g['integral_limit'])}}},  // {axis}")
+        out.append(
+            f"    {{{f32_literal(g['kp'])}, {f32_literal(g['ki'])}, {f32_literal(g['kd'])}, "
+            f"{f32_literal(g['integral_limit'])}}},  // {axis}"
+        )
     out.append("};")
     out.append("")
     for msg in schema["messages"]:
@@ -228,14 +265,19 @@ def render_cpp(schema: dict) -> str:
         out.append("")
     out += cpp_size_switch(schema, "host_to_mcu", "host -> MCU, or -1 if the MCU handles no such id")
     out += cpp_size_switch(schema, "mcu_to_host", "MCU -> host, or -1 if the MCU sends no such id")
-    host_ids = ", ".join(f"{camel(msg['name'])}::kId" for msg in schema["messages"] if msg["direction"] == "host_to_mcu")
-    out.append("// Every message id travelling host -> MCU, in schema order (for the fuzzer and the tests: no hand-kept list).")
+    host_ids = ", ".join(
+        f"{camel(msg['name'])}::kId" for msg in schema["messages"] if msg["direction"] == "host_to_mcu"
+    )
+    out.append(
+        "// Every message id travelling host -> MCU, in schema order (for the fuzzer and the tests: no hand-kept list)."
+    )
     out.append(f"constexpr uint8_t kHostToMcuIds[] = {{{host_ids}}};")
     out += ["", "}  // namespace proto", "}  // namespace mr", ""]
     return "\n".join(out)
 
 
 # --------------------------------------------------------------------------------------------- Python
+
 
 def py_default(schema: dict, field: dict) -> str:
     if "enum" in field:
@@ -264,17 +306,29 @@ def py_annotation(field: dict) -> str:
 
 def render_py(schema: dict) -> str:
     proto = schema["protocol"]
-    out = [f'"""Protocol messages, enums and error codes. {HEADER}"""', "",
-           "from __future__ import annotations", "",
-           "import enum", "from dataclasses import dataclass", "from typing import ClassVar", "",
-           "from .codec import FieldSpec, Message", "",
-           f"PROTOCOL_VERSION = {proto['version']}",
-           f"SCHEMA_HASH = 0x{schema_hash(schema):08X}",
-           f"MAX_PACKET = {proto['max_packet']}  # [bytes] id + seq + payload + CRC",
-           f"MAX_WIRE = {proto['max_wire']}  # [bytes] COBS packet + delimiter",
-           "NO_FIELD = 255", "", "",
-           "class ErrorCode(enum.IntEnum):",
-           '    """nack.code values."""', "", "    OK = 0"]
+    out = [
+        f'"""Protocol messages, enums and error codes. {HEADER}"""',
+        "",
+        "from __future__ import annotations",
+        "",
+        "import enum",
+        "from dataclasses import dataclass",
+        "from typing import ClassVar",
+        "",
+        "from .codec import FieldSpec, Message",
+        "",
+        f"PROTOCOL_VERSION = {proto['version']}",
+        f"SCHEMA_HASH = 0x{schema_hash(schema):08X}",
+        f"MAX_PACKET = {proto['max_packet']}  # [bytes] id + seq + payload + CRC",
+        f"MAX_WIRE = {proto['max_wire']}  # [bytes] COBS packet + delimiter",
+        "NO_FIELD = 255",
+        "",
+        "",
+        "class ErrorCode(enum.IntEnum):",
+        '    """nack.code values."""',
+        "",
+        "    OK = 0",
+    ]
     for err in schema["errors"]:
         out.append(f"    {err['name'].upper()} = {err['code']}")
     out += ["", "", "ERROR_DOCS = {"]
@@ -289,40 +343,57 @@ def render_py(schema: dict) -> str:
         out += ["", "", f"class {camel(name)}(enum.IntFlag):", f'    """{flags["doc"]}"""', ""]
         for vname, bit in flags["values"].items():
             out.append(f"    {vname.upper()} = 1 << {bit}")
-    out += ["", "", "# Boot gains of each PID: kp [deg/m], ki [deg/(m s)], kd [deg s/m], integral_limit [deg].",
-            "PID_DEFAULTS = {"]
+    out += [
+        "",
+        "",
+        "# Boot gains of each PID: kp [deg/m], ki [deg/(m s)], kd [deg s/m], integral_limit [deg].",
+        "PID_DEFAULTS = {",
+    ]
     for axis in schema["enums"]["axis"]["values"]:
         g = schema["pid_defaults"][axis]
-        out.append(f"    Axis.{axis.upper()}: {{'kp': {g['kp']!r}, 'ki': {g['ki']!r}, 'kd': {g['kd']!r}, "
-                   f"'integral_limit': {g['integral_limit']!r}}},")
+        out.append(
+            f"    Axis.{axis.upper()}: {{'kp': {g['kp']!r}, 'ki': {g['ki']!r}, 'kd': {g['kd']!r}, "
+            f"'integral_limit': {g['integral_limit']!r}}},"
+        )
     out.append("}")
     names = []
     for msg in schema["messages"]:
         cls = camel(msg["name"])
         names.append(cls)
-        out += ["", "", "@dataclass(frozen=True)", f"class {cls}(Message):", f'    """{msg["doc"]}"""', "",
-                f"    ID: ClassVar[int] = 0x{msg['id']:02X}",
-                f"    NAME: ClassVar[str] = {msg['name']!r}",
-                f"    DIRECTION: ClassVar[str] = {msg['direction']!r}",
-                f"    REPLY: ClassVar[str | None] = {msg.get('reply')!r}",
-                f"    SIZE: ClassVar[int] = {payload_size(msg)}  # [bytes] payload",
-                "    FIELDS: ClassVar[tuple[FieldSpec, ...]] = ("]
+        out += [
+            "",
+            "",
+            "@dataclass(frozen=True)",
+            f"class {cls}(Message):",
+            f'    """{msg["doc"]}"""',
+            "",
+            f"    ID: ClassVar[int] = 0x{msg['id']:02X}",
+            f"    NAME: ClassVar[str] = {msg['name']!r}",
+            f"    DIRECTION: ClassVar[str] = {msg['direction']!r}",
+            f"    REPLY: ClassVar[str | None] = {msg.get('reply')!r}",
+            f"    SIZE: ClassVar[int] = {payload_size(msg)}  # [bytes] payload",
+            "    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (",
+        ]
         for field in msg["fields"]:
             kind = camel(field["enum"]) if "enum" in field else camel(field["flags"]) if "flags" in field else "None"
-            out.append(f"        FieldSpec({field['name']!r}, {TYPES[field['type']][2]!r}, {field.get('count', 1)}, "
-                       f"{field.get('scale')!r}, {kind}, {field.get('min')!r}, {field.get('max')!r}, "
-                       f"{field.get('unit', '')!r}),")
+            out.append(
+                f"        FieldSpec({field['name']!r}, {TYPES[field['type']][2]!r}, {field.get('count', 1)}, "
+                f"{field.get('scale')!r}, {kind}, {field.get('min')!r}, {field.get('max')!r}, "
+                f"{field.get('unit', '')!r}),"
+            )
         out.append("    )")
         if msg["fields"]:
             out.append("")
         for field in msg["fields"]:
-            out.append(f"    {field['name']}: {py_annotation(field)} = {py_default(schema, field)}"
-                       f"  # {field_comment(field)}")
+            out.append(
+                f"    {field['name']}: {py_annotation(field)} = {py_default(schema, field)}  # {field_comment(field)}"
+            )
     out += ["", "", "MESSAGES: dict[int, type[Message]] = {m.ID: m for m in (" + ", ".join(names) + ")}", ""]
     return "\n".join(out)
 
 
 # ------------------------------------------------------------------------------- PROTOCOL.md reference
+
 
 def md_bounds(field: dict) -> str:
     parts = []
@@ -334,8 +405,16 @@ def md_bounds(field: dict) -> str:
 
 
 def render_md(schema: dict) -> str:
-    out = [SPEC_BEGIN, "", f"Schema hash of this version: `0x{schema_hash(schema):08X}`.", "",
-           "### Error codes (`nack.code`)", "", "| code | name | meaning |", "|---|---|---|"]
+    out = [
+        SPEC_BEGIN,
+        "",
+        f"Schema hash of this version: `0x{schema_hash(schema):08X}`.",
+        "",
+        "### Error codes (`nack.code`)",
+        "",
+        "| code | name | meaning |",
+        "|---|---|---|",
+    ]
     for err in schema["errors"]:
         out.append(f"| {err['code']} | `{err['name']}` | {err['doc']} |")
     out += ["", "### Enums and flags", ""]
@@ -345,15 +424,24 @@ def render_md(schema: dict) -> str:
     for name, flags in schema["flags"].items():
         values = ", ".join(f"bit {v} = `{k}`" for k, v in flags["values"].items())
         out.append(f"- **{name}** ({flags['doc']}): {values}")
-    out += ["", "### Messages", "",
-            "Offsets are into the payload (after id and seq); all fields little-endian; f32 is IEEE-754 binary32.",
-            "A scaled field carries round(value / scale) saturated to its integer range.", ""]
+    out += [
+        "",
+        "### Messages",
+        "",
+        "Offsets are into the payload (after id and seq); all fields little-endian; f32 is IEEE-754 binary32.",
+        "A scaled field carries round(value / scale) saturated to its integer range.",
+        "",
+    ]
     for msg in schema["messages"]:
         arrow = "host → firmware" if msg["direction"] == "host_to_mcu" else "firmware → host"
         reply = f"; answered by `{msg['reply']}`" if "reply" in msg else ""
         size = payload_size(msg)
-        out += [f"#### `{msg['name']}` — id 0x{msg['id']:02X}, {arrow}{reply}",
-                "", f"{msg['doc']} Payload {size} bytes; frame on the wire {cobs_wire_size(size)} bytes.", ""]
+        out += [
+            f"#### `{msg['name']}` — id 0x{msg['id']:02X}, {arrow}{reply}",
+            "",
+            f"{msg['doc']} Payload {size} bytes; frame on the wire {cobs_wire_size(size)} bytes.",
+            "",
+        ]
         if not msg["fields"]:
             continue
         out += ["| offset | field | type | unit | scale | bounds, default | meaning |", "|---|---|---|---|---|---|---|"]
@@ -361,9 +449,17 @@ def render_md(schema: dict) -> str:
         for field in msg["fields"]:
             count = field.get("count", 1)
             ftype = field["type"] + (f"[{count}]" if count > 1 else "")
-            kind = f" (enum `{field['enum']}`)" if "enum" in field else f" (flags `{field['flags']}`)" if "flags" in field else ""
-            out.append(f"| {offset} | `{field['name']}` | {ftype} | {field.get('unit', '')} | {field.get('scale', '')} | "
-                       f"{md_bounds(field)} | {field['doc']}{kind} |")
+            kind = (
+                f" (enum `{field['enum']}`)"
+                if "enum" in field
+                else f" (flags `{field['flags']}`)"
+                if "flags" in field
+                else ""
+            )
+            out.append(
+                f"| {offset} | `{field['name']}` | {ftype} | {field.get('unit', '')} | {field.get('scale', '')} | "
+                f"{md_bounds(field)} | {field['doc']}{kind} |"
+            )
             offset += TYPES[field["type"]][0] * count
         out.append("")
     out.append(SPEC_END)
@@ -384,6 +480,7 @@ def splice_spec(text: str, reference: str) -> str:
 
 
 # ------------------------------------------------------------------------------------- C++ test vectors
+
 
 def cpp_field_checks(schema: dict, msg: dict, fields: dict) -> list[str]:
     checks = []
@@ -409,25 +506,35 @@ def cpp_field_checks(schema: dict, msg: dict, fields: dict) -> list[str]:
 
 def render_cpp_vectors(schema: dict, vectors: list[dict]) -> str:
     by_name = {m["name"]: m for m in schema["messages"]}
-    out = [f"// Test vectors from protocol/vectors.json. {HEADER}", "#pragma once", "",
-           "#include <stdint.h>  // uint8_t", "",
-           '#include "protocol_gen.h"  // message structs and decode()', "",
-           "namespace vectors {", "",
-           "enum class Yield : uint8_t { kFrame, kCrcError, kFrameError };", "",
-           "struct Expected {",
-           "  Yield yield;",
-           "  uint8_t id, seq;",
-           "  const uint8_t* payload;",
-           "  uint8_t payload_len;",
-           "  bool (*fields_ok)(const uint8_t* payload);  // null when the vector names no fields",
-           "};", "",
-           "struct Vector {",
-           "  const char* name;",
-           "  const uint8_t* wire;",
-           "  uint16_t wire_len;",
-           "  const Expected* expected;",
-           "  uint8_t expected_len;",
-           "};", ""]
+    out = [
+        f"// Test vectors from protocol/vectors.json. {HEADER}",
+        "#pragma once",
+        "",
+        "#include <stdint.h>  // uint8_t",
+        "",
+        '#include "protocol_gen.h"  // message structs and decode()',
+        "",
+        "namespace vectors {",
+        "",
+        "enum class Yield : uint8_t { kFrame, kCrcError, kFrameError };",
+        "",
+        "struct Expected {",
+        "  Yield yield;",
+        "  uint8_t id, seq;",
+        "  const uint8_t* payload;",
+        "  uint8_t payload_len;",
+        "  bool (*fields_ok)(const uint8_t* payload);  // null when the vector names no fields",
+        "};",
+        "",
+        "struct Vector {",
+        "  const char* name;",
+        "  const uint8_t* wire;",
+        "  uint16_t wire_len;",
+        "  const Expected* expected;",
+        "  uint8_t expected_len;",
+        "};",
+        "",
+    ]
     table = []
     for vi, vec in enumerate(vectors):
         wire = bytes.fromhex(vec["wire"])
@@ -437,7 +544,9 @@ def render_cpp_vectors(schema: dict, vectors: list[dict]) -> str:
         for yi, y in enumerate(vec["yields"]):
             if y["yield"] == "frame":
                 payload = bytes.fromhex(y["payload"])
-                out.append(f"const uint8_t payload_{vi}_{yi}[] = {{{', '.join(f'0x{b:02X}' for b in payload) or '0'}}};")
+                out.append(
+                    f"const uint8_t payload_{vi}_{yi}[] = {{{', '.join(f'0x{b:02X}' for b in payload) or '0'}}};"
+                )
                 check = "nullptr"
                 if "fields" in y:
                     msg = by_name[y["message"]]
@@ -448,14 +557,18 @@ def render_cpp_vectors(schema: dict, vectors: list[dict]) -> str:
                     out.append("  return " + (" &&\n         ".join(checks) if checks else "true") + ";")
                     out.append("}")
                     check = f"fields_ok_{vi}_{yi}"
-                exp_rows.append(f"{{Yield::kFrame, 0x{y['id']:02X}, {y['seq']}, payload_{vi}_{yi}, {len(payload)}, {check}}}")
+                exp_rows.append(
+                    f"{{Yield::kFrame, 0x{y['id']:02X}, {y['seq']}, payload_{vi}_{yi}, {len(payload)}, {check}}}"
+                )
             else:
                 kind = {"crc_error": "kCrcError", "frame_error": "kFrameError"}[y["yield"]]
                 exp_rows.append(f"{{Yield::{kind}, 0, 0, nullptr, 0, nullptr}}")
         if exp_rows:
             out.append(f"const Expected expected_{vi}[] = {{{', '.join(exp_rows)}}};")
-        table.append(f"    {{{json.dumps(vec['name'])}, wire_{vi}, {len(wire)}, "
-                     f"{f'expected_{vi}' if exp_rows else 'nullptr'}, {len(exp_rows)}}},")
+        table.append(
+            f"    {{{json.dumps(vec['name'])}, wire_{vi}, {len(wire)}, "
+            f"{f'expected_{vi}' if exp_rows else 'nullptr'}, {len(exp_rows)}}},"
+        )
         out.append("")
     out.append("const Vector kAll[] = {")
     out += table
@@ -466,15 +579,21 @@ def render_cpp_vectors(schema: dict, vectors: list[dict]) -> str:
 
 def outputs() -> dict[Path, str]:
     schema = load_schema()
-    files = {CPP_OUT: render_cpp(schema), PY_OUT: render_py(schema),
-             SPEC: splice_spec(SPEC.read_text(), render_md(schema)), **generate_rig.outputs(schema)}
+    files = {
+        CPP_OUT: render_cpp(schema),
+        PY_OUT: render_py(schema),
+        SPEC: splice_spec(SPEC.read_text(), render_md(schema)),
+        **generate_rig.outputs(schema),
+    }
     if VECTORS.exists():
         try:
             files[CPP_VECTORS_OUT] = render_cpp_vectors(schema, json.loads(VECTORS.read_text())["vectors"])
-        except KeyError as exc:     # a field the schema gained: make_vectors.py writes it, from messages.py
-            raise StaleVectors(f"vectors.json has no field {exc} the schema now has (messages.py and protocol_gen.h are "
-                               f"written): "
-                               f"run python protocol/make_vectors.py, then this again") from None
+        except KeyError as exc:  # a field the schema gained: make_vectors.py writes it, from messages.py
+            raise StaleVectors(
+                f"vectors.json has no field {exc} the schema now has (messages.py and protocol_gen.h are "
+                f"written): "
+                f"run python protocol/make_vectors.py, then this again"
+            ) from None
     return files
 
 
@@ -506,8 +625,9 @@ def main(argv: list[str] | None = None) -> int:
         else:
             path.write_text(text)
     if stale:
-        print("stale generated files (run: python protocol/generate.py): " + ", ".join(map(str, stale)),
-              file=sys.stderr)
+        print(
+            "stale generated files (run: python protocol/generate.py): " + ", ".join(map(str, stale)), file=sys.stderr
+        )
         return 1
     return 0
 

@@ -12,6 +12,7 @@ inlined it into the board's functions (avr_size.py measures the image and judges
 
 Exit status: 0 built and within budget, 1 build or configuration error, 3 over budget (2 is a usage error).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -27,23 +28,34 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))   # its sibling avr_size.py, also when loaded by a test
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # its sibling avr_size.py, also when loaded by a test
 import avr_size  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
 ARDUINO_AVR = Path("/usr/share/arduino/hardware/arduino/avr")  # Debian package arduino-core-avr
 AVR_LIBC_HEADER = Path("/usr/lib/avr/include/avr/io.h")  # Debian package avr-libc
 TOOLS = {  # command -> Debian package
-    "avr-gcc": "gcc-avr", "avr-g++": "gcc-avr", "avr-gcc-ar": "gcc-avr",
-    "avr-objcopy": "binutils-avr", "avr-objdump": "binutils-avr", "avr-nm": "binutils-avr",
-    "avr-size": "binutils-avr", "avr-c++filt": "binutils-avr",
+    "avr-gcc": "gcc-avr",
+    "avr-g++": "gcc-avr",
+    "avr-gcc-ar": "gcc-avr",
+    "avr-objcopy": "binutils-avr",
+    "avr-objdump": "binutils-avr",
+    "avr-nm": "binutils-avr",
+    "avr-size": "binutils-avr",
+    "avr-c++filt": "binutils-avr",
 }
 
 ARDUINO_VERSION = 10808  # the ARDUINO macro PlatformIO's atmelavr platform defines
 SOURCE_EXTS = (".c", ".cpp", ".S")
 # Options whose effect this script does not reproduce: refuse them rather than measure a different build.
-UNSUPPORTED_OPTIONS = ("extends", "build_src_filter", "build_src_flags", "lib_deps", "board_build.mcu",
-                       "board_build.f_cpu")
+UNSUPPORTED_OPTIONS = (
+    "extends",
+    "build_src_filter",
+    "build_src_flags",
+    "lib_deps",
+    "board_build.mcu",
+    "board_build.f_cpu",
+)
 MEASURE_FLAGS = ["-gdwarf-4"]  # debug info only (no code change): lets the line table attribute code to files
 
 
@@ -88,8 +100,9 @@ class Flags:
         for name in self.__dataclass_fields__:
             if name != "defines":
                 setattr(self, name, [f for f in getattr(self, name) if f not in getattr(unflags, name)])
-        self.defines = [d for d in self.defines
-                        if d not in unflags.defines and d.split("=", 1)[0] not in unflags.defines]
+        self.defines = [
+            d for d in self.defines if d not in unflags.defines and d.split("=", 1)[0] not in unflags.defines
+        ]
 
 
 def parse_flags(items: list[str], project_dir: Path) -> Flags:
@@ -248,13 +261,25 @@ INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]', re.MULTILINE)
 def framework_libraries(roots: list[Path]) -> list[Path]:
     """The Arduino core's bundled libraries (Wire, SPI, ...) whose headers our sources include: PlatformIO's
     library dependency finder (lib_ldf_mode = chain) picks these up the same way."""
-    wanted = {name for root in roots for source in sources(root) if source.suffix != ".S"
-              for name in INCLUDE.findall(source.read_text(errors="replace"))}
-    wanted |= {name for root in roots for header in root.rglob("*.h")
-               for name in INCLUDE.findall(header.read_text(errors="replace"))}
+    wanted = {
+        name
+        for root in roots
+        for source in sources(root)
+        if source.suffix != ".S"
+        for name in INCLUDE.findall(source.read_text(errors="replace"))
+    }
+    wanted |= {
+        name
+        for root in roots
+        for header in root.rglob("*.h")
+        for name in INCLUDE.findall(header.read_text(errors="replace"))
+    }
     libraries = ARDUINO_AVR / "libraries"
-    return sorted(lib for lib in libraries.iterdir()
-                  if (lib / "src").is_dir() and any((lib / "src" / name).is_file() for name in wanted))
+    return sorted(
+        lib
+        for lib in libraries.iterdir()
+        if (lib / "src").is_dir() and any((lib / "src" / name).is_file() for name in wanted)
+    )
 
 
 def plan_build(project: Project, out: Path) -> Plan:
@@ -262,8 +287,11 @@ def plan_build(project: Project, out: Path) -> Plan:
     # Debian's core needs DECIMAL_DIG, which avr-libc's float.h does not define (gcc's value for AVR floats).
     core_defines = ["DECIMAL_DIG=__DECIMAL_DIG__"]
     variant_dir = ARDUINO_AVR / "variants" / project.board.variant
-    framework = [Unit(s, out / "framework" / f"{s.name}.o", False)
-                 for root in (ARDUINO_AVR / "cores" / "arduino", variant_dir) for s in sources(root)]
+    framework = [
+        Unit(s, out / "framework" / f"{s.name}.o", False)
+        for root in (ARDUINO_AVR / "cores" / "arduino", variant_dir)
+        for s in sources(root)
+    ]
     for unit in framework:
         unit.command = compile_command(unit, flags, core_defines, [])
 
@@ -272,8 +300,10 @@ def plan_build(project: Project, out: Path) -> Plan:
     libs: dict[str, list[Unit]] = {}
     for library in framework_libraries([project.src_dir, *lib_includes]):
         include = library / "src"
-        units = [Unit(s, out / "framework_lib" / library.name / f"{s.relative_to(include)}.o", False)
-                 for s in sources(include)]
+        units = [
+            Unit(s, out / "framework_lib" / library.name / f"{s.relative_to(include)}.o", False)
+            for s in sources(include)
+        ]
         for unit in units:
             unit.command = compile_command(unit, flags, core_defines, [include, include / "utility"])
         libs[library.name] = units
@@ -293,9 +323,18 @@ def plan_build(project: Project, out: Path) -> Plan:
     archives = {out / f"lib{name}.a": [u.obj for u in units] for name, units in libs.items() if units}
     archives[out / "libFrameworkArduino.a"] = [u.obj for u in framework]
     elf = out / "firmware.elf"
-    link = ["avr-g++", "-o", str(elf), *flags.linkflags, *MEASURE_FLAGS, *[str(u.obj) for u in src],
-            "-Wl,--start-group", *[str(a) for a in archives], *[f"-l{lib}" for lib in flags.libs],
-            "-Wl,--end-group"]
+    link = [
+        "avr-g++",
+        "-o",
+        str(elf),
+        *flags.linkflags,
+        *MEASURE_FLAGS,
+        *[str(u.obj) for u in src],
+        "-Wl,--start-group",
+        *[str(a) for a in archives],
+        *[f"-l{lib}" for lib in flags.libs],
+        "-Wl,--end-group",
+    ]
     ihex = ["avr-objcopy", "-O", "ihex", "-R", ".eeprom", str(elf), str(out / "firmware.hex")]
     return Plan(framework, libs, src, archives, link, ihex, elf)
 
@@ -390,11 +429,13 @@ def missing_packages(compiling: bool) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         description=__doc__.splitlines()[0],
-        epilog="Exit status: 0 within budget, 1 build or configuration error, 3 over budget.")
+        epilog="Exit status: 0 within budget, 1 build or configuration error, 3 over budget.",
+    )
     parser.add_argument("--ini", type=Path, default=REPO / "platformio.ini", help="project file (default: %(default)s)")
     parser.add_argument("--env", default="uno", help="PlatformIO environment to build (default: %(default)s)")
-    parser.add_argument("--out", type=Path, default=REPO / "build" / "avr",
-                        help="build directory (default: %(default)s)")
+    parser.add_argument(
+        "--out", type=Path, default=REPO / "build" / "avr", help="build directory (default: %(default)s)"
+    )
     parser.add_argument("--jobs", "-j", type=int, default=2, help="parallel compilations (default: %(default)s)")
     parser.add_argument("--json", action="store_true", help="print the sizes as JSON instead of text")
     parser.add_argument("--dry-run", action="store_true", help="print every build command, run none")
@@ -417,8 +458,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"avr_build: {exc}", file=sys.stderr)
         return 1
     print(json.dumps(sizes, indent=2) if args.json else avr_size.report(sizes, compiled, total, sizes["build_s"]))
-    over = [f"{label} {sizes[key]['used']} B > {sizes[key]['budget']} B"
-            for key, label in (("flash", "flash"), ("ram", "RAM")) if sizes[key]["used"] > sizes[key]["budget"]]
+    over = [
+        f"{label} {sizes[key]['used']} B > {sizes[key]['budget']} B"
+        for key, label in (("flash", "flash"), ("ram", "RAM"))
+        if sizes[key]["used"] > sizes[key]["budget"]
+    ]
     if over:
         print(f"avr_build: over budget: {', '.join(over)}", file=sys.stderr)
         return 3

@@ -1,4 +1,5 @@
 """The Uno image's flash and static RAM, the portable core's share of them, and the budgets they are judged by."""
+
 from __future__ import annotations
 
 import bisect
@@ -34,8 +35,10 @@ def symbols(elf: Path) -> list[tuple[int, int, str, str]]:
     # GCC's clone suffixes (.lto_priv.N, .constprop.N, ...) stop the demangler: strip them first.
     names = "\n".join(CLONE_SUFFIX.sub("", parts[3]) for parts in rows)
     demangled = subprocess.run(["avr-c++filt"], input=names, capture_output=True, text=True, check=True).stdout
-    return [(int(parts[0], 16), int(parts[1], 16), parts[2], name)
-            for parts, name in zip(rows, demangled.splitlines(), strict=True)]
+    return [
+        (int(parts[0], 16), int(parts[1], 16), parts[2], name)
+        for parts, name in zip(rows, demangled.splitlines(), strict=True)
+    ]
 
 
 def code_by_file(elf: Path, functions: list[tuple[int, int]]) -> dict[Path, int]:
@@ -80,8 +83,11 @@ def measure(elf: Path, lib_dir: Path, board_name: str, board) -> dict:
     functions = [(addr, size) for addr, size, kind, _ in syms if kind in "tTwW" and size]
     core_code = sum(n for path, n in code_by_file(elf, functions).items() if path.is_relative_to(lib_dir))
     data = [(size, kind, name) for _, size, kind, name in syms if kind in "dDbB"]
-    core_data = [(size, kind) for size, kind, name in data
-                 if name.startswith(CORE_NAMESPACE) and not name.startswith(BOARD_NAMESPACE)]
+    core_data = [
+        (size, kind)
+        for size, kind, name in data
+        if name.startswith(CORE_NAMESPACE) and not name.startswith(BOARD_NAMESPACE)
+    ]
     core_ram = sum(size for size, _ in core_data)
     core_initialised = sum(size for size, kind in core_data if kind in "dD")  # initial values stored in flash
     flash_budget = int(board.flash * FLASH_BUDGET)
@@ -91,8 +97,12 @@ def measure(elf: Path, lib_dir: Path, board_name: str, board) -> dict:
         "elf": str(elf),
         "board": board_name,
         "mcu": board.mcu,
-        "flash": {"used": flash, "max": board.flash, "percent": round(100 * flash / board.flash, 1),
-                  "budget": flash_budget},
+        "flash": {
+            "used": flash,
+            "max": board.flash,
+            "percent": round(100 * flash / board.flash, 1),
+            "budget": flash_budget,
+        },
         "ram": {"used": ram, "max": board.ram, "percent": round(100 * ram / board.ram, 1), "budget": ram_budget},
         "core": {"flash": core_code + core_initialised, "code": core_code, "ram": core_ram},
         "largest_ram": [{"name": name, "size": size} for size, _, name in largest],
@@ -105,16 +115,20 @@ def report(sizes: dict, compiled: int, total: int, seconds: float) -> str:
 
     def line(label: str, part: dict, pct_of_budget: float) -> str:
         verdict = "ok" if part["used"] <= part["budget"] else "OVER BUDGET"
-        return (f"{label:<6}{part['used']:>6} B  {part['percent']:5.1f} % of {part['max']:>5} B"
-                f"   budget {pct_of_budget:.0%} = {part['budget']} B: {verdict}")
+        return (
+            f"{label:<6}{part['used']:>6} B  {part['percent']:5.1f} % of {part['max']:>5} B"
+            f"   budget {pct_of_budget:.0%} = {part['budget']} B: {verdict}"
+        )
 
     largest = ", ".join(f"{item['name']} {item['size']} B" for item in sizes["largest_ram"])
-    return "\n".join([
-        f"{sizes['elf']} ({sizes['board']}, {sizes['mcu']})",
-        line("flash", flash, FLASH_BUDGET) + "   (.text + .data)",
-        line("RAM", ram, RAM_BUDGET) + "   (.data + .bss; the stack takes from the rest)",
-        f"core  {core['flash']:>6} B flash ({core['code']} B code from lib_dir, as linked and inlined, "
-        f"+ initial values), {core['ram']} B static RAM ({CORE_NAMESPACE} data outside {BOARD_NAMESPACE})",
-        f"largest RAM: {largest}",
-        f"compiled {compiled} of {total} objects in {seconds:.1f} s",
-    ])
+    return "\n".join(
+        [
+            f"{sizes['elf']} ({sizes['board']}, {sizes['mcu']})",
+            line("flash", flash, FLASH_BUDGET) + "   (.text + .data)",
+            line("RAM", ram, RAM_BUDGET) + "   (.data + .bss; the stack takes from the rest)",
+            f"core  {core['flash']:>6} B flash ({core['code']} B code from lib_dir, as linked and inlined, "
+            f"+ initial values), {core['ram']} B static RAM ({CORE_NAMESPACE} data outside {BOARD_NAMESPACE})",
+            f"largest RAM: {largest}",
+            f"compiled {compiled} of {total} objects in {seconds:.1f} s",
+        ]
+    )

@@ -1,4 +1,5 @@
 """The simulated MANTA-RAY rig (MuJoCo) and its bridge to the firmware; see sim/README.md."""
+
 import os
 
 # MuJoCo picks its OpenGL backend when it is first imported: offscreen EGL where there is no display.

@@ -9,6 +9,7 @@ Time: trial time t [s] starts at 0 when the controller starts. In lock-step the 
 set by sim_clock to the delivery time of each frame, so a run never depends on this machine's
 speed; in real time the firmware keeps its own wall clock and the bridge paces the physics to it.
 """
+
 from __future__ import annotations
 
 import math
@@ -30,10 +31,14 @@ from .model import SimulationUnstable
 from .parameters import default
 from .rig import VISION_MODES, Rig
 
-SPEC_NAMES = {"noise_amplitude": "noise amplitude alpha", "tolerance": "tolerance epsilon", "x": "target x",
-              "y": "target y"}   # a refused command field -> what a trial spec calls it
-MODULE_M = (rig_description.MODULE_SIZE_X_M, rig_description.MODULE_SIZE_Y_M)   # [m] the rig's m, n
-CLOCK_GAP_US = 1_000_000   # [us] the firmware clock moves on this much between trials, so it never goes back
+SPEC_NAMES = {
+    "noise_amplitude": "noise amplitude alpha",
+    "tolerance": "tolerance epsilon",
+    "x": "target x",
+    "y": "target y",
+}  # a refused command field -> what a trial spec calls it
+MODULE_M = (rig_description.MODULE_SIZE_X_M, rig_description.MODULE_SIZE_Y_M)  # [m] the rig's m, n
+CLOCK_GAP_US = 1_000_000  # [us] the firmware clock moves on this much between trials, so it never goes back
 # [s] In lock-step nothing is real-time (the firmware's clock waits for the bridge), so the link may wait this
 # long for each answer: it costs nothing when the firmware answers in ~0.1 ms, and rides out a loaded machine.
 LOCKSTEP_ACK_TIMEOUT_S = 1.0
@@ -42,18 +47,21 @@ LOCKSTEP_ACK_TIMEOUT_S = 1.0
 @dataclass(frozen=True)
 class Tracking:
     """The camera as the controller sees it: rate, latency, noise and lost frames (the paper: 12 Hz)."""
-    rate_hz: float = default("tracking.rate_hz")       # [Hz] frames per second
-    latency_s: float = default("tracking.latency_s")   # [s] capture -> delivery to the firmware; below one frame period
-    noise_m: float = 0.0           # [m] standard deviation of Gaussian noise on x and on y
-    drop_rate: float = 0.0         # [-] probability that a frame never reaches the firmware
-    vision: str | None = None      # None: the true position; "aruco" or "blob": the tracker on rendered frames
+
+    rate_hz: float = default("tracking.rate_hz")  # [Hz] frames per second
+    latency_s: float = default("tracking.latency_s")  # [s] capture -> delivery to the firmware; below one frame period
+    noise_m: float = 0.0  # [m] standard deviation of Gaussian noise on x and on y
+    drop_rate: float = 0.0  # [-] probability that a frame never reaches the firmware
+    vision: str | None = None  # None: the true position; "aruco" or "blob": the tracker on rendered frames
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.rate_hz) and 0.5 <= self.rate_hz <= 1000):
             raise ValueError(f"camera rate must be 0.5..1000 Hz, got {self.rate_hz}")
         if not (0 <= self.latency_s < 1 / self.rate_hz):
-            raise ValueError(f"camera latency must be at least 0 and below one frame period "
-                             f"({1 / self.rate_hz:.3f} s), got {self.latency_s}")
+            raise ValueError(
+                f"camera latency must be at least 0 and below one frame period "
+                f"({1 / self.rate_hz:.3f} s), got {self.latency_s}"
+            )
         if not (0 <= self.noise_m <= 0.1):
             raise ValueError(f"camera noise must be 0..0.1 m, got {self.noise_m}")
         if not (0 <= self.drop_rate < 1):
@@ -65,25 +73,29 @@ class Tracking:
 @dataclass(frozen=True)
 class Gains:
     """One PID's gains, as configure_pid carries them (output in degrees of tilt)."""
-    kp: float                      # [deg/m]
-    ki: float                      # [deg/(m s)]
-    kd: float                      # [deg s/m]
-    integral_limit: float          # [deg]
+
+    kp: float  # [deg/m]
+    ki: float  # [deg/(m s)]
+    kd: float  # [deg s/m]
+    integral_limit: float  # [deg]
 
 
 @dataclass(frozen=True)
 class TrialSpec:
     """One target-reaching trial as the paper runs them (Results): success is judged at the end of duration_s."""
+
     start_m: tuple[float, float]
     target_m: tuple[float, float]
-    controller: str = "manhattan"          # manhattan | euclidean
-    duration_s: float = 10.0               # [s] T
-    alpha_m: float = 0.0                   # [m] noise amplitude
-    tolerance_m: float = 0.02              # [m] epsilon
-    seed: int = 1                          # camera noise, drops and the firmware's noise PRNG
-    gains: dict[str, Gains] = field(default_factory=dict)   # axis name (x, y, radial) -> gains; absent: firmware defaults
-    stop_when_reached: bool = False        # end at the first frame within epsilon, as the paper's loop does
-    settings: tuple[tuple[str, float], ...] = ()   # the controller's own settings (host/controller_settings.py keys)
+    controller: str = "manhattan"  # manhattan | euclidean
+    duration_s: float = 10.0  # [s] T
+    alpha_m: float = 0.0  # [m] noise amplitude
+    tolerance_m: float = 0.02  # [m] epsilon
+    seed: int = 1  # camera noise, drops and the firmware's noise PRNG
+    gains: dict[str, Gains] = field(
+        default_factory=dict
+    )  # axis name (x, y, radial) -> gains; absent: firmware defaults
+    stop_when_reached: bool = False  # end at the first frame within epsilon, as the paper's loop does
+    settings: tuple[tuple[str, float], ...] = ()  # the controller's own settings (host/controller_settings.py keys)
 
     def __post_init__(self) -> None:
         if self.controller.upper() not in m.Controller.__members__:
@@ -95,27 +107,34 @@ class TrialSpec:
         for axis in self.gains:
             if axis.upper() not in m.Axis.__members__:
                 raise ValueError(f"gains are for axes {', '.join(choices(m.Axis))}, got {axis!r}")
-        self.controller_settings()                     # the keys and values of settings (SettingsError: a ValueError)
-        for command in self.setup().commands():   # the schema's bounds, before any firmware sees them
+        self.controller_settings()  # the keys and values of settings (SettingsError: a ValueError)
+        for command in self.setup().commands():  # the schema's bounds, before any firmware sees them
             try:
                 command.check()
             except FieldRefused as refused:
                 axis = f" of the {command.axis.name.lower()} PID" if isinstance(command, m.ConfigurePid) else ""
-                raise ValueError(f"{SPEC_NAMES.get(refused.field, refused.field)}{axis}: {refused.reason} "
-                                 f"({refused.message_name}.{refused.field}, protocol/schema.toml)") from None
+                raise ValueError(
+                    f"{SPEC_NAMES.get(refused.field, refused.field)}{axis}: {refused.reason} "
+                    f"({refused.message_name}.{refused.field}, protocol/schema.toml)"
+                ) from None
 
     def setup(self, module_m: tuple[float, float] = MODULE_M, telemetry_period_ms: int = 0) -> Setup:
         """The firmware's set-up for this trial: configure, every PID's gains (the paper's where not given), the
         target; sent as the rig's session sends its own (Setup.commands)."""
         configure = m.Configure(
-            controller=m.Controller[self.controller.upper()], module_x=module_m[0], module_y=module_m[1],
-            tolerance=self.tolerance_m, noise_amplitude=self.alpha_m, noise_seed=self.seed or 1,
-            telemetry_period=telemetry_period_ms)
+            controller=m.Controller[self.controller.upper()],
+            module_x=module_m[0],
+            module_y=module_m[1],
+            tolerance=self.tolerance_m,
+            noise_amplitude=self.alpha_m,
+            noise_seed=self.seed or 1,
+            telemetry_period=telemetry_period_ms,
+        )
         gains = {}
         for axis in m.Axis:
             g = self.gains.get(axis.name.lower())
             gains[axis] = dict(vars(g) if g else m.PID_DEFAULTS[axis])
-        settings = self.controller_settings()     # all of them every time: nothing stays from an earlier trial
+        settings = self.controller_settings()  # all of them every time: nothing stays from an earlier trial
         return Setup(settings.configure(configure), settings.gains(gains), self.target_m, settings.commands())
 
     def controller_settings(self) -> ControllerSettings:
@@ -130,12 +149,13 @@ def is_success(fell_off: bool, final_error_m: float, tolerance_m: float) -> bool
 @dataclass
 class LinkWatch:
     """What the frame counters showed during a trial: each count is something the bridge reported."""
-    firmware_resets: int = 0        # boot messages: the firmware restarted
-    missed_replies: int = 0         # position frames whose telemetry never came
-    duplicate_replies: int = 0      # telemetry for a frame already answered
-    lost_firmware_frames: int = 0   # gaps in the firmware's sequence numbers
-    dropped_frames: int = 0         # camera frames dropped on purpose (Tracking.drop_rate)
-    unseen_frames: int = 0          # vision in the loop: frames in which the tracker found no object
+
+    firmware_resets: int = 0  # boot messages: the firmware restarted
+    missed_replies: int = 0  # position frames whose telemetry never came
+    duplicate_replies: int = 0  # telemetry for a frame already answered
+    lost_firmware_frames: int = 0  # gaps in the firmware's sequence numbers
+    dropped_frames: int = 0  # camera frames dropped on purpose (Tracking.drop_rate)
+    unseen_frames: int = 0  # vision in the loop: frames in which the tracker found no object
     messages: list[str] = field(default_factory=list)
 
     def report(self, text: str) -> None:
@@ -149,38 +169,48 @@ class LinkWatch:
 @dataclass
 class TrialResult:
     """Outcome and trajectory of one trial; arrays have one row per camera frame."""
+
     spec: TrialSpec
     object_name: str
-    success: bool                   # within tolerance at the end, not fallen off
-    final_error_m: float            # [m] true distance to the target at the end
-    final_xy_m: np.ndarray          # [m] object position at the end: the frame it was judged on (also the reach frame
-                                    #     when the trial stopped there, which is not a row of true_xy_m)
-    time_to_reach_s: float | None   # [s] first frame the true distance was within tolerance
+    success: bool  # within tolerance at the end, not fallen off
+    final_error_m: float  # [m] true distance to the target at the end
+    final_xy_m: np.ndarray  # [m] object position at the end: the frame it was judged on (also the reach frame
+    #     when the trial stopped there, which is not a row of true_xy_m)
+    time_to_reach_s: float | None  # [s] first frame the true distance was within tolerance
     fell_off: bool
-    sim_time_s: float               # [s] trial time simulated (shorter when the object fell off)
-    wall_time_s: float              # [s] the whole trial, settling included
-    physics_wall_s: float           # [s] of which MuJoCo stepping
-    link_wall_s: float              # [s] of which the protocol exchange with the firmware
-    t_s: np.ndarray                 # [s] capture times
-    true_xy_m: np.ndarray           # [m] object position (marker) at capture
-    measured_xy_m: np.ndarray       # [m] what the firmware was sent (NaN: dropped)
-    tilt_deg: np.ndarray            # [deg] theta_zx, theta_zy from telemetry (NaN: no answer)
-    command_m: np.ndarray           # [m] a_0..a_3 from telemetry
-    state: np.ndarray               # supervisor state per frame (-1: no answer)
+    sim_time_s: float  # [s] trial time simulated (shorter when the object fell off)
+    wall_time_s: float  # [s] the whole trial, settling included
+    physics_wall_s: float  # [s] of which MuJoCo stepping
+    link_wall_s: float  # [s] of which the protocol exchange with the firmware
+    t_s: np.ndarray  # [s] capture times
+    true_xy_m: np.ndarray  # [m] object position (marker) at capture
+    measured_xy_m: np.ndarray  # [m] what the firmware was sent (NaN: dropped)
+    tilt_deg: np.ndarray  # [deg] theta_zx, theta_zy from telemetry (NaN: no answer)
+    command_m: np.ndarray  # [m] a_0..a_3 from telemetry
+    state: np.ndarray  # supervisor state per frame (-1: no answer)
     watch: LinkWatch
 
     def summary(self) -> dict:
         """The machine-readable one-line result."""
-        return {"success": self.success, "final_error_m": round(self.final_error_m, 5),
-                "time_to_reach_s": None if self.time_to_reach_s is None else round(self.time_to_reach_s, 3),
-                "fell_off": self.fell_off, "sim_time_s": round(self.sim_time_s, 3),
-                "wall_time_s": round(self.wall_time_s, 3), "physics_share": round(self.physics_share, 3),
-                "link_share": round(self.link_wall_s / max(self.wall_time_s, 1e-9), 3),
-                "object": self.object_name, "controller": self.spec.controller,
-                "start_m": list(self.spec.start_m), "target_m": list(self.spec.target_m),
-                "seed": self.spec.seed, "link_clean": self.watch.clean,
-                "camera_frames": len(self.t_s), "unseen_frames": self.watch.unseen_frames,
-                "dropped_frames": self.watch.dropped_frames}
+        return {
+            "success": self.success,
+            "final_error_m": round(self.final_error_m, 5),
+            "time_to_reach_s": None if self.time_to_reach_s is None else round(self.time_to_reach_s, 3),
+            "fell_off": self.fell_off,
+            "sim_time_s": round(self.sim_time_s, 3),
+            "wall_time_s": round(self.wall_time_s, 3),
+            "physics_share": round(self.physics_share, 3),
+            "link_share": round(self.link_wall_s / max(self.wall_time_s, 1e-9), 3),
+            "object": self.object_name,
+            "controller": self.spec.controller,
+            "start_m": list(self.spec.start_m),
+            "target_m": list(self.spec.target_m),
+            "seed": self.spec.seed,
+            "link_clean": self.watch.clean,
+            "camera_frames": len(self.t_s),
+            "unseen_frames": self.watch.unseen_frames,
+            "dropped_frames": self.watch.dropped_frames,
+        }
 
     @property
     def physics_share(self) -> float:
@@ -200,33 +230,37 @@ class Bridge:
             link.ack_timeout_s = max(link.ack_timeout_s, LOCKSTEP_ACK_TIMEOUT_S)
         identity = link.identify()
         if not math.isclose(identity.actuator_range, rig.actuators.range_m, rel_tol=1e-6):
-            raise LinkError(f"the firmware was built for actuators of +-{identity.actuator_range:g} m, the simulated "
-                            f"rig's travel +-{rig.actuators.range_m:g} m: the commands would not mean the same")
+            raise LinkError(
+                f"the firmware was built for actuators of +-{identity.actuator_range:g} m, the simulated "
+                f"rig's travel +-{rig.actuators.range_m:g} m: the commands would not mean the same"
+            )
         simulated = identity.clock == m.Clock.SIMULATED
         if lockstep and not simulated:
-            raise LinkError("lock-step needs a firmware on the simulated clock (mantaray-vmcu --clock sim); "
-                            "this one runs on its wall clock: use real-time mode")
+            raise LinkError(
+                "lock-step needs a firmware on the simulated clock (mantaray-vmcu --clock sim); "
+                "this one runs on its wall clock: use real-time mode"
+            )
         if not lockstep and simulated:
             raise LinkError("real-time mode needs a wall-clock firmware; this one is on the simulated clock")
         self.model, self.data = M.load(rig)
         self.vision = None
         if tracking.vision is not None:
             from .vision import CameraVision
+
             self.vision = CameraVision(self.model, self.data, rig, tracking.vision)
-        self.clock_us = 0               # the firmware's sim clock, last value sent
-        self.frame = 0                  # camera frame counter, runs on across trials
+        self.clock_us = 0  # the firmware's sim clock, last value sent
+        self.frame = 0  # camera frame counter, runs on across trials
         if lockstep:
             # The firmware may have run before (another bridge, another host): its clock must never go back.
             # A not_visible frame steps nothing and feeds no deadman; its telemetry tells the time [ms].
             self.frame = 1
-            probe = link.position(m.ObjectPosition(frame=self.frame, capture_time=0,
-                                                   flags=m.PositionFlags.NOT_VISIBLE))
-            self.clock_us = (probe.time + 1) * 1000   # telemetry truncates to whole ms
+            probe = link.position(m.ObjectPosition(frame=self.frame, capture_time=0, flags=m.PositionFlags.NOT_VISIBLE))
+            self.clock_us = (probe.time + 1) * 1000  # telemetry truncates to whole ms
         self.link.on_message = self._watch_message
         self._watch = LinkWatch()
         self._answered: set[int] = set()
-        self.viewer = None              # a mujoco.viewer handle: synced after every camera frame
-        self.recorder = None            # a video.Recorder: offered every physics step
+        self.viewer = None  # a mujoco.viewer handle: synced after every camera frame
+        self.recorder = None  # a video.Recorder: offered every physics step
 
     def _watch_message(self, msg) -> None:
         if isinstance(msg, m.Boot):
@@ -244,8 +278,9 @@ class Bridge:
 
     def _configure(self, spec: TrialSpec) -> None:
         self.link.command(m.Stop())
-        setup = spec.setup((self.rig.frame.size_x_m, self.rig.frame.size_y_m),
-                           telemetry_period_ms=0 if self.lockstep else 100)
+        setup = spec.setup(
+            (self.rig.frame.size_x_m, self.rig.frame.size_y_m), telemetry_period_ms=0 if self.lockstep else 100
+        )
         for command in setup.commands():
             self.link.command(command)
 
@@ -258,9 +293,13 @@ class Bridge:
         self._watch, self._answered = LinkWatch(), set()
         resets0, lost0 = self.link.resets, self.link.lost_frames
         trial = self._start(spec)
-        loop = ClosedLoop(lambda msg: self._send(msg, trial), time_base_us=trial.base_us, frame=self.frame,
-                          on_telemetry=lambda reply: M.set_commands(self.model, self.data, reply.command))
-        judge = Tolerance(spec.tolerance_m)             # on the true position: where the object really is
+        loop = ClosedLoop(
+            lambda msg: self._send(msg, trial),
+            time_base_us=trial.base_us,
+            frame=self.frame,
+            on_telemetry=lambda reply: M.set_commands(self.model, self.data, reply.command),
+        )
+        judge = Tolerance(spec.tolerance_m)  # on the true position: where the object really is
         true_xy_rows = []
 
         def record(frame: Frame, telemetry) -> None:
@@ -309,7 +348,7 @@ class Bridge:
         t = time.perf_counter()
         self._configure(spec)
         M.drop_object(self.model, self.data, *spec.start_m)
-        base_us = (self.clock_us + CLOCK_GAP_US) & U32    # firmware time at trial time 0
+        base_us = (self.clock_us + CLOCK_GAP_US) & U32  # firmware time at trial time 0
         if self.lockstep:
             self._set_clock(base_us)
         self.link.command(m.Start())
@@ -321,17 +360,22 @@ class Bridge:
 
     def _advance(self, trial: _Trial, to_trial_s: float) -> bool:
         """Step physics to trial time to_trial_s; True if the object fell off on the way."""
-        if not self.lockstep:   # hold the physics back to the wall clock
+        if not self.lockstep:  # hold the physics back to the wall clock
             ahead = to_trial_s - (time.perf_counter() - trial.wall_start_s)
             if ahead > 0:
                 time.sleep(ahead)
         t = time.perf_counter()
         try:
-            M.step_until(self.model, self.data, trial.t0_sim_s + to_trial_s,
-                         None if self.recorder is None else self.recorder.capture)
+            M.step_until(
+                self.model,
+                self.data,
+                trial.t0_sim_s + to_trial_s,
+                None if self.recorder is None else self.recorder.capture,
+            )
         except SimulationUnstable:
-            raise SimulationUnstable(f"the physics diverged before trial time {to_trial_s:.3f} s",
-                                     self.rig.stiffest()) from None
+            raise SimulationUnstable(
+                f"the physics diverged before trial time {to_trial_s:.3f} s", self.rig.stiffest()
+            ) from None
         trial.physics_s += time.perf_counter() - t
         if self.viewer is not None:
             self.viewer.sync()
@@ -372,28 +416,43 @@ class Bridge:
         if self._watch.lost_firmware_frames:
             self._watch.report(f"{self._watch.lost_firmware_frames} firmware frames missing from its sequence")
 
-    def _result(self, spec: TrialSpec, trial: _Trial, rows: dict, true_xy_m: np.ndarray, judge: Tolerance,
-                fell: bool) -> TrialResult:
+    def _result(
+        self, spec: TrialSpec, trial: _Trial, rows: dict, true_xy_m: np.ndarray, judge: Tolerance, fell: bool
+    ) -> TrialResult:
         """The trial judged where the object is at the end (the paper's Results), with its trajectory."""
         final_xy = M.object_xy(self.model, self.data)
         final_error = float(np.hypot(*(final_xy - np.asarray(spec.target_m))))
         return TrialResult(
-            spec=spec, object_name=self.rig.object.name, success=is_success(fell, final_error, spec.tolerance_m),
-            final_error_m=final_error, final_xy_m=final_xy, time_to_reach_s=judge.first_s, fell_off=fell,
-            sim_time_s=self.data.time - trial.t0_sim_s, wall_time_s=time.perf_counter() - trial.wall0_s,
-            physics_wall_s=trial.physics_s, link_wall_s=trial.link_s, t_s=rows["t_s"], true_xy_m=true_xy_m,
-            measured_xy_m=rows["measured_xy_m"], tilt_deg=rows["tilt_deg"], command_m=rows["command_m"],
-            state=rows["state"], watch=self._watch)
+            spec=spec,
+            object_name=self.rig.object.name,
+            success=is_success(fell, final_error, spec.tolerance_m),
+            final_error_m=final_error,
+            final_xy_m=final_xy,
+            time_to_reach_s=judge.first_s,
+            fell_off=fell,
+            sim_time_s=self.data.time - trial.t0_sim_s,
+            wall_time_s=time.perf_counter() - trial.wall0_s,
+            physics_wall_s=trial.physics_s,
+            link_wall_s=trial.link_s,
+            t_s=rows["t_s"],
+            true_xy_m=true_xy_m,
+            measured_xy_m=rows["measured_xy_m"],
+            tilt_deg=rows["tilt_deg"],
+            command_m=rows["command_m"],
+            state=rows["state"],
+            watch=self._watch,
+        )
 
 
 @dataclass
 class _Trial:
     """One running trial's clocks and time accounts."""
-    wall0_s: float                  # [s] perf_counter when the trial began (set-up included)
-    t0_sim_s: float                 # [s] physics time at trial time 0
-    base_us: int                    # [us] the firmware's clock at trial time 0
-    wall_start_s: float             # [s] perf_counter at trial time 0 (real time paces the physics to it)
-    deliver_us: int = 0             # [us] the firmware's clock when the present frame arrives
-    fell: bool = False              # the object fell off (the trial ended there)
-    physics_s: float = 0.0          # [s] wall time spent stepping MuJoCo
-    link_s: float = 0.0             # [s] wall time spent in the protocol exchange
+
+    wall0_s: float  # [s] perf_counter when the trial began (set-up included)
+    t0_sim_s: float  # [s] physics time at trial time 0
+    base_us: int  # [us] the firmware's clock at trial time 0
+    wall_start_s: float  # [s] perf_counter at trial time 0 (real time paces the physics to it)
+    deliver_us: int = 0  # [us] the firmware's clock when the present frame arrives
+    fell: bool = False  # the object fell off (the trial ended there)
+    physics_s: float = 0.0  # [s] wall time spent stepping MuJoCo
+    link_s: float = 0.0  # [s] wall time spent in the protocol exchange

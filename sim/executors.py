@@ -1,4 +1,5 @@
 """Where an experiment's trials run: this process, worker processes of this machine, or Ray actors."""
+
 from __future__ import annotations
 
 import importlib.util
@@ -29,14 +30,16 @@ class TrialRunner:
         self._link = Link(InProcessTransport(simulated_clock=True))
         self._rig_key: str | None = None
         self._bridge_now = None
-        self._unstable: tuple[str, SimulationUnstable] | None = None   # the last rig that would not load
+        self._unstable: tuple[str, SimulationUnstable] | None = None  # the last rig that would not load
 
     def _bridge(self, protocol: Experiment):
         from .bridge import Bridge
-        key = json.dumps([protocol.object_name, protocol.plant, protocol.plant_set, protocol.resolution,
-                          protocol.timestep_s])
+
+        key = json.dumps(
+            [protocol.object_name, protocol.plant, protocol.plant_set, protocol.resolution, protocol.timestep_s]
+        )
         if self._unstable is not None and self._unstable[0] == key:
-            raise self._unstable[1]        # the same rig diverges the same way: do not load it again
+            raise self._unstable[1]  # the same rig diverges the same way: do not load it again
         if key != self._rig_key:
             try:
                 self._bridge_now = Bridge(self._link, protocol.rig(), protocol.plant_model().tracking())
@@ -52,7 +55,7 @@ class TrialRunner:
         bridge = self._bridge(protocol)
         try:
             return bridge.run(trial_spec(protocol, trial))
-        except SimulationUnstable as exc:   # this rig diverges: its other trials are refused without running
+        except SimulationUnstable as exc:  # this rig diverges: its other trials are refused without running
             self._unstable = (self._rig_key, exc)
             raise
 
@@ -60,7 +63,7 @@ class TrialRunner:
         """The record of one trial of protocol (default: the runner's own)."""
         try:
             result = self.result(trial, protocol)
-        except ValueError as exc:        # model.fabric_height: the start is not over the fabric
+        except ValueError as exc:  # model.fabric_height: the start is not over the fabric
             if "not over the fabric" not in str(exc):
                 raise
             return unplaceable_record(trial, str(exc))
@@ -76,7 +79,7 @@ _worker: TrialRunner | None = None
 
 def _init_worker() -> None:
     global _worker
-    signal.signal(signal.SIGINT, signal.SIG_IGN)   # Ctrl-C is the parent's to handle: no traceback per worker
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle: no traceback per worker
     _worker = TrialRunner()
 
 
@@ -101,6 +104,7 @@ class LocalPool:
     def __enter__(self) -> LocalPool:
         if self.jobs > 1:
             import multiprocessing
+
             self._pool = multiprocessing.get_context("forkserver").Pool(self.jobs, initializer=_init_worker)
         return self
 
@@ -130,8 +134,8 @@ class LocalPool:
         return self._pool.map(_call_in_worker, [(fn, a) for a in args], chunksize=1)
 
 
-RAY_CONNECT_TIMEOUT_S = 10.0   # [s] how long a cluster's address may take to answer before a run gives up on it
-RAY_DEFAULT_PORTS = {"": 6379, "ray": 10001}   # a head's GCS port, and its Ray Client server's (ray://), when unnamed
+RAY_CONNECT_TIMEOUT_S = 10.0  # [s] how long a cluster's address may take to answer before a run gives up on it
+RAY_DEFAULT_PORTS = {"": 6379, "ray": 10001}  # a head's GCS port, and its Ray Client server's (ray://), when unnamed
 
 
 class RayUnavailable(Exception):
@@ -149,11 +153,13 @@ def check_ray(address: str | None) -> None:
         return
     scheme, _, where = address.rpartition("://")
     if scheme not in RAY_DEFAULT_PORTS:
-        raise RayUnavailable(f"--ray-address is HOST:PORT (a cluster's head) or ray://HOST:PORT (its Ray Client "
-                             f"server), got {address!r}")
+        raise RayUnavailable(
+            f"--ray-address is HOST:PORT (a cluster's head) or ray://HOST:PORT (its Ray Client server), got {address!r}"
+        )
     if scheme == "ray" and importlib.util.find_spec("grpc") is None:
-        raise RayUnavailable(f'--ray-address {address} goes through Ray Client, which is not installed: '
-                             f'pip install "ray[client]"')
+        raise RayUnavailable(
+            f'--ray-address {address} goes through Ray Client, which is not installed: pip install "ray[client]"'
+        )
     try:
         parts = urlsplit(f"//{where}")
         host, port = parts.hostname, parts.port or RAY_DEFAULT_PORTS[scheme]
@@ -164,9 +170,11 @@ def check_ray(address: str | None) -> None:
     try:
         socket.create_connection((host, port), timeout=RAY_CONNECT_TIMEOUT_S).close()
     except OSError as exc:
-        raise RayUnavailable(f"--ray-address {address}: no connection to port {port} of {host} within "
-                             f"{RAY_CONNECT_TIMEOUT_S:g} s ({exc.strerror or exc}); is the cluster up, and its port "
-                             f"open to this machine?") from None
+        raise RayUnavailable(
+            f"--ray-address {address}: no connection to port {port} of {host} within "
+            f"{RAY_CONNECT_TIMEOUT_S:g} s ({exc.strerror or exc}); is the cluster up, and its port "
+            f"open to this machine?"
+        ) from None
 
 
 class RayPool:
@@ -175,9 +183,9 @@ class RayPool:
     mode (its default on macOS and Windows), which the environment selects when ray is first imported in a process."""
 
     def __init__(self, jobs: int | None, address: str | None) -> None:
-        if address is None:                       # Ray's single-machine mode: its node address is 127.0.0.1
+        if address is None:  # Ray's single-machine mode: its node address is 127.0.0.1
             os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
-        elif "://" not in address:   # an address that answers, but not as a head: Ray would wait 20 tries of 30 s
+        elif "://" not in address:  # an address that answers, but not as a head: Ray would wait 20 tries of 30 s
             os.environ.setdefault("RAY_py_gcs_connect_timeout_s", f"{RAY_CONNECT_TIMEOUT_S:g}")
             os.environ.setdefault("RAY_gcs_server_port_wait_time_s", "1")
         import ray
@@ -185,9 +193,10 @@ class RayPool:
 
         if not ray.is_initialized():
             try:
-                ray.init(address=address or "local", include_dashboard=False, logging_level="ERROR",
-                         log_to_driver=False)
-            except ConnectionError as exc:        # it answered, but not as a Ray cluster does
+                ray.init(
+                    address=address or "local", include_dashboard=False, logging_level="ERROR", log_to_driver=False
+                )
+            except ConnectionError as exc:  # it answered, but not as a Ray cluster does
                 why = str(exc).splitlines()[0].rstrip(".")
                 raise RayUnavailable(f"--ray-address {address}: {why}; is a Ray cluster's head there?") from None
         actors_n = jobs or max(1, int(ray.cluster_resources().get("CPU", 1)))

@@ -8,6 +8,7 @@ epsilon of the target at the end of T without having fallen off (issue 4); wheth
 epsilon at any frame before T (where the paper's algorithms stop) is recorded too. The trials run on
 sim/executors.py, their records go to sim/results_file.py, and sim/summary.py makes the map.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -31,24 +32,25 @@ class ExperimentMismatch(ValueError):
 @dataclass(frozen=True)
 class Experiment:
     """Everything that decides a heatmap's trials and how they run."""
+
     object_name: str = "sphere"
     controller: str = "manhattan"
-    cells: int = 20                         # [-] per side: the paper's 20 x 20 cells of 2.5 cm
-    trials_per_cell: int = 10               # [-] N (the paper: 10)
-    tolerance_m: float = 0.02               # [m] epsilon
-    duration_s: float = 10.0                # [s] T (the paper: 10 s)
-    alpha_m: float = 0.0                    # [m] noise amplitude
+    cells: int = 20  # [-] per side: the paper's 20 x 20 cells of 2.5 cm
+    trials_per_cell: int = 10  # [-] N (the paper: 10)
+    tolerance_m: float = 0.02  # [m] epsilon
+    duration_s: float = 10.0  # [s] T (the paper: 10 s)
+    alpha_m: float = 0.0  # [m] noise amplitude
     seed: int = 2026
-    gains: tuple[float, float, float, float] | None = None   # (kp, ki, kd, integral limit); None: the paper's
-    resolution: int = DEFAULT_FIDELITY.resolution   # [vertices per side] of the fabric (sim/rig.py, FIDELITIES)
+    gains: tuple[float, float, float, float] | None = None  # (kp, ki, kd, integral limit); None: the paper's
+    resolution: int = DEFAULT_FIDELITY.resolution  # [vertices per side] of the fabric (sim/rig.py, FIDELITIES)
     timestep_s: float = DEFAULT_FIDELITY.timestep_s  # [s] physics step
-    only_cells: tuple[int, ...] | None = None   # run just these cell indices (samples, tests); None: all
-    plant: str = DEFAULT_PLANT              # the named plant (sim/plant.toml) ...
-    plant_set: tuple[tuple[str, float | str], ...] = ()   # ... with these values set over it
-    stop_when_reached: bool = False         # end each trial at the first frame within epsilon (the paper's loop)
-    settings: tuple[tuple[str, float], ...] = ()   # the controller's own settings (host/controller_settings.py)
-    start_shift_m: float = 0.0              # [m] every start moved this far, each in its own direction drawn from
-                                            # (seed, cell, k): the same trials, perturbed (the fidelity gate's floor)
+    only_cells: tuple[int, ...] | None = None  # run just these cell indices (samples, tests); None: all
+    plant: str = DEFAULT_PLANT  # the named plant (sim/plant.toml) ...
+    plant_set: tuple[tuple[str, float | str], ...] = ()  # ... with these values set over it
+    stop_when_reached: bool = False  # end each trial at the first frame within epsilon (the paper's loop)
+    settings: tuple[tuple[str, float], ...] = ()  # the controller's own settings (host/controller_settings.py)
+    start_shift_m: float = 0.0  # [m] every start moved this far, each in its own direction drawn from
+    # (seed, cell, k): the same trials, perturbed (the fidelity gate's floor)
 
     def __post_init__(self) -> None:
         checks = [
@@ -59,19 +61,25 @@ class Experiment:
             (self.seed >= 0, f"seed must be >= 0, got {self.seed}"),
             (0 <= self.start_shift_m <= 0.01, f"start shift must be 0..0.01 m, got {self.start_shift_m}"),
             (0 < self.timestep_s <= 0.01, f"timestep must be in (0, 0.01] s, got {self.timestep_s}"),
-            (self.gains is None or len(self.gains) == 4,
-             f"gains must be four numbers (kp, ki, kd, integral limit), got {self.gains}"),
-            (self.only_cells is None or all(0 <= c < self.cells ** 2 for c in self.only_cells),
-             f"cell indices must be 0..{self.cells ** 2 - 1}"),
-            (self.only_cells is None or len(set(self.only_cells)) == len(self.only_cells),
-             f"cell indices must not repeat, got {self.only_cells}"),
+            (
+                self.gains is None or len(self.gains) == 4,
+                f"gains must be four numbers (kp, ki, kd, integral limit), got {self.gains}",
+            ),
+            (
+                self.only_cells is None or all(0 <= c < self.cells**2 for c in self.only_cells),
+                f"cell indices must be 0..{self.cells**2 - 1}",
+            ),
+            (
+                self.only_cells is None or len(set(self.only_cells)) == len(self.only_cells),
+                f"cell indices must not repeat, got {self.only_cells}",
+            ),
         ]
         for ok, message in checks:
             if not ok:
                 raise ValueError(message)
-        Fabric(resolution=self.resolution)      # refuses an even or too small resolution
-        self.plant_model()                       # refuses an unknown plant or a value outside its range
-        trial_spec(self, Trial(0, 0, (0.0, 0.0), (0.0, 0.0), 1))   # the controller, tolerance, alpha, gains: schema's
+        Fabric(resolution=self.resolution)  # refuses an even or too small resolution
+        self.plant_model()  # refuses an unknown plant or a value outside its range
+        trial_spec(self, Trial(0, 0, (0.0, 0.0), (0.0, 0.0), 1))  # the controller, tolerance, alpha, gains: schema's
 
     def plant_model(self) -> Plant:
         return Plant(self.plant, self.plant_set)
@@ -81,7 +89,7 @@ class Experiment:
         return self.plant_model().rig(self.object_name, resolution=self.resolution, timestep_s=self.timestep_s)
 
     def cell_ids(self) -> list[int]:
-        return list(self.only_cells) if self.only_cells is not None else list(range(self.cells ** 2))
+        return list(self.only_cells) if self.only_cells is not None else list(range(self.cells**2))
 
     def to_json(self) -> dict:
         return {k: (list(v) if isinstance(v, tuple) else v) for k, v in dataclasses.asdict(self).items()}
@@ -97,11 +105,12 @@ class Experiment:
 @dataclass(frozen=True)
 class Trial:
     """One trial of the protocol: where it starts and what it aims at."""
-    cell: int                     # cell index: ix + iy * cells (ix along x from -m/2, iy along y from -n/2)
-    k: int                        # trial number within the cell
+
+    cell: int  # cell index: ix + iy * cells (ix along x from -m/2, iy along y from -n/2)
+    k: int  # trial number within the cell
     start_m: tuple[float, float]
     target_m: tuple[float, float]
-    seed: int                     # the trial's seed for the firmware's noise and the camera model
+    seed: int  # the trial's seed for the firmware's noise and the camera model
 
     @property
     def key(self) -> str:
@@ -124,11 +133,13 @@ def make_trial(protocol: Experiment, module_m: tuple[float, float], cell: int, k
     target = (float(rng.uniform(x_lo, x_hi)), float(rng.uniform(y_lo, y_hi)))
     hx, hy = module_m[0] / 2, module_m[1] / 2
     start = (float(rng.uniform(-hx, hx)), float(rng.uniform(-hy, hy)))
-    seed = int(rng.integers(1, 2 ** 31))
-    if protocol.start_shift_m:      # its own draw, so that every other number of the trial stays as it was
+    seed = int(rng.integers(1, 2**31))
+    if protocol.start_shift_m:  # its own draw, so that every other number of the trial stays as it was
         angle = np.random.default_rng([protocol.seed, cell, k, 1]).uniform(0.0, 2 * np.pi)
-        start = (float(np.clip(start[0] + protocol.start_shift_m * np.cos(angle), -hx, hx)),
-                 float(np.clip(start[1] + protocol.start_shift_m * np.sin(angle), -hy, hy)))
+        start = (
+            float(np.clip(start[0] + protocol.start_shift_m * np.cos(angle), -hx, hx)),
+            float(np.clip(start[1] + protocol.start_shift_m * np.sin(angle), -hy, hy)),
+        )
     return Trial(cell, k, start, target, seed)
 
 
@@ -140,14 +151,23 @@ def trials(protocol: Experiment) -> list[Trial]:
 
 
 def trial_spec(protocol: Experiment, trial: Trial) -> TrialSpec:
-    return TrialSpec(trial.start_m, trial.target_m, controller=protocol.controller, duration_s=protocol.duration_s,
-                     alpha_m=protocol.alpha_m, tolerance_m=protocol.tolerance_m, seed=trial.seed,
-                     gains=controller_gains(protocol.controller, protocol.gains, protocol.plant_model().gain_scale),
-                     stop_when_reached=protocol.stop_when_reached, settings=protocol.settings)
+    return TrialSpec(
+        trial.start_m,
+        trial.target_m,
+        controller=protocol.controller,
+        duration_s=protocol.duration_s,
+        alpha_m=protocol.alpha_m,
+        tolerance_m=protocol.tolerance_m,
+        seed=trial.seed,
+        gains=controller_gains(protocol.controller, protocol.gains, protocol.plant_model().gain_scale),
+        stop_when_reached=protocol.stop_when_reached,
+        settings=protocol.settings,
+    )
 
 
-def controller_gains(controller: str, gains: tuple[float, float, float, float] | None,
-                     scale: float = 1.0) -> dict[str, Gains]:
+def controller_gains(
+    controller: str, gains: tuple[float, float, float, float] | None, scale: float = 1.0
+) -> dict[str, Gains]:
     """The gains to configure per axis: the given ones, else the paper's; kp, ki, kd times scale (the plant's reading of
     the PID's unit: 180/pi when the paper's gains are per radian). Empty: the firmware's own defaults as they are."""
     if gains is None and scale == 1.0:
@@ -155,6 +175,6 @@ def controller_gains(controller: str, gains: tuple[float, float, float, float] |
     out = {}
     for axis in controller_axes(controller):
         kp, ki, kd, limit = gains if gains is not None else m.PID_DEFAULTS[axis].values()
-        k = scale if axis in PAPER_AXES else 1.0       # the cascade's velocity PIDs are no gains of the paper
+        k = scale if axis in PAPER_AXES else 1.0  # the cascade's velocity PIDs are no gains of the paper
         out[axis.name.lower()] = Gains(kp * k, ki * k, kd * k, limit)
     return out

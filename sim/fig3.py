@@ -6,6 +6,7 @@ alpha the paper used for that object; a trial ends when the object first comes w
 loop stops there), falls off, or at 60 s. The targets come from (seed, object, k) alone. The trials run
 through the heatmap's trial runners (heatmap.LocalPool or RayPool), one protocol per object.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -19,39 +20,75 @@ from .plant import DEFAULT_PLANT
 from .rig import DEFAULT_FIDELITY
 
 
-def fig3_jobs(plant_name: str, values: dict, seed: int, resolution: int, timestep_s: float,
-              settings: ControllerSettings | None = None) -> list[tuple]:
+def fig3_jobs(
+    plant_name: str,
+    values: dict,
+    seed: int,
+    resolution: int,
+    timestep_s: float,
+    settings: ControllerSettings | None = None,
+) -> list[tuple]:
     """One (protocol, trial) per object and k; the targets depend on the seed alone, whatever the controller."""
     settings = settings or ControllerSettings("manhattan")
     jobs = []
     for name, alpha_m in F.FIG3_ALPHA_M.items():
-        protocol = Experiment(object_name=name, controller=settings.controller, cells=1,
-                            trials_per_cell=F.FIG3_TRIALS, duration_s=F.FIG3_DURATION_S, alpha_m=alpha_m, seed=seed,
-                            resolution=resolution, timestep_s=timestep_s, plant=plant_name,
-                            plant_set=tuple(values.items()), stop_when_reached=True, settings=settings.values)
+        protocol = Experiment(
+            object_name=name,
+            controller=settings.controller,
+            cells=1,
+            trials_per_cell=F.FIG3_TRIALS,
+            duration_s=F.FIG3_DURATION_S,
+            alpha_m=alpha_m,
+            seed=seed,
+            resolution=resolution,
+            timestep_s=timestep_s,
+            plant=plant_name,
+            plant_set=tuple(values.items()),
+            stop_when_reached=True,
+            settings=settings.values,
+        )
         for k in range(F.FIG3_TRIALS):
             rng = np.random.default_rng([seed, sum(map(ord, name)), k])
             target = tuple(float(v) for v in rng.uniform(-F.FIG3_TARGET_HALF_M, F.FIG3_TARGET_HALF_M, 2))
-            jobs.append((protocol, Trial(0, k, (0.0, 0.0), target, int(rng.integers(1, 2 ** 31)))))
+            jobs.append((protocol, Trial(0, k, (0.0, 0.0), target, int(rng.integers(1, 2**31)))))
     return jobs
 
 
 def run_fig3_trial(runner, job: tuple) -> dict:
     """One Fig. 3 trial on the process's runner: its outcome, path and tilts (a diverging plant: fell off, said so)."""
     protocol, trial = job
-    row = {"object": protocol.object_name, "k": trial.k, "target_m": list(trial.target_m),
-           "alpha_m": protocol.alpha_m}
+    row = {"object": protocol.object_name, "k": trial.k, "target_m": list(trial.target_m), "alpha_m": protocol.alpha_m}
     try:
         result = runner.result(trial, protocol)
     except SimulationUnstable as exc:
-        return {**row, "reached": False, "time_to_reach_s": None, "fell_off": True, "unstable": str(exc),
-                "path_m": [], "tilt_deg": []}
-    return {**row, "reached": result.time_to_reach_s is not None, "time_to_reach_s": result.time_to_reach_s,
-            "fell_off": bool(result.fell_off), "sim_time_s": round(result.sim_time_s, 3),
-            "path_m": np.round(result.true_xy_m, 5).tolist(), "tilt_deg": np.round(result.tilt_deg, 3).tolist()}
+        return {
+            **row,
+            "reached": False,
+            "time_to_reach_s": None,
+            "fell_off": True,
+            "unstable": str(exc),
+            "path_m": [],
+            "tilt_deg": [],
+        }
+    return {
+        **row,
+        "reached": result.time_to_reach_s is not None,
+        "time_to_reach_s": result.time_to_reach_s,
+        "fell_off": bool(result.fell_off),
+        "sim_time_s": round(result.sim_time_s, 3),
+        "path_m": np.round(result.true_xy_m, 5).tolist(),
+        "tilt_deg": np.round(result.tilt_deg, 3).tolist(),
+    }
 
 
-def run_fig3(pool, plant_name: str = DEFAULT_PLANT, values: dict | None = None, seed: int = 3, resolution: int = DEFAULT_FIDELITY.resolution,
-             timestep_s: float = DEFAULT_FIDELITY.timestep_s, settings: ControllerSettings | None = None) -> list[dict]:
+def run_fig3(
+    pool,
+    plant_name: str = DEFAULT_PLANT,
+    values: dict | None = None,
+    seed: int = 3,
+    resolution: int = DEFAULT_FIDELITY.resolution,
+    timestep_s: float = DEFAULT_FIDELITY.timestep_s,
+    settings: ControllerSettings | None = None,
+) -> list[dict]:
     """Every Fig. 3 trial on the pool's workers, in order."""
     return pool.map_calls(run_fig3_trial, fig3_jobs(plant_name, values or {}, seed, resolution, timestep_s, settings))

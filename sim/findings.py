@@ -15,6 +15,7 @@ counts as success is a reading of the paper (sim/plant.toml reading.success_rule
 - F6 (the hardware experiment, Fig. 3): every object of Table I starting at the centre reaches a random target in
   [-0.2, 0.2]^2 m with the Manhattan controller within 60 s, 5 of 5 trials each.
 """
+
 from __future__ import annotations
 
 import math
@@ -26,18 +27,25 @@ import numpy as np
 from .rig import Frame
 from .summary import FAILURE_REGION_AT
 
-MODULE_M = (Frame().size_x_m, Frame().size_y_m)   # [m] the paper's module; the findings' zones are drawn on it
-PAPER_CELLS = 20                 # per side: the paper's grid, over which its totals are summed
-CENTRAL_HALF_M = 0.10            # [m] F1: central targets have |x|, |y| below this
-CENTRAL_AT = 0.9                 # [-] F1: central success rate at least this
-CORNER_FROM_M = 0.175            # [m] F2, F3: corner targets have |x| and |y| above this (7.5 cm squares)
-PAPER_TOTALS = {"manhattan": 171.3, "euclidean": 108.2}   # F5: the paper's scores
-TOTAL_TOLERANCE = 0.20           # [-] F5: each total within this fraction of the paper's
-FIG3_TRIALS = 5                  # F6: trials per object (the paper: five)
-FIG3_DURATION_S = 60.0           # [s] F6: the hardware runs' runtime (the paper: one minute)
-FIG3_TARGET_HALF_M = 0.2         # [m] F6: targets uniform in [-0.2, 0.2]^2
-FIG3_ALPHA_M = {"sphere": 0.0, "cube": 0.1, "disk": 0.05, "cylinder": 0.1, "apple": 0.05, "egg": 0.01,
-                "bunny": 0.05}   # [m] F6: the paper's alpha for each object (Fig. 3's captions)
+MODULE_M = (Frame().size_x_m, Frame().size_y_m)  # [m] the paper's module; the findings' zones are drawn on it
+PAPER_CELLS = 20  # per side: the paper's grid, over which its totals are summed
+CENTRAL_HALF_M = 0.10  # [m] F1: central targets have |x|, |y| below this
+CENTRAL_AT = 0.9  # [-] F1: central success rate at least this
+CORNER_FROM_M = 0.175  # [m] F2, F3: corner targets have |x| and |y| above this (7.5 cm squares)
+PAPER_TOTALS = {"manhattan": 171.3, "euclidean": 108.2}  # F5: the paper's scores
+TOTAL_TOLERANCE = 0.20  # [-] F5: each total within this fraction of the paper's
+FIG3_TRIALS = 5  # F6: trials per object (the paper: five)
+FIG3_DURATION_S = 60.0  # [s] F6: the hardware runs' runtime (the paper: one minute)
+FIG3_TARGET_HALF_M = 0.2  # [m] F6: targets uniform in [-0.2, 0.2]^2
+FIG3_ALPHA_M = {
+    "sphere": 0.0,
+    "cube": 0.1,
+    "disk": 0.05,
+    "cylinder": 0.1,
+    "apple": 0.05,
+    "egg": 0.01,
+    "bunny": 0.05,
+}  # [m] F6: the paper's alpha for each object (Fig. 3's captions)
 STRATA = ("centre", "axes", "diagonals", "edges", "corners")
 RULES = ("end", "reached")
 
@@ -81,8 +89,10 @@ def stratified_draw(cells: int, per_stratum: int, seed: int) -> dict[str, list[i
     the order drawn: the first k of each stratum are a smaller sample of the same kind, nested in the larger."""
     rng = np.random.default_rng([seed, cells, per_stratum])
     strata = strata_cells(cells)
-    return {name: [int(c) for c in rng.choice(strata[name], size=min(per_stratum, len(strata[name])), replace=False)]
-            for name in STRATA}
+    return {
+        name: [int(c) for c in rng.choice(strata[name], size=min(per_stratum, len(strata[name])), replace=False)]
+        for name in STRATA
+    }
 
 
 def stratified_sample(cells: int, per_stratum: int, seed: int, first: int | None = None) -> tuple[int, ...]:
@@ -94,12 +104,13 @@ def stratified_sample(cells: int, per_stratum: int, seed: int, first: int | None
 @dataclass(frozen=True)
 class MapStats:
     """What one controller's trials show: the rates the findings read, under one success rule."""
+
     trials: int
-    central_rate: float           # F1: share of successes among trials with a central target (NaN: none)
-    corner_rate: float            # F2 / F3: among trials with a corner target
-    shape_index: float            # F4: rank correlation with L-inf closeness minus with L1 closeness (NaN: too few)
-    total: float                  # F5: estimated sum of the cell rates over the grid, scaled to the paper's 400 cells
-                                  # (NaN if a stratum had no cell run)
+    central_rate: float  # F1: share of successes among trials with a central target (NaN: none)
+    corner_rate: float  # F2 / F3: among trials with a corner target
+    shape_index: float  # F4: rank correlation with L-inf closeness minus with L1 closeness (NaN: too few)
+    total: float  # F5: estimated sum of the cell rates over the grid, scaled to the paper's 400 cells
+    # (NaN if a stratum had no cell run)
     strata_rates: dict[str, float]  # mean cell rate by stratum (NaN where no cell was run)
     fell_rate: float
 
@@ -158,20 +169,25 @@ def map_stats(records: Iterable[dict], cells: int, rule: str) -> MapStats:
         strata_rates[name] = float(np.mean(run)) if run else math.nan
         if members[name]:
             total += len(members[name]) * strata_rates[name]
-    total *= PAPER_CELLS ** 2 / cells ** 2
-    return MapStats(trials=len(records), central_rate=float(np.mean(central)) if central else math.nan,
-                    corner_rate=float(np.mean(corner)) if corner else math.nan,
-                    shape_index=shape_index(centres, rates), total=total, strata_rates=strata_rates,
-                    fell_rate=float(np.mean([r["fell_off"] for r in records])) if records else math.nan)
+    total *= PAPER_CELLS**2 / cells**2
+    return MapStats(
+        trials=len(records),
+        central_rate=float(np.mean(central)) if central else math.nan,
+        corner_rate=float(np.mean(corner)) if corner else math.nan,
+        shape_index=shape_index(centres, rates),
+        total=total,
+        strata_rates=strata_rates,
+        fell_rate=float(np.mean([r["fell_off"] for r in records])) if records else math.nan,
+    )
 
 
 # ------------------------------------------------------------------------------------------- the findings
 @dataclass(frozen=True)
 class Finding:
-    name: str                     # F1 .. F6
-    claim: str                    # the paper's claim
-    holds: bool | None            # None: not measured
-    measured: str                 # what we measured, in words and numbers
+    name: str  # F1 .. F6
+    claim: str  # the paper's claim
+    holds: bool | None  # None: not measured
+    measured: str  # what we measured, in words and numbers
 
 
 def _fmt(x: float) -> str:
@@ -181,24 +197,44 @@ def _fmt(x: float) -> str:
 def heatmap_findings(manhattan: MapStats, euclidean: MapStats) -> list[Finding]:
     """F1-F5 from the two controllers' statistics under the same rule."""
     m, e = manhattan, euclidean
-    f1 = (m.central_rate >= CENTRAL_AT and e.central_rate >= CENTRAL_AT)
-    totals_ok = all(abs(s.total / PAPER_TOTALS[name] - 1) <= TOTAL_TOLERANCE
-                    for name, s in (("manhattan", m), ("euclidean", e)))
+    f1 = m.central_rate >= CENTRAL_AT and e.central_rate >= CENTRAL_AT
+    totals_ok = all(
+        abs(s.total / PAPER_TOTALS[name] - 1) <= TOTAL_TOLERANCE for name, s in (("manhattan", m), ("euclidean", e))
+    )
     ratio = m.total / e.total if e.total > 0 else math.inf
     return [
-        Finding("F1", "central targets succeed (100 %) with both controllers", f1,
-                f"central rate Manhattan {_fmt(m.central_rate)}, Euclidean {_fmt(e.central_rate)} (need >= {CENTRAL_AT})"),
-        Finding("F2", "Manhattan extends reachability to the corners", m.corner_rate > FAILURE_REGION_AT,
-                f"Manhattan corner rate {_fmt(m.corner_rate)} (need > {FAILURE_REGION_AT})"),
-        Finding("F3", "corners are entirely unreachable with Euclidean", e.corner_rate <= FAILURE_REGION_AT,
-                f"Euclidean corner rate {_fmt(e.corner_rate)} (need <= {FAILURE_REGION_AT})"),
-        Finding("F4", "Manhattan's uncertain region is square, Euclidean's a diamond",
-                m.shape_index > 0 > e.shape_index,
-                f"shape index Manhattan {_fmt(m.shape_index)} (need > 0), Euclidean {_fmt(e.shape_index)} (need < 0)"),
-        Finding("F5", f"totals: Manhattan {PAPER_TOTALS['manhattan']}, Euclidean {PAPER_TOTALS['euclidean']} (ratio "
-                f"{PAPER_TOTALS['manhattan'] / PAPER_TOTALS['euclidean']:.2f})", totals_ok,
-                f"Manhattan {m.total:.1f}, Euclidean {e.total:.1f} (ratio {ratio:.2f}; each within "
-                f"{TOTAL_TOLERANCE:.0%} of the paper's)"),
+        Finding(
+            "F1",
+            "central targets succeed (100 %) with both controllers",
+            f1,
+            f"central rate Manhattan {_fmt(m.central_rate)}, Euclidean {_fmt(e.central_rate)} (need >= {CENTRAL_AT})",
+        ),
+        Finding(
+            "F2",
+            "Manhattan extends reachability to the corners",
+            m.corner_rate > FAILURE_REGION_AT,
+            f"Manhattan corner rate {_fmt(m.corner_rate)} (need > {FAILURE_REGION_AT})",
+        ),
+        Finding(
+            "F3",
+            "corners are entirely unreachable with Euclidean",
+            e.corner_rate <= FAILURE_REGION_AT,
+            f"Euclidean corner rate {_fmt(e.corner_rate)} (need <= {FAILURE_REGION_AT})",
+        ),
+        Finding(
+            "F4",
+            "Manhattan's uncertain region is square, Euclidean's a diamond",
+            m.shape_index > 0 > e.shape_index,
+            f"shape index Manhattan {_fmt(m.shape_index)} (need > 0), Euclidean {_fmt(e.shape_index)} (need < 0)",
+        ),
+        Finding(
+            "F5",
+            f"totals: Manhattan {PAPER_TOTALS['manhattan']}, Euclidean {PAPER_TOTALS['euclidean']} (ratio "
+            f"{PAPER_TOTALS['manhattan'] / PAPER_TOTALS['euclidean']:.2f})",
+            totals_ok,
+            f"Manhattan {m.total:.1f}, Euclidean {e.total:.1f} (ratio {ratio:.2f}; each within "
+            f"{TOTAL_TOLERANCE:.0%} of the paper's)",
+        ),
     ]
 
 
@@ -211,8 +247,12 @@ def fig3_finding(records: Iterable[dict]) -> Finding:
     complete = set(by_object) == set(FIG3_ALPHA_M) and all(len(v) >= FIG3_TRIALS for v in by_object.values())
     holds = complete and all(all(v) for v in by_object.values())
     words = ", ".join(f"{name} {sum(v)}/{len(v)}" for name, v in sorted(by_object.items()))
-    return Finding("F6", "every object reaches a random target within 60 s, 5 of 5 (Fig. 3)",
-                   holds if records else None, words or "not run")
+    return Finding(
+        "F6",
+        "every object reaches a random target within 60 s, 5 of 5 (Fig. 3)",
+        holds if records else None,
+        words or "not run",
+    )
 
 
 def _short(gap: float) -> float:
@@ -222,8 +262,11 @@ def _short(gap: float) -> float:
 
 # The largest value each objective can take: both central rates 0; the corner rates and shape indices as wrong as
 # they can be; both totals at the floor of 1.
-WORST_OBJECTIVES = (2 * CENTRAL_AT, FAILURE_REGION_AT + (1 - FAILURE_REGION_AT) + 2 + 2,
-                    math.log(PAPER_TOTALS["manhattan"]) + math.log(PAPER_TOTALS["euclidean"]))
+WORST_OBJECTIVES = (
+    2 * CENTRAL_AT,
+    FAILURE_REGION_AT + (1 - FAILURE_REGION_AT) + 2 + 2,
+    math.log(PAPER_TOTALS["manhattan"]) + math.log(PAPER_TOTALS["euclidean"]),
+)
 
 
 def objectives(manhattan: MapStats, euclidean: MapStats) -> tuple[float, float, float]:
@@ -233,9 +276,15 @@ def objectives(manhattan: MapStats, euclidean: MapStats) -> tuple[float, float, 
     # A measure the trials could not give (no central or corner target, too few cells) is NaN, and so is the
     # objective it enters: the search scores such a candidate as the worst (calibrate.run_study).
     central = _short(CENTRAL_AT - m.central_rate) + _short(CENTRAL_AT - e.central_rate)
-    corners = (_short(FAILURE_REGION_AT - m.corner_rate) + _short(e.corner_rate - FAILURE_REGION_AT)
-               + _short(-m.shape_index) + _short(e.shape_index))
-    floor = 1.0                     # [-] a total of 0 (nothing succeeds) counts as 1
-    totals = sum(abs(math.log(max(s.total, floor) / PAPER_TOTALS[name])) if math.isfinite(s.total) else math.nan
-                 for name, s in (("manhattan", m), ("euclidean", e)))
+    corners = (
+        _short(FAILURE_REGION_AT - m.corner_rate)
+        + _short(e.corner_rate - FAILURE_REGION_AT)
+        + _short(-m.shape_index)
+        + _short(e.shape_index)
+    )
+    floor = 1.0  # [-] a total of 0 (nothing succeeds) counts as 1
+    totals = sum(
+        abs(math.log(max(s.total, floor) / PAPER_TOTALS[name])) if math.isfinite(s.total) else math.nan
+        for name, s in (("manhattan", m), ("euclidean", e))
+    )
     return central, corners, totals

@@ -6,6 +6,7 @@ commands open loop, from the logged start, on a candidate plant gives the trajec
 had; the evidence is the mean distance between it and the logged one. `write_log` writes a simulated trial
 in the same format, so a fit can be checked on logs whose plant is known.
 """
+
 from __future__ import annotations
 
 import math
@@ -19,7 +20,7 @@ from mantaray.host.runlog import LoggedRun, RunLog, RunLogError, read_run_log
 from .plant import DEFAULT_PLANT
 from .rig import DEFAULT_FIDELITY
 
-FELL_ERROR_M = 0.25          # [m] the error a frame counts for once the replayed object has fallen off
+FELL_ERROR_M = 0.25  # [m] the error a frame counts for once the replayed object has fallen off
 
 
 def replay(run: LoggedRun, rig, latency_s: float = 0.0, horizon_s: float | None = None) -> np.ndarray:
@@ -34,12 +35,12 @@ def replay(run: LoggedRun, rig, latency_s: float = 0.0, horizon_s: float | None 
     model, data = M.load(rig)
     try:
         M.drop_object(model, data, *run.start_m)
-    except ValueError as exc:                  # model.fabric_height: not over the fabric
+    except ValueError as exc:  # model.fabric_height: not over the fabric
         raise RunLogError(f"{run.path}: the run starts at {run.start_m}, {exc}") from None
     t0 = data.time
     half_step_s = 0.5 * model.opt.timestep
     out = np.full((len(run.t_s), 2), np.nan)
-    pending: list[tuple[float, np.ndarray]] = []           # (run time [s], command [m]) not yet applied
+    pending: list[tuple[float, np.ndarray]] = []  # (run time [s], command [m]) not yet applied
 
     def apply_due(_=None) -> None:
         while pending and pending[0][0] <= data.time - t0 + half_step_s:
@@ -72,6 +73,7 @@ def _replay_error(_runner, job: tuple) -> float:
     """The trajectory error of one log on one candidate plant (a pool job; it needs no trial runner)."""
     path, plant_name, values, object_name, resolution, timestep_s, horizon_s = job
     from .plant import Plant
+
     plant = Plant(plant_name).set(values)
     run = read_run_log(path)
     rig = plant.rig(object_name, resolution=resolution, timestep_s=timestep_s)
@@ -83,23 +85,28 @@ def _replay_error(_runner, job: tuple) -> float:
 @dataclass(frozen=True)
 class LogEvidence:
     """Rig logs: the candidate plant, driven by each log's commands, should retrace each log's trajectory."""
+
     logs: tuple[str, ...]
     object_name: str = "sphere"
     plant: str = DEFAULT_PLANT
-    horizon_s: float | None = None       # [s] compare only the first part of each run (None: all of it)
-    resolution: int = DEFAULT_FIDELITY.resolution   # [vertices per side] (sim/rig.py, FIDELITIES)
+    horizon_s: float | None = None  # [s] compare only the first part of each run (None: all of it)
+    resolution: int = DEFAULT_FIDELITY.resolution  # [vertices per side] (sim/rig.py, FIDELITIES)
     timestep_s: float = DEFAULT_FIDELITY.timestep_s  # [s]
     seed: int = 12
     kind: str = "log"
     objective_names: tuple[str, ...] = ("mean trajectory error [m]",)
-    penalty: tuple[float, ...] = (FELL_ERROR_M,)     # a plant that cannot be simulated: as if it fell at once
+    penalty: tuple[float, ...] = (FELL_ERROR_M,)  # a plant that cannot be simulated: as if it fell at once
 
     def evaluate(self, values: dict[str, float | str], pool) -> tuple[tuple[float, ...], dict]:
-        jobs = [(log, self.plant, values, self.object_name, self.resolution, self.timestep_s, self.horizon_s)
-                for log in self.logs]
+        jobs = [
+            (log, self.plant, values, self.object_name, self.resolution, self.timestep_s, self.horizon_s)
+            for log in self.logs
+        ]
         errors = pool.map_calls(_replay_error, jobs)
-        return (float(np.mean(errors)),), {"errors_m": {Path(p).name: round(e, 5) for p, e in zip(self.logs, errors, strict=True)},
-                                           "passed": 0}
+        return (float(np.mean(errors)),), {
+            "errors_m": {Path(p).name: round(e, 5) for p, e in zip(self.logs, errors, strict=True)},
+            "passed": 0,
+        }
 
 
 def check_logs(paths: list[str], object_name: str, horizon_s: float | None) -> None:
@@ -116,29 +123,54 @@ def check_logs(paths: list[str], object_name: str, horizon_s: float | None) -> N
             raise RunLogError(f"{run.path} was logged with the {logged}, not the {object_name}: pass --object {logged}")
         seen = np.isfinite(run.xy_m[:, 0]) & (run.t_s <= (horizon_s if horizon_s is not None else math.inf))
         if seen.sum() < 2:
-            raise RunLogError(f"{run.path} has fewer than two frames with the object seen before the horizon "
-                              f"({horizon_s} s)")
+            raise RunLogError(
+                f"{run.path} has fewer than two frames with the object seen before the horizon ({horizon_s} s)"
+            )
 
 
 def write_log(path: str | Path, result, object_name: str, plant_name: str) -> Path:
     """Write a simulated trial (bridge.TrialResult) as `mantaray rig` writes a run: config, then per camera frame
     its position and the telemetry that answered it."""
     spec = result.spec
-    log = RunLog(Path(path), {"args": {"controller": spec.controller, "target": list(spec.target_m),
-                                       "alpha": spec.alpha_m, "tolerance": spec.tolerance_m, "object": object_name,
-                                       "simulated_plant": plant_name}})
+    log = RunLog(
+        Path(path),
+        {
+            "args": {
+                "controller": spec.controller,
+                "target": list(spec.target_m),
+                "alpha": spec.alpha_m,
+                "tolerance": spec.tolerance_m,
+                "object": object_name,
+                "simulated_plant": plant_name,
+            }
+        },
+    )
     try:
         for k, t_s in enumerate(result.t_s):
             frame = k + 1
             xy = result.measured_xy_m[k]
             seen = bool(np.all(np.isfinite(xy)))
-            log.write("position", {"frame": frame, "capture_s": round(float(t_s), 6),
-                                   "status": "OK" if seen else "NO_OBJECT",
-                                   "xy_m": [float(xy[0]), float(xy[1])] if seen else None, "corners_seen": [0, 1, 2, 3]})
+            log.write(
+                "position",
+                {
+                    "frame": frame,
+                    "capture_s": round(float(t_s), 6),
+                    "status": "OK" if seen else "NO_OBJECT",
+                    "xy_m": [float(xy[0]), float(xy[1])] if seen else None,
+                    "corners_seen": [0, 1, 2, 3],
+                },
+            )
             if np.all(np.isfinite(result.command_m[k])):
-                log.write("telemetry", {"position_frame": frame, "state": int(result.state[k]),
-                                        "tilt_zx": float(result.tilt_deg[k, 0]), "tilt_zy": float(result.tilt_deg[k, 1]),
-                                        "command": [float(v) for v in result.command_m[k]]})
+                log.write(
+                    "telemetry",
+                    {
+                        "position_frame": frame,
+                        "state": int(result.state[k]),
+                        "tilt_zx": float(result.tilt_deg[k, 0]),
+                        "tilt_zy": float(result.tilt_deg[k, 1]),
+                        "command": [float(v) for v in result.command_m[k]],
+                    },
+                )
         log.write("end", {"outcome": "fell off" if result.fell_off else "timeout"})
     finally:
         log.close()

@@ -1,4 +1,5 @@
 """MJCF for the rig (the model file, Menagerie-style) and its scene (floor, light, overhead camera, object, markers)."""
+
 from __future__ import annotations
 
 import hashlib
@@ -12,22 +13,22 @@ from .objects import ASSETS
 from .rig import Rig
 
 MODEL_FILE = "manta_ray.xml"
-FABRIC = "fabric"             # flexcomp name; its vertex bodies are fabric_<id>
-OBJECT = "object"             # the object's body and geom
+FABRIC = "fabric"  # flexcomp name; its vertex bodies are fabric_<id>
+OBJECT = "object"  # the object's body and geom
 # The object's six dofs: slides along world x, y, z [m], then a ball joint (its rotation, which alone is damped).
 # MuJoCo steps them bit for bit as it steps a free joint (tests/test_sim_model.py), whose MJCF damping would
 # also brake the object's fall and slide; qpos and qvel are laid out as a free joint's.
 OBJECT_SLIDES = ("object_x", "object_y", "object_z")
 OBJECT_TURN = "object_turn"
-REST_KEY = "rest"             # the scene's keyframe, filled by model.load(): fabric settled, commands zero, object parked
-MARKER = "marker"             # site on top of the object: the point the overhead camera tracks
-OVERHEAD = "overhead"         # the scene's camera looking straight down at the fabric
+REST_KEY = "rest"  # the scene's keyframe, filled by model.load(): fabric settled, commands zero, object parked
+MARKER = "marker"  # site on top of the object: the point the overhead camera tracks
+OVERHEAD = "overhead"  # the scene's camera looking straight down at the fabric
 N_ACTUATORS = 4
 # Corner signs (x, y) of actuators 0..3, PROTOCOL.md §5: 0 (-x,-y), 1 (+x,-y), 2 (-x,+y), 3 (+x,+y).
 CORNERS = ((-1, -1), (1, -1), (-1, 1), (1, 1))
-POST_OFFSET_M = 0.03           # [m] visual frame posts stand this far outboard of each corner (no collisions)
+POST_OFFSET_M = 0.03  # [m] visual frame posts stand this far outboard of each corner (no collisions)
 CARRIAGE_HALF_SIZE_M = (0.02, 0.02, 0.03)  # [m] visual carriage block (no collisions; mass from the rig)
-OFFSCREEN_PX = (1920, 1920)    # [px] offscreen framebuffer: the largest image the renderer can make
+OFFSCREEN_PX = (1920, 1920)  # [px] offscreen framebuffer: the largest image the renderer can make
 
 
 def _v(*values: float) -> str:
@@ -48,7 +49,9 @@ def corner_vertex(resolution: int, actuator: int) -> int:
     return ix * resolution + iy
 
 
-def clamped_vertices(resolution: int, spacing_m: float, clamp_m: float, actuator: int) -> list[tuple[int, float, float]]:
+def clamped_vertices(
+    resolution: int, spacing_m: float, clamp_m: float, actuator: int
+) -> list[tuple[int, float, float]]:
     """(vertex id, x, y [m] relative to the carriage) of the edge vertices the corner's clamp holds, corner excluded.
 
     The clamp holds clamp_m of both edges from the corner straight, at the fabric's own spacing, pointing along
@@ -61,8 +64,8 @@ def clamped_vertices(resolution: int, spacing_m: float, clamp_m: float, actuator
             break
         ix0 = 0 if sx < 0 else resolution - 1
         iy0 = 0 if sy < 0 else resolution - 1
-        held.append(((ix0 - sx * k) * resolution + iy0, -sx * k * spacing_m, 0.0))   # along the x edge
-        held.append((ix0 * resolution + iy0 - sy * k, 0.0, -sy * k * spacing_m))     # along the y edge
+        held.append(((ix0 - sx * k) * resolution + iy0, -sx * k * spacing_m, 0.0))  # along the x edge
+        held.append((ix0 * resolution + iy0 - sy * k, 0.0, -sy * k * spacing_m))  # along the y edge
     return held
 
 
@@ -106,27 +109,36 @@ def model_xml(rig: Rig) -> str:
     for i, (sx, sy) in enumerate(CORNERS):
         x, y = sx * hx, sy * hy
         px, py = sx * (hx + POST_OFFSET_M), sy * (hy + POST_OFFSET_M)
-        posts.append(f'    <geom class="frame" type="box" size="0.01 0.01 {post_top / 2:.6g}" '
-                     f'pos="{_v(px, py, post_top / 2)}"/>')
+        posts.append(
+            f'    <geom class="frame" type="box" size="0.01 0.01 {post_top / 2:.6g}" pos="{_v(px, py, post_top / 2)}"/>'
+        )
         carriages.append(
             f'    <body name="carriage{i}" pos="{_v(x, y, z0)}" gravcomp="1">\n'
             f'      <joint name="lift{i}" type="slide" axis="0 0 -1" range="{_v(-a.range_m, a.range_m)}"/>\n'
             f'      <inertial pos="0 0 0" mass="{_v(a.carriage_mass_kg)}" diaginertia="1e-4 1e-4 1e-4"/>\n'
             f'      <geom class="carriage" type="box" size="{_v(*CARRIAGE_HALF_SIZE_M)}" '
             f'pos="{_v(sx * CARRIAGE_HALF_SIZE_M[0], sy * CARRIAGE_HALF_SIZE_M[1], 0)}"/>\n'
-            f'    </body>')
-        welds.append(f'    <weld name="corner{i}" body1="carriage{i}" '
-                     f'body2="{FABRIC}_{corner_vertex(fab.resolution, i)}" relpose="0 0 0 1 0 0 0" '
-                     f'solref="{_v(*fab.corner_weld_solref)}"/>')
+            f"    </body>"
+        )
+        welds.append(
+            f'    <weld name="corner{i}" body1="carriage{i}" '
+            f'body2="{FABRIC}_{corner_vertex(fab.resolution, i)}" relpose="0 0 0 1 0 0 0" '
+            f'solref="{_v(*fab.corner_weld_solref)}"/>'
+        )
         for k, (vertex, dx, dy) in enumerate(clamped_vertices(fab.resolution, fab.spacing_m, fab.corner_clamp_m, i)):
-            welds.append(f'    <weld name="clamp{i}_{k}" body1="carriage{i}" body2="{FABRIC}_{vertex}" '
-                         f'relpose="{_v(dx, dy, 0)} 1 0 0 0" solref="{_v(*fab.corner_weld_solref)}"/>')
+            welds.append(
+                f'    <weld name="clamp{i}_{k}" body1="carriage{i}" body2="{FABRIC}_{vertex}" '
+                f'relpose="{_v(dx, dy, 0)} 1 0 0 0" solref="{_v(*fab.corner_weld_solref)}"/>'
+            )
         actuators.append(
             f'    <pid name="actuator{i}" joint="lift{i}" input="pos" kp="{_v(a.kp_n_per_m)}" '
             f'dampratio="{_v(a.damping_ratio)}" slewmax="{_v(a.speed_m_per_s)}" '
-            f'ctrlrange="{_v(-a.range_m, a.range_m)}"/>')
-    rails = [f'    <geom class="frame" type="box" size="{_v(hx + 0.04, 0.01, 0.01)}" pos="{_v(0, sy * (hy + POST_OFFSET_M), post_top)}"/>'
-             for sy in (-1, 1)]
+            f'ctrlrange="{_v(-a.range_m, a.range_m)}"/>'
+        )
+    rails = [
+        f'    <geom class="frame" type="box" size="{_v(hx + 0.04, 0.01, 0.01)}" pos="{_v(0, sy * (hy + POST_OFFSET_M), post_top)}"/>'
+        for sy in (-1, 1)
+    ]
     nl = "\n"
     return f"""<!-- MANTA-RAY rig, generated by mantaray.sim.mjcf from sim/rig.py: do not edit by hand. -->
 <mujoco model="manta_ray">
@@ -193,20 +205,22 @@ def rolling_damping(rig: Rig) -> float:
     alone = mujoco.MjSpec.from_string(f"""<mujoco><compiler angle="radian" meshdir="{ASSETS}"/>
   <asset>{_mesh_asset(rig)}</asset><worldbody>{_object_body(rig)}</worldbody></mujoco>""").compile()
     body = alone.body(OBJECT).id
-    about_contact = float(np.mean(alone.body_inertia[body])) + alone.body_mass[body] * rig.object.half_height_m ** 2
+    about_contact = float(np.mean(alone.body_inertia[body])) + alone.body_mass[body] * rig.object.half_height_m**2
     return rig.contact.rolling_damping_per_s * about_contact
 
 
 def _object_xml(rig: Rig, marker_geom: str = "") -> tuple[str, str]:
     """(asset lines, body) for the rig's object; qpos0 puts it at the world's origin, place_object() puts it on the fabric."""
-    joints = "".join(f'      <joint name="{name}" type="slide" axis="{_v(*axis)}"/>\n'
-                     for name, axis in zip(OBJECT_SLIDES, np.eye(3), strict=True))
+    joints = "".join(
+        f'      <joint name="{name}" type="slide" axis="{_v(*axis)}"/>\n'
+        for name, axis in zip(OBJECT_SLIDES, np.eye(3), strict=True)
+    )
     joints += f'      <joint name="{OBJECT_TURN}" type="ball" damping="{_exact(rolling_damping(rig))}"/>\n'
     return _mesh_asset(rig), _object_body(rig, joints, marker_geom)
 
 
-MARKER_TEXTURE_PX = 256        # [px] side of each ArUco texture (a multiple of the marker's 8 cells with its quiet zone)
-MARKER_PLATE_M = 0.001         # [m] half thickness of a marker plate (visual only)
+MARKER_TEXTURE_PX = 256  # [px] side of each ArUco texture (a multiple of the marker's 8 cells with its quiet zone)
+MARKER_PLATE_M = 0.001  # [m] half thickness of a marker plate (visual only)
 
 
 def _marker_xml(rig: Rig) -> tuple[str, str, str]:
@@ -217,20 +231,30 @@ def _marker_xml(rig: Rig) -> tuple[str, str, str]:
 
     layout = MarkerLayout()
     ids = [*layout.corner_ids, layout.object_id]
-    assets = "\n".join(f'    <texture name="aruco{i}" type="2d" file="aruco_{i}.png"/>\n'
-                       f'    <material name="aruco{i}" texture="aruco{i}" texrepeat="1 1" specular="0" shininess="0"/>'
-                       for i in ids)
+    assets = "\n".join(
+        f'    <texture name="aruco{i}" type="2d" file="aruco_{i}.png"/>\n'
+        f'    <material name="aruco{i}" texture="aruco{i}" texrepeat="1 1" specular="0" shininess="0"/>'
+        for i in ids
+    )
     half_corner = layout.corner_size_m * quiet_scale(layout) / 2
     z0 = rig.frame.z0_m
-    world = "\n".join(f'    <geom name="corner_marker{k}" type="box" size="{_v(half_corner, half_corner, MARKER_PLATE_M)}" '
-                      f'pos="{_v(x, y, z0 - MARKER_PLATE_M)}" material="aruco{i}" contype="0" conaffinity="0"/>'
-                      for k, (i, (x, y)) in enumerate(zip(layout.corner_ids, layout.corner_centres_m(), strict=True))
-                      if rig.camera.corner_markers)
+    world = "\n".join(
+        f'    <geom name="corner_marker{k}" type="box" size="{_v(half_corner, half_corner, MARKER_PLATE_M)}" '
+        f'pos="{_v(x, y, z0 - MARKER_PLATE_M)}" material="aruco{i}" contype="0" conaffinity="0"/>'
+        for k, (i, (x, y)) in enumerate(zip(layout.corner_ids, layout.corner_centres_m(), strict=True))
+        if rig.camera.corner_markers
+    )
     half_object = layout.object_size_m * quiet_scale(layout) / 2
     top = rig.object.half_height_m
-    on_object = (f'      <geom name="object_marker" type="box" size="{_v(half_object, half_object, MARKER_PLATE_M)}" '
-                 f'pos="{_v(0, 0, top + MARKER_PLATE_M)}" material="aruco{layout.object_id}" mass="0" contype="0" '
-                 f'conaffinity="0"/>\n') if rig.camera.object_marker else ""  # on the object's top
+    on_object = (
+        (
+            f'      <geom name="object_marker" type="box" size="{_v(half_object, half_object, MARKER_PLATE_M)}" '
+            f'pos="{_v(0, 0, top + MARKER_PLATE_M)}" material="aruco{layout.object_id}" mass="0" contype="0" '
+            f'conaffinity="0"/>\n'
+        )
+        if rig.camera.object_marker
+        else ""
+    )  # on the object's top
     return assets, world, on_object
 
 

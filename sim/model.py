@@ -1,4 +1,5 @@
 """The rig's MuJoCo model as it runs: compiled from the MJCF files mjcf.py writes, stepped, commanded, and asked where things are."""
+
 from __future__ import annotations
 
 import tempfile
@@ -9,13 +10,13 @@ import numpy as np
 from .mjcf import FABRIC, MARKER, N_ACTUATORS, OBJECT, OBJECT_SLIDES, REST_KEY, write_model
 from .rig import FallRule, Rig
 
-ANY_FALL = FallRule()   # the fall rule's defaults, for callers that pass no rig's
+ANY_FALL = FallRule()  # the fall rule's defaults, for callers that pass no rig's
 
-AT_REST_SPEED_M_PER_S = 0.01   # [m/s] object linear speed below which it counts as at rest ...
-AT_REST_SPIN_RAD_PER_S = 0.5   # [rad/s] ... with its angular speed below this ...
-AT_REST_HOLD_S = 0.2           # [s] ... for this long without a break
-DROP_CLEARANCE_M = 0.002       # [m] gap left under the object when it is placed above the fabric
-PARK_OFFSET_M = 0.35           # [m] the object waits on the floor this far beyond the +x edge while the fabric settles
+AT_REST_SPEED_M_PER_S = 0.01  # [m/s] object linear speed below which it counts as at rest ...
+AT_REST_SPIN_RAD_PER_S = 0.5  # [rad/s] ... with its angular speed below this ...
+AT_REST_HOLD_S = 0.2  # [s] ... for this long without a break
+DROP_CLEARANCE_M = 0.002  # [m] gap left under the object when it is placed above the fabric
+PARK_OFFSET_M = 0.35  # [m] the object waits on the floor this far beyond the +x edge while the fabric settles
 
 
 class SimulationUnstable(RuntimeError):
@@ -23,10 +24,9 @@ class SimulationUnstable(RuntimeError):
 
     def __init__(self, when: str, why: str = "") -> None:
         self.when, self.why = when, why
-        super().__init__(f"{when}; the rig's parameters are too stiff for the timestep: "
-                         f"{why or 'see sim/README.md'}")
+        super().__init__(f"{when}; the rig's parameters are too stiff for the timestep: {why or 'see sim/README.md'}")
 
-    def __reduce__(self):              # across processes (a worker's trial) with its message once
+    def __reduce__(self):  # across processes (a worker's trial) with its message once
         return type(self), (self.when, self.why)
 
 
@@ -51,11 +51,11 @@ def load(rig: Rig, fabric_settle_s: float = 2.0) -> tuple[mujoco.MjModel, mujoco
     data = mujoco.MjData(model)
     qadr = _object_qpos_adr(model)
     park_x_m = rig.frame.size_x_m / 2 + PARK_OFFSET_M
-    data.qpos[qadr:qadr + 7] = [park_x_m, 0.0, rig.object.half_height_m + 0.01, 1, 0, 0, 0]  # dropped 1 cm
-    diverged = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]   # a live view of MuJoCo's counter
+    data.qpos[qadr : qadr + 7] = [park_x_m, 0.0, rig.object.half_height_m + 0.01, 1, 0, 0, 0]  # dropped 1 cm
+    diverged = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]  # a live view of MuJoCo's counter
     for _ in range(round(fabric_settle_s / model.opt.timestep)):
         mujoco.mj_step(model, data)
-        if diverged.number:            # MuJoCo restarts a diverged state from zero: nothing after it is valid
+        if diverged.number:  # MuJoCo restarts a diverged state from zero: nothing after it is valid
             raise SimulationUnstable("the physics diverged while the bare fabric settled", rig.stiffest())
     key = model.key(REST_KEY).id
     model.key_time[key] = 0.0
@@ -72,7 +72,7 @@ def step_until(model: mujoco.MjModel, data: mujoco.MjData, until_s: float, after
     """Step until data.time is within half a step of until_s [s, physics time], calling after_step(data) after each
     step; raise SimulationUnstable at the step MuJoCo reports a diverged state (it resets it to time 0, so the loop
     would otherwise start over)."""
-    diverged = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]   # a live view of MuJoCo's counter
+    diverged = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]  # a live view of MuJoCo's counter
     before = diverged.number
     end = until_s - 0.5 * model.opt.timestep
     while data.time < end:
@@ -99,7 +99,7 @@ def _flex_id(model: mujoco.MjModel) -> int:
 def fabric_vertices(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
     """The fabric's vertices now: (x, y, z) [m, world frame; x, y as the fabric frame's], one row each (a view)."""
     flex = _flex_id(model)
-    return data.flexvert_xpos[model.flex_vertadr[flex]:model.flex_vertadr[flex] + model.flex_vertnum[flex]]
+    return data.flexvert_xpos[model.flex_vertadr[flex] : model.flex_vertadr[flex] + model.flex_vertnum[flex]]
 
 
 def fabric_height(model: mujoco.MjModel, data: mujoco.MjData, x_m: float, y_m: float) -> float:
@@ -107,7 +107,7 @@ def fabric_height(model: mujoco.MjModel, data: mujoco.MjData, x_m: float, y_m: f
     flex = _flex_id(model)
     v = fabric_vertices(model, data)
     adr, num = model.flex_elemdataadr[flex], model.flex_elemnum[flex]
-    tri = v[model.flex_elem[adr:adr + 3 * num].reshape(-1, 3)]
+    tri = v[model.flex_elem[adr : adr + 3 * num].reshape(-1, 3)]
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
     det = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1])
     ok = np.abs(det) > 1e-12
@@ -134,7 +134,7 @@ def object_xy(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
 def object_speed(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[float, float]:
     """(linear speed [m/s] of the object's origin, angular speed [rad/s])."""
     dadr = _object_dof_adr(model)
-    return float(np.linalg.norm(data.qvel[dadr:dadr + 3])), float(np.linalg.norm(data.qvel[dadr + 3:dadr + 6]))
+    return float(np.linalg.norm(data.qvel[dadr : dadr + 3])), float(np.linalg.norm(data.qvel[dadr + 3 : dadr + 6]))
 
 
 def fell_off(model: mujoco.MjModel, data: mujoco.MjData, rule: FallRule = ANY_FALL) -> bool:
@@ -150,8 +150,12 @@ def fell_off(model: mujoco.MjModel, data: mujoco.MjData, rule: FallRule = ANY_FA
     x, y = object_xy(model, data)
     z = data.body(OBJECT).xpos[2]
     lowest = fabric_vertices(model, data)[:, 2].min()
-    return bool(abs(x) > half[0] + rule.outside_margin_m or abs(y) > half[1] + rule.outside_margin_m
-                or z < lowest - rule.below_fabric_m or z < rule.floor_z_m)
+    return bool(
+        abs(x) > half[0] + rule.outside_margin_m
+        or abs(y) > half[1] + rule.outside_margin_m
+        or z < lowest - rule.below_fabric_m
+        or z < rule.floor_z_m
+    )
 
 
 class ObjectNotSettled(RuntimeError):
@@ -165,12 +169,20 @@ def drop_object(model: mujoco.MjModel, data: mujoco.MjData, x_m: float, y_m: flo
     half_height_m = model.site(MARKER).pos[2]
     z = fabric_height(model, data, x_m, y_m) + half_height_m + DROP_CLEARANCE_M
     qadr = _object_qpos_adr(model)
-    data.qpos[qadr:qadr + 7] = [x_m, y_m, z, np.cos(yaw_rad / 2), 0.0, 0.0, np.sin(yaw_rad / 2)]
+    data.qpos[qadr : qadr + 7] = [x_m, y_m, z, np.cos(yaw_rad / 2), 0.0, 0.0, np.sin(yaw_rad / 2)]
     mujoco.mj_forward(model, data)
 
 
-def place_object(model: mujoco.MjModel, data: mujoco.MjData, x_m: float, y_m: float, *,
-                 yaw_rad: float = 0.0, settle_max_s: float = 3.0, rule: FallRule = ANY_FALL) -> float:
+def place_object(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    x_m: float,
+    y_m: float,
+    *,
+    yaw_rad: float = 0.0,
+    settle_max_s: float = 3.0,
+    rule: FallRule = ANY_FALL,
+) -> float:
     """drop_object() at (x, y), then step until the object is at rest.
 
     Returns the settling time [s] (simulated). At rest: linear speed below AT_REST_SPEED_M_PER_S and

@@ -1,4 +1,5 @@
 """Paired comparisons of two runs of the same trials: McNemar's exact test on a yes/no outcome, a bootstrap on a number."""
+
 from __future__ import annotations
 
 import math
@@ -7,21 +8,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
-BOOTSTRAP_DRAWS = 20000     # resamples of the paired differences behind each interval (50 beyond a 0.25 % tail)
-MIN_BOOTSTRAP_N = 20        # fewer differences than this give no interval: a percentile bootstrap of a handful
-                            # never reaches past their extremes, so it would call any one-signed handful a bias
+BOOTSTRAP_DRAWS = 20000  # resamples of the paired differences behind each interval (50 beyond a 0.25 % tail)
+MIN_BOOTSTRAP_N = 20  # fewer differences than this give no interval: a percentile bootstrap of a handful
+# never reaches past their extremes, so it would call any one-signed handful a bias
 
 
 def binomial_tail(k: int, n: int) -> float:
     """P(X >= k) for X ~ Binomial(n, 1/2): the chance of k or more heads in n fair tosses."""
     if k <= 0:
         return 1.0
-    return math.fsum(math.comb(n, i) for i in range(k, n + 1)) / 2.0 ** n
+    return math.fsum(math.comb(n, i) for i in range(k, n + 1)) / 2.0**n
 
 
 @dataclass(frozen=True)
 class Discordance:
     """A yes/no outcome on paired trials: how often it holds in a alone and in b alone, and McNemar's exact test."""
+
     pairs: int
     only_a: int
     only_b: int
@@ -44,8 +46,13 @@ class Discordance:
         return binomial_tail(self.only_a, self.flips)
 
     def to_json(self) -> dict:
-        return {"pairs": self.pairs, "only_a": self.only_a, "only_b": self.only_b, "flips": self.flips,
-                "p": round(self.p_two_sided, 6)}
+        return {
+            "pairs": self.pairs,
+            "only_a": self.only_a,
+            "only_b": self.only_b,
+            "flips": self.flips,
+            "p": round(self.p_two_sided, 6),
+        }
 
 
 def discordance(a: Sequence[bool], b: Sequence[bool]) -> Discordance:
@@ -59,14 +66,19 @@ def discordance(a: Sequence[bool], b: Sequence[bool]) -> Discordance:
 @dataclass(frozen=True)
 class MeanInterval:
     """The mean of paired differences with a bootstrap percentile interval."""
+
     n: int
     mean: float
     low: float
     high: float
 
     def to_json(self, digits: int = 5) -> dict:
-        return {"n": self.n, "mean": _round(self.mean, digits), "low": _round(self.low, digits),
-                "high": _round(self.high, digits)}
+        return {
+            "n": self.n,
+            "mean": _round(self.mean, digits),
+            "low": _round(self.low, digits),
+            "high": _round(self.high, digits),
+        }
 
 
 def mean_interval(differences: Sequence[float], level: float = 0.95, seed: int = 0) -> MeanInterval:
@@ -80,8 +92,9 @@ def mean_interval(differences: Sequence[float], level: float = 0.95, seed: int =
     rng = np.random.default_rng(seed)
     means = d[rng.integers(0, d.size, size=(BOOTSTRAP_DRAWS, d.size))].mean(axis=1)
     tail = (1.0 - level) / 2.0
-    return MeanInterval(int(d.size), float(d.mean()), float(np.quantile(means, tail)),
-                        float(np.quantile(means, 1.0 - tail)))
+    return MeanInterval(
+        int(d.size), float(d.mean()), float(np.quantile(means, tail)), float(np.quantile(means, 1.0 - tail))
+    )
 
 
 def _round(x: float, digits: int) -> float | None:

@@ -1,4 +1,5 @@
 """The declared parameter space of the simulated rig (sim/plant.toml): every value the paper does not give, its range and source."""
+
 from __future__ import annotations
 
 import math
@@ -11,7 +12,7 @@ from pathlib import Path
 TABLE = Path(__file__).resolve().parent / "plant.toml"
 SCALES = ("linear", "log", "one_minus_log")
 KINDS = ("physical", "structure", "reading")
-LOG_FROM_ZERO_DECADES = 4      # a log-scaled range that starts at 0 is searched over [high / 1e4, high]
+LOG_FROM_ZERO_DECADES = 4  # a log-scaled range that starts at 0 is searched over [high / 1e4, high]
 _KEY = re.compile(r"^(?P<section>[a-z_]+)\.(?P<field>[a-z_0-9]+)(\[(?P<index>\d)\])?$")
 
 
@@ -22,18 +23,19 @@ class ParameterError(ValueError):
 @dataclass(frozen=True)
 class Parameter:
     """One declared quantity: the Rig field (or camera setting, or reading) it sets, with its range and source."""
-    key: str                      # section.field or section.field[i]
-    value: float | str            # the default: the polyester plant
-    low: float | None             # inclusive range; None for a reading with choices
+
+    key: str  # section.field or section.field[i]
+    value: float | str  # the default: the polyester plant
+    low: float | None  # inclusive range; None for a reading with choices
     high: float | None
-    choices: tuple[str, ...]      # a reading's choices; () for a number
+    choices: tuple[str, ...]  # a reading's choices; () for a number
     scale: str
     unit: str
     kind: str
     search: bool
     source: str
     reason: str
-    mujoco: float | None          # MuJoCo's own default, where it has one
+    mujoco: float | None  # MuJoCo's own default, where it has one
 
     @property
     def section(self) -> str:
@@ -59,14 +61,16 @@ class Parameter:
         except (TypeError, ValueError):
             raise ParameterError(f"{self.key} must be a number [{self.unit}], got {value!r}") from None
         if not (math.isfinite(number) and self.low <= number <= self.high):
-            raise ParameterError(f"{self.key} = {value!r} is outside its declared range "
-                                 f"[{self.low:g}, {self.high:g}] {self.unit} (sim/plant.toml: {self.reason})")
+            raise ParameterError(
+                f"{self.key} = {value!r} is outside its declared range "
+                f"[{self.low:g}, {self.high:g}] {self.unit} (sim/plant.toml: {self.reason})"
+            )
         return number
 
     def search_bounds(self) -> tuple[float, float]:
         """The interval the search samples, in the parameter's own unit (a log range from 0 starts higher)."""
         if self.scale == "log" and self.low <= 0:
-            return self.high / 10 ** LOG_FROM_ZERO_DECADES, self.high
+            return self.high / 10**LOG_FROM_ZERO_DECADES, self.high
         return self.low, self.high
 
 
@@ -75,10 +79,20 @@ def _parameter(key: str, entry: dict) -> Parameter:
         raise ValueError(f"{TABLE}: parameter key {key!r} is not section.field or section.field[i]")
     span = entry["range"]
     choices = tuple(span) if isinstance(entry["value"], str) else ()
-    p = Parameter(key=key, value=entry["value"], low=None if choices else float(span[0]),
-                  high=None if choices else float(span[1]), choices=choices, scale=entry.get("scale", "linear"),
-                  unit=entry.get("unit", ""), kind=entry["kind"], search=bool(entry["search"]),
-                  source=entry["source"], reason=entry["reason"], mujoco=entry.get("mujoco"))
+    p = Parameter(
+        key=key,
+        value=entry["value"],
+        low=None if choices else float(span[0]),
+        high=None if choices else float(span[1]),
+        choices=choices,
+        scale=entry.get("scale", "linear"),
+        unit=entry.get("unit", ""),
+        kind=entry["kind"],
+        search=bool(entry["search"]),
+        source=entry["source"],
+        reason=entry["reason"],
+        mujoco=entry.get("mujoco"),
+    )
     if p.scale not in SCALES or p.kind not in KINDS:
         raise ValueError(f"{TABLE}: {key}: scale must be one of {SCALES}, kind one of {KINDS}")
     p.check(p.value)
@@ -93,8 +107,9 @@ def _table() -> tuple[dict[str, Parameter], dict[str, dict[str, float | str]]]:
     parameters = {key: _parameter(key, entry) for key, entry in data["parameter"].items()}
     plants = {}
     for name, values in data.get("plant", {}).items():
-        plants[name] = {key: lookup(key, parameters).check(value) for key, value in values.items()
-                        if not key.startswith("_")}
+        plants[name] = {
+            key: lookup(key, parameters).check(value) for key, value in values.items() if not key.startswith("_")
+        }
     return parameters, plants
 
 
@@ -103,8 +118,9 @@ def lookup(key: str, parameters: dict[str, Parameter] | None = None) -> Paramete
     try:
         return parameters[key]
     except KeyError:
-        raise ParameterError(f"{key!r} is not a declared parameter of the plant; the declared ones are: "
-                             f"{', '.join(parameters)}") from None
+        raise ParameterError(
+            f"{key!r} is not a declared parameter of the plant; the declared ones are: {', '.join(parameters)}"
+        ) from None
 
 
 def parameters() -> dict[str, Parameter]:
@@ -133,9 +149,12 @@ def markdown_table() -> str:
     """The table for sim/README.md (generated: the README never restates a value by hand). "value" is the default,
     the polyester plant's; each other named plant has a column with its own value where it sets one."""
     others = [name for name in plant_names() if plant_values(name)]
-    rows = ["| parameter | value | " + "".join(f"`{name}` plant | " for name in others)
-            + "range | MuJoCo's default | searched | kind | source; why this range |",
-            "|---|---|" + "---|" * len(others) + "---|---|---|---|---|"]
+    rows = [
+        "| parameter | value | "
+        + "".join(f"`{name}` plant | " for name in others)
+        + "range | MuJoCo's default | searched | kind | source; why this range |",
+        "|---|---|" + "---|" * len(others) + "---|---|---|---|---|",
+    ]
     for p in parameters().values():
         unit = "" if p.unit in ("", "-") else f" {p.unit}"
 
@@ -145,13 +164,17 @@ def markdown_table() -> str:
         span = " / ".join(p.choices) if p.choices else f"{p.low:g} – {p.high:g}{unit}"
         mujoco = "" if p.mujoco is None else f"{p.mujoco:g}"
         named = "".join(f"{shown(plant_values(n)[p.key]) if p.key in plant_values(n) else ''} | " for n in others)
-        rows.append(f"| `{p.key}` | {shown(p.value)} | {named}{span} | {mujoco} | {'yes' if p.search else 'no'} | "
-                    f"{p.kind} | {p.source}; {p.reason} |")
+        rows.append(
+            f"| `{p.key}` | {shown(p.value)} | {named}{span} | {mujoco} | {'yes' if p.search else 'no'} | "
+            f"{p.kind} | {p.source}; {p.reason} |"
+        )
     return "\n".join(rows)
 
 
 README = Path(__file__).resolve().parent / "README.md"
-README_BEGIN = "<!-- parameters: begin (generated from sim/plant.toml by python3 -m mantaray.sim.parameters --write-readme) -->"
+README_BEGIN = (
+    "<!-- parameters: begin (generated from sim/plant.toml by python3 -m mantaray.sim.parameters --write-readme) -->"
+)
 README_END = "<!-- parameters: end -->"
 
 
@@ -164,6 +187,7 @@ def write_readme() -> None:
 
 if __name__ == "__main__":
     import sys
+
     if sys.argv[1:] != ["--write-readme"]:
         sys.exit("usage: python3 -m mantaray.sim.parameters --write-readme")
     write_readme()

@@ -1,4 +1,5 @@
 """A plant: one point of the declared parameter space (sim/plant.toml), named or not, as the Rig, camera and readings it gives."""
+
 from __future__ import annotations
 
 import dataclasses
@@ -8,26 +9,31 @@ from dataclasses import dataclass, field
 from . import parameters as P
 from .rig import Rig
 
-DEFAULT_PLANT = "polyester"     # the physically calibrated rig of sim/README.md
+DEFAULT_PLANT = "polyester"  # the physically calibrated rig of sim/README.md
 
 
 def plant_for(settings, given: str | None) -> str:
     """The plant a command runs settings on: --plant (given), else the one the settings file was tuned for, else the
     default. A --plant other than the file's is refused (ValueError): the file's gains are that plant's reading."""
     if given is not None and settings.plant is not None and given != settings.plant:
-        raise ValueError(f"the settings were tuned for the {settings.plant} plant, not {given}: their gains are the "
-                         f"firmware's numbers for that plant (drop --plant, or give --plant {settings.plant})")
+        raise ValueError(
+            f"the settings were tuned for the {settings.plant} plant, not {given}: their gains are the "
+            f"firmware's numbers for that plant (drop --plant, or give --plant {settings.plant})"
+        )
     if settings.plant is not None and settings.plant not in P.plant_names():
-        raise ValueError(f"the settings were tuned for a plant {settings.plant!r} that sim/plant.toml does not "
-                         f"declare; the plants are: {', '.join(P.plant_names())}")
+        raise ValueError(
+            f"the settings were tuned for a plant {settings.plant!r} that sim/plant.toml does not "
+            f"declare; the plants are: {', '.join(P.plant_names())}"
+        )
     return given or settings.plant or DEFAULT_PLANT
 
 
 @dataclass(frozen=True)
 class Plant:
     """A named plant with values set over it; every value is checked against its declared range."""
+
     name: str = DEFAULT_PLANT
-    overrides: tuple[tuple[str, float | str], ...] = ()     # (key, value) set over the named plant, in order
+    overrides: tuple[tuple[str, float | str], ...] = ()  # (key, value) set over the named plant, in order
     values: dict[str, float | str] = field(init=False, compare=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -41,7 +47,9 @@ class Plant:
         """This plant with more values set (keys as in sim/plant.toml); refuses an undeclared key or a value out of range."""
         return Plant(self.name, self.overrides + tuple((k, P.lookup(k).check(v)) for k, v in mapping.items()))
 
-    def rig(self, object_name: str = "sphere", *, resolution: int | None = None, timestep_s: float | None = None) -> Rig:
+    def rig(
+        self, object_name: str = "sphere", *, resolution: int | None = None, timestep_s: float | None = None
+    ) -> Rig:
         """The Rig of this plant carrying an object; resolution and timestep choose the physics' fidelity (not the plant)."""
         rig = Rig().with_object(object_name)
         for key, value in self.values.items():
@@ -59,9 +67,11 @@ class Plant:
         """The camera model (sim/bridge.py Tracking) of this plant; kwargs set the rest (noise, drops, vision) or
         override its rate and latency (a None keeps the plant's)."""
         from .bridge import Tracking
+
         given = {k: v for k, v in kwargs.items() if v is not None}
-        return Tracking(**{"rate_hz": self.values["tracking.rate_hz"], "latency_s": self.values["tracking.latency_s"],
-                           **given})
+        return Tracking(
+            **{"rate_hz": self.values["tracking.rate_hz"], "latency_s": self.values["tracking.latency_s"], **given}
+        )
 
     @property
     def gain_scale(self) -> float:

@@ -1,4 +1,5 @@
 """Progress of a long run: a bar with ETA on a terminal, plain timestamped lines when the output goes to a log."""
+
 from __future__ import annotations
 
 import sys
@@ -12,9 +13,17 @@ class Progress:
     Counts are whole (trials, candidates) or, with a float total, a quantity such as simulated seconds; units is
     the plural the lines print (unit + "s" unless given)."""
 
-    def __init__(self, total: float, initial: float = 0, unit: str = "trial", label: str = "",
-                 stream: TextIO | None = None, line_every_s: float = 30.0, enabled: bool = True,
-                 units: str | None = None) -> None:
+    def __init__(
+        self,
+        total: float,
+        initial: float = 0,
+        unit: str = "trial",
+        label: str = "",
+        stream: TextIO | None = None,
+        line_every_s: float = 30.0,
+        enabled: bool = True,
+        units: str | None = None,
+    ) -> None:
         self.total, self.done, self.unit, self.label = total, initial, unit, label
         self.units = units or f"{unit}s"
         self.stream = stream or sys.stderr
@@ -23,8 +32,10 @@ class Progress:
         self._bar = None
         if enabled and self.stream.isatty():
             from tqdm import tqdm
-            self._bar = tqdm(total=total, initial=initial, unit=unit, desc=label or None, file=self.stream,
-                             smoothing=0.05)
+
+            self._bar = tqdm(
+                total=total, initial=initial, unit=unit, desc=label or None, file=self.stream, smoothing=0.05
+            )
 
     def eta_s(self) -> float | None:
         """[s] seconds left at the rate of this run so far (None before anything finished in it)."""
@@ -47,8 +58,12 @@ class Progress:
             self._last_line = now
             eta = self.eta_s()
             left = "" if eta is None else f", about {_duration(eta)} left"
-            print(f"{time.strftime('%H:%M:%S')} {self.label + ': ' if self.label else ''}{_count(self.done)}/"
-                  f"{_count(self.total)} {self.units}{left}{'; ' + note if note else ''}", file=self.stream, flush=True)
+            print(
+                f"{time.strftime('%H:%M:%S')} {self.label + ': ' if self.label else ''}{_count(self.done)}/"
+                f"{_count(self.total)} {self.units}{left}{'; ' + note if note else ''}",
+                file=self.stream,
+                flush=True,
+            )
 
     def close(self) -> None:
         if self._bar is not None:

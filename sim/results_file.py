@@ -5,6 +5,7 @@ where it stopped and loses nothing. A run with more trials per cell, or more cel
 trials already there and adds the rest (a quick N = 3 map first, topped up to the paper's N = 10 later). One
 process at a time continues a file: a second run on it would do the same trials again and write each line twice.
 """
+
 from __future__ import annotations
 
 import atexit
@@ -29,7 +30,7 @@ class ResultsFileBusy(Exception):
     """Another process is continuing the same results file; the message names it."""
 
 
-_HELD: dict[Path, tuple[Path, IO[str]]] = {}   # results file (resolved) -> its lock file, path and open, held here
+_HELD: dict[Path, tuple[Path, IO[str]]] = {}  # results file (resolved) -> its lock file, path and open, held here
 
 
 def _lock(path: Path) -> None:
@@ -41,7 +42,7 @@ def _lock(path: Path) -> None:
     key = path.resolve()
     if key in _HELD:
         return
-    lock_path = path.absolute().with_name(path.name + ".lock")     # absolute: removed at exit, from any folder
+    lock_path = path.absolute().with_name(path.name + ".lock")  # absolute: removed at exit, from any folder
     while True:
         lock = os.fdopen(os.open(lock_path, os.O_RDWR | os.O_CREAT, 0o644), "r+")
         try:
@@ -49,8 +50,10 @@ def _lock(path: Path) -> None:
         except BlockingIOError:
             holder = lock.read().strip() or "a process that has not written its PID yet"
             lock.close()
-            raise ResultsFileBusy(f"{path} is being continued by another run ({holder}); wait for it to end or stop "
-                                  f"it: two runs on one file would do the same trials twice") from None
+            raise ResultsFileBusy(
+                f"{path} is being continued by another run ({holder}); wait for it to end or stop "
+                f"it: two runs on one file would do the same trials twice"
+            ) from None
         if _same_file(lock, lock_path):
             break
         lock.close()
@@ -87,12 +90,13 @@ class ResultsFile:
     A line that is not a valid trial record (a disk error, a hand edit) is kept out of the counts and named in
     `rejected`; continuing the run moves it to <file>.rejected, so nothing is lost, and its trial runs again. A last
     line cut off by an interruption is dropped quietly: its trial runs again too."""
+
     path: Path
     protocol: Experiment
-    records: dict[str, dict] = field(default_factory=dict)   # trial key -> record
-    rejected: list[tuple[int, str]] = field(default_factory=list)   # (line number from 1, why) of refused lines
-    model: dict | None = None          # the model_identity() it ran on (None: written before files recorded it)
-    plant_values: dict | None = None   # the plant's values it ran with (None: written before files recorded them)
+    records: dict[str, dict] = field(default_factory=dict)  # trial key -> record
+    rejected: list[tuple[int, str]] = field(default_factory=list)  # (line number from 1, why) of refused lines
+    model: dict | None = None  # the model_identity() it ran on (None: written before files recorded it)
+    plant_values: dict | None = None  # the plant's values it ran with (None: written before files recorded them)
 
     @classmethod
     def open(cls, path: str | Path, protocol: Experiment) -> ResultsFile:
@@ -101,36 +105,43 @@ class ResultsFile:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         _lock(path)
-        results = cls(path, protocol, model=model_identity(protocol.rig()),
-                      plant_values=protocol.plant_model().values)
-        if not path.exists() or _cut_header(path.read_bytes()):   # new, or its header was cut off as it was written
+        results = cls(path, protocol, model=model_identity(protocol.rig()), plant_values=protocol.plant_model().values)
+        if not path.exists() or _cut_header(path.read_bytes()):  # new, or its header was cut off as it was written
             write_whole(path, json.dumps(_header(results)).encode() + b"\n")
             return results
         with open(path, "rb") as f:
             gzipped = f.read(len(GZIP_MAGIC)) == GZIP_MAGIC
         if gzipped:
-            raise ValueError(f"{path} is gzipped: it opens for figures and comparisons as it is; to continue its run, "
-                             f"gunzip it first (or start from its uncompressed copy)")
+            raise ValueError(
+                f"{path} is gzipped: it opens for figures and comparisons as it is; to continue its run, "
+                f"gunzip it first (or start from its uncompressed copy)"
+            )
         stored = _read(path)
         now = results.plant_values
         if stored.plant_values is not None and stored.plant_values != now:
             changed = sorted(k for k in now if stored.plant_values.get(k) != now[k])
-            raise ExperimentMismatch(f"{path} was run on the plant {protocol.plant!r} when its values were others "
-                                   f"({', '.join(changed)} differ in sim/plant.toml since); use another --out")
+            raise ExperimentMismatch(
+                f"{path} was run on the plant {protocol.plant!r} when its values were others "
+                f"({', '.join(changed)} differ in sim/plant.toml since); use another --out"
+            )
         if stored.protocol != protocol and not _extends(stored.protocol, protocol):
             changed = sorted(k for k, v in protocol.to_json().items() if stored.protocol.to_json().get(k) != v)
-            raise ExperimentMismatch(f"{path} holds a run with other options ({', '.join(changed)} differ); "
-                                   f"use another --out, the same options to continue it, or more trials or "
-                                   f"cells to add to it")
+            raise ExperimentMismatch(
+                f"{path} holds a run with other options ({', '.join(changed)} differ); "
+                f"use another --out, the same options to continue it, or more trials or "
+                f"cells to add to it"
+            )
         if stored.model != results.model:
             raise ExperimentMismatch(_other_model(path, stored.model, results.model))
-        if stored.bad_lines:                    # kept aside, never lost
+        if stored.bad_lines:  # kept aside, never lost
             with open(path.with_name(path.name + ".rejected"), "ab") as f:
                 f.write(b"".join(line + b"\n" for line in stored.bad_lines))
         if stored.protocol != protocol or stored.bad_lines or stored.cut:
             # the header names the (possibly grown) run; only the good lines stay
-            write_whole(path, json.dumps(_header(results)).encode() + b"\n"
-                     + b"".join(line + b"\n" for line in stored.good_lines))
+            write_whole(
+                path,
+                json.dumps(_header(results)).encode() + b"\n" + b"".join(line + b"\n" for line in stored.good_lines),
+            )
         results.records, results.rejected = stored.records, stored.rejected
         return results
 
@@ -150,17 +161,25 @@ class ResultsFile:
 
     def warnings(self) -> list[str]:
         """One line per refused line of the file, for the user."""
-        return [f"{self.path} line {line}: {why}; not counted (its trial runs again when the run continues, and "
-                f"the line is kept in {self.path.name}.rejected)" for line, why in self.rejected]
+        return [
+            f"{self.path} line {line}: {why}; not counted (its trial runs again when the run continues, and "
+            f"the line is kept in {self.path.name}.rejected)"
+            for line, why in self.rejected
+        ]
 
 
 def _other_model(path: Path, stored: dict | None, now: dict) -> str:
     """Why a results file written on another model is not continued, and how to start it again."""
-    was = ("a model from before results files recorded theirs" if stored is None else
-           f"model {stored.get('mjcf_sha1')} on MuJoCo {stored.get('mujoco')}")
-    return (f"{path} was written on {was}; this run's is model {now['mjcf_sha1']} on MuJoCo {now['mujoco']} (the MJCF "
-            f"the rig generates, or MuJoCo, changed since): its trials would mix two models. Start it again with "
-            f"another --out, or move {path.name} away; it still opens for figures and comparisons")
+    was = (
+        "a model from before results files recorded theirs"
+        if stored is None
+        else f"model {stored.get('mjcf_sha1')} on MuJoCo {stored.get('mujoco')}"
+    )
+    return (
+        f"{path} was written on {was}; this run's is model {now['mjcf_sha1']} on MuJoCo {now['mujoco']} (the MJCF "
+        f"the rig generates, or MuJoCo, changed since): its trials would mix two models. Start it again with "
+        f"another --out, or move {path.name} away; it still opens for figures and comparisons"
+    )
 
 
 def _cut_header(raw: bytes) -> bool:
@@ -179,23 +198,36 @@ def write_whole(path: Path, content: bytes) -> None:
 def _extends(stored: Experiment, wanted: Experiment) -> bool:
     """Whether wanted only adds trials to stored (more per cell, or more cells), so every stored trial is one of
     wanted's: trials are drawn from (seed, cell, k) alone."""
-    same_otherwise = dataclasses.replace(stored, trials_per_cell=wanted.trials_per_cell,
-                                         only_cells=wanted.only_cells) == wanted
+    same_otherwise = (
+        dataclasses.replace(stored, trials_per_cell=wanted.trials_per_cell, only_cells=wanted.only_cells) == wanted
+    )
     more_per_cell = wanted.trials_per_cell >= stored.trials_per_cell
-    more_cells = wanted.only_cells is None or (stored.only_cells is not None
-                                               and set(stored.only_cells) <= set(wanted.only_cells))
+    more_cells = wanted.only_cells is None or (
+        stored.only_cells is not None and set(stored.only_cells) <= set(wanted.only_cells)
+    )
     return same_otherwise and more_per_cell and more_cells
 
 
 def _header(results: ResultsFile) -> dict:
     """A results file's first line: the protocol, the values its plant had (a named plant may be refitted) and the
     model that stepped it (the generated MJCF's digest and MuJoCo's version)."""
-    return {"format": RESULTS_FORMAT, "protocol": results.protocol.to_json(), "plant_values": results.plant_values,
-            "model": results.model}
+    return {
+        "format": RESULTS_FORMAT,
+        "protocol": results.protocol.to_json(),
+        "plant_values": results.plant_values,
+        "model": results.model,
+    }
 
 
-RECORD_TYPES = {"key": str, "cell": int, "k": int, "success": bool, "reached": bool, "fell_off": bool,
-                "target_m": list}   # what aggregation reads from a trial record, by type
+RECORD_TYPES = {
+    "key": str,
+    "cell": int,
+    "k": int,
+    "success": bool,
+    "reached": bool,
+    "fell_off": bool,
+    "target_m": list,
+}  # what aggregation reads from a trial record, by type
 TYPE_NAMES = {str: "a string", int: "a whole number", bool: "true or false", list: "a list"}
 
 
@@ -207,7 +239,7 @@ def record_problem(record, protocol: Experiment) -> str | None:
         if name not in record:
             return f"no {name!r} field"
         value = record[name]
-        if type(value) is not kind:   # exact: a bool is not a count, 7 is not a success
+        if type(value) is not kind:  # exact: a bool is not a count, 7 is not a success
             return f"{name} must be {TYPE_NAMES[kind]}, got {value!r}"
     if record["cell"] not in set(protocol.cell_ids()) or not 0 <= record["k"] < protocol.trials_per_cell:
         return f"trial {record['cell']}:{record['k']} is not one of this run's"
@@ -219,17 +251,18 @@ def record_problem(record, protocol: Experiment) -> str | None:
 @dataclass
 class _Contents:
     """What a results file holds, line by line."""
+
     protocol: Experiment
     plant_values: dict | None
-    model: dict | None             # model_identity() of the run; None in files written before it was recorded
+    model: dict | None  # model_identity() of the run; None in files written before it was recorded
     records: dict[str, dict] = field(default_factory=dict)
     good_lines: list[bytes] = field(default_factory=list)
     bad_lines: list[bytes] = field(default_factory=list)
     rejected: list[tuple[int, str]] = field(default_factory=list)
-    cut: bool = False            # the last line was cut off (an interruption mid-write)
+    cut: bool = False  # the last line was cut off (an interruption mid-write)
 
 
-GZIP_MAGIC = b"\x1f\x8b"      # how a gzipped file begins (the committed runs in docs/results/ are)
+GZIP_MAGIC = b"\x1f\x8b"  # how a gzipped file begins (the committed runs in docs/results/ are)
 
 
 def _read(path: Path) -> _Contents:
@@ -240,8 +273,10 @@ def _read(path: Path) -> _Contents:
         except (OSError, EOFError) as exc:
             raise ValueError(f"{path} is a damaged gzip file ({exc})") from None
     if _cut_header(raw):
-        raise ValueError(f"{path} holds no complete header line (a run interrupted as it began); rerun the same "
-                         f"heatmap command to start it afresh")
+        raise ValueError(
+            f"{path} holds no complete header line (a run interrupted as it began); rerun the same "
+            f"heatmap command to start it afresh"
+        )
     lines = raw.split(b"\n")
     try:
         header = json.loads(lines[0])
@@ -250,14 +285,16 @@ def _read(path: Path) -> _Contents:
     if not isinstance(header, dict) or header.get("format") != RESULTS_FORMAT:
         raise ValueError(f"{path} is not a heatmap results file ({RESULTS_FORMAT})")
     if "protocol" not in header:
-        raise ValueError(f"{path}: its header line names no protocol (the experiment its trials belong to), so its "
-                         f"trials cannot be placed; was it edited by hand?")
+        raise ValueError(
+            f"{path}: its header line names no protocol (the experiment its trials belong to), so its "
+            f"trials cannot be placed; was it edited by hand?"
+        )
     try:
         protocol = Experiment.from_json(header["protocol"])
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"{path}: its header's protocol is not valid ({exc})") from None
     out = _Contents(protocol, header.get("plant_values"), header.get("model"), cut=lines[-1] != b"")
-    for number, line in enumerate(lines[1:-1], start=2):   # the last element follows the final newline
+    for number, line in enumerate(lines[1:-1], start=2):  # the last element follows the final newline
         if not line.strip():
             continue
         try:
@@ -277,23 +314,47 @@ def _read(path: Path) -> _Contents:
     return out
 
 
-WALL_CLOCK_FIELDS = ("wall_time_s", "physics_wall_s")   # a record's fields that depend on the machine, not the trial
+WALL_CLOCK_FIELDS = ("wall_time_s", "physics_wall_s")  # a record's fields that depend on the machine, not the trial
 
 
 def trial_record(trial: Trial, result) -> dict:
     """The results-file line of a finished trial (result: a bridge.TrialResult)."""
-    return {"key": trial.key, "cell": trial.cell, "k": trial.k, "seed": trial.seed,
-            "start_m": [round(v, 5) for v in trial.start_m], "target_m": [round(v, 5) for v in trial.target_m],
-            "final_m": [round(float(v), 5) for v in result.final_xy_m], "final_error_m": round(result.final_error_m, 5),
-            "success": bool(result.success), "reached": result.time_to_reach_s is not None,
-            "time_to_reach_s": result.time_to_reach_s, "fell_off": bool(result.fell_off),
-            "sim_time_s": round(result.sim_time_s, 3), "wall_time_s": round(result.wall_time_s, 3),
-            "physics_wall_s": round(result.physics_wall_s, 3)}
+    return {
+        "key": trial.key,
+        "cell": trial.cell,
+        "k": trial.k,
+        "seed": trial.seed,
+        "start_m": [round(v, 5) for v in trial.start_m],
+        "target_m": [round(v, 5) for v in trial.target_m],
+        "final_m": [round(float(v), 5) for v in result.final_xy_m],
+        "final_error_m": round(result.final_error_m, 5),
+        "success": bool(result.success),
+        "reached": result.time_to_reach_s is not None,
+        "time_to_reach_s": result.time_to_reach_s,
+        "fell_off": bool(result.fell_off),
+        "sim_time_s": round(result.sim_time_s, 3),
+        "wall_time_s": round(result.wall_time_s, 3),
+        "physics_wall_s": round(result.physics_wall_s, 3),
+    }
 
 
 def unplaceable_record(trial: Trial, why: str) -> dict:
     """A trial whose start is not over the fabric (only at the very corners): it counts as fallen off."""
-    return {"key": trial.key, "cell": trial.cell, "k": trial.k, "seed": trial.seed,
-            "start_m": list(trial.start_m), "target_m": list(trial.target_m), "final_m": [None, None],
-            "final_error_m": None, "success": False, "reached": False, "time_to_reach_s": None,
-            "fell_off": True, "sim_time_s": 0.0, "wall_time_s": 0.0, "physics_wall_s": 0.0, "unplaceable": why}
+    return {
+        "key": trial.key,
+        "cell": trial.cell,
+        "k": trial.k,
+        "seed": trial.seed,
+        "start_m": list(trial.start_m),
+        "target_m": list(trial.target_m),
+        "final_m": [None, None],
+        "final_error_m": None,
+        "success": False,
+        "reached": False,
+        "time_to_reach_s": None,
+        "fell_off": True,
+        "sim_time_s": 0.0,
+        "wall_time_s": 0.0,
+        "physics_wall_s": 0.0,
+        "unplaceable": why,
+    }

@@ -5,6 +5,7 @@ sim/plant.toml, and the defaults here are read from there (the polyester plant).
 travel, motor) come from protocol/rig.toml (mantaray.protocol.rig); what is left here is the numerics (mesh
 resolution, solver) and the renderer's camera.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -19,9 +20,10 @@ from .parameters import default as _d
 @dataclass(frozen=True)
 class Frame:
     """The module: actuators at its corners (±size_x/2, ±size_y/2), fabric frame origin at its centre."""
-    size_x_m: float = _rig.MODULE_SIZE_X_M   # [m] the paper's m (frame and actuator spacing along x)
-    size_y_m: float = _rig.MODULE_SIZE_Y_M   # [m] the paper's n
-    z0_m: float = 1.5            # [m] reference height: corners at a_i = 0 (paper)
+
+    size_x_m: float = _rig.MODULE_SIZE_X_M  # [m] the paper's m (frame and actuator spacing along x)
+    size_y_m: float = _rig.MODULE_SIZE_Y_M  # [m] the paper's n
+    z0_m: float = 1.5  # [m] reference height: corners at a_i = 0 (paper)
 
 
 @dataclass(frozen=True)
@@ -32,14 +34,15 @@ class Actuators:
     setpoint rate-limited to the actuator's top speed (`slewmax`): a position servo that reaches a
     new command no faster than the motor can drive the belt.
     """
-    range_m: float = _rig.ACTUATOR_RANGE_M           # [m] travel each way from z0 (protocol/rig.toml)
-    motor_speed_rpm: float = _rig.MOTOR_SPEED_RPM    # [rev/min] at full drive (protocol/rig.toml)
+
+    range_m: float = _rig.ACTUATOR_RANGE_M  # [m] travel each way from z0 (protocol/rig.toml)
+    motor_speed_rpm: float = _rig.MOTOR_SPEED_RPM  # [rev/min] at full drive (protocol/rig.toml)
     # [m/rev] belt per motor revolution: the plant's, which sets the simulated carriage's top speed (a fitted value;
     # the board's own is protocol/rig.toml's, which the bench-mode firmware never applies: it drives no motor)
     pulley_circumference_m: float = _d("actuators.pulley_circumference_m")
-    kp_n_per_m: float = _d("actuators.kp_n_per_m")               # [N/m] servo stiffness; the real loop is on the Uno
-    damping_ratio: float = _d("actuators.damping_ratio")         # [-] servo damping as a fraction of critical
-    carriage_mass_kg: float = _d("actuators.carriage_mass_kg")   # [kg] gravity-compensated
+    kp_n_per_m: float = _d("actuators.kp_n_per_m")  # [N/m] servo stiffness; the real loop is on the Uno
+    damping_ratio: float = _d("actuators.damping_ratio")  # [-] servo damping as a fraction of critical
+    carriage_mass_kg: float = _d("actuators.carriage_mass_kg")  # [kg] gravity-compensated
 
     @property
     def speed_m_per_s(self) -> float:
@@ -47,14 +50,15 @@ class Actuators:
         return self.motor_speed_rpm / 60.0 * self.pulley_circumference_m
 
 
-STATED_AT_RESOLUTION = 15   # [vertices per side] the mesh at which sim/plant.toml states the edges' time constant
+STATED_AT_RESOLUTION = 15  # [vertices per side] the mesh at which sim/plant.toml states the edges' time constant
 
 
 @dataclass(frozen=True)
 class Fidelity:
     """How finely the physics is resolved: fabric vertices per side and the physics step."""
-    resolution: int               # [vertices per side] odd
-    timestep_s: float             # [s]
+
+    resolution: int  # [vertices per side] odd
+    timestep_s: float  # [s]
 
     @property
     def label(self) -> str:
@@ -83,22 +87,29 @@ DEFAULT_FIDELITY = FIDELITIES["reference"]
 @dataclass(frozen=True)
 class Fabric:
     """The polyester sheet: a MuJoCo flexcomp grid (dim 2, full dofs), welded at its four corners to the carriages."""
-    size_m: float = _d("fabric.size_m")          # [m] side of the square sheet (the paper: simulation 0.5, rig 0.6)
-    resolution: int = DEFAULT_FIDELITY.resolution   # [vertices per side] odd, so the alternating mesh is
-                                                    # mirror-symmetric
-    mass_kg: float = _d("fabric.mass_kg")        # [kg] the whole sheet
-    young_pa: float = _d("fabric.young_pa")      # [Pa] sets bending stiffness with thickness and Poisson's ratio
-    poisson: float = _d("fabric.poisson")        # [-]
-    thickness_m: float = _d("fabric.thickness_m")   # [m]
-    damping_s: float = _d("fabric.damping_s")    # [s] elastic (Rayleigh, stiffness-proportional) damping
-    radius_m: float = _d("fabric.radius_m")      # [m] collision thickness of the triangles
-    edge_solref: tuple[float, float] = (_d("fabric.edge_solref[0]"), 1.0)   # [s, -] edge-length equality: time
-                                                                              # constant, critical damping
-    edge_solimp: tuple[float, float, float] = (_d("fabric.edge_solimp[0]"), _d("fabric.edge_solimp[1]"),
-                                               _d("fabric.edge_solimp[2]"))   # [-, -, m] edges' impedance d0, dmax, width
-    corner_weld_solref: tuple[float, float] = (_d("fabric.corner_weld_solref[0]"), 1.0)   # [s, -] corner-to-carriage welds
-    corner_clamp_m: float = _d("fabric.corner_clamp_m")   # [m] length of each edge, from its corner, the corner's clamp
-                                                           # holds straight at the carriage (0: a point attachment)
+
+    size_m: float = _d("fabric.size_m")  # [m] side of the square sheet (the paper: simulation 0.5, rig 0.6)
+    resolution: int = DEFAULT_FIDELITY.resolution  # [vertices per side] odd, so the alternating mesh is
+    # mirror-symmetric
+    mass_kg: float = _d("fabric.mass_kg")  # [kg] the whole sheet
+    young_pa: float = _d("fabric.young_pa")  # [Pa] sets bending stiffness with thickness and Poisson's ratio
+    poisson: float = _d("fabric.poisson")  # [-]
+    thickness_m: float = _d("fabric.thickness_m")  # [m]
+    damping_s: float = _d("fabric.damping_s")  # [s] elastic (Rayleigh, stiffness-proportional) damping
+    radius_m: float = _d("fabric.radius_m")  # [m] collision thickness of the triangles
+    edge_solref: tuple[float, float] = (_d("fabric.edge_solref[0]"), 1.0)  # [s, -] edge-length equality: time
+    # constant, critical damping
+    edge_solimp: tuple[float, float, float] = (
+        _d("fabric.edge_solimp[0]"),
+        _d("fabric.edge_solimp[1]"),
+        _d("fabric.edge_solimp[2]"),
+    )  # [-, -, m] edges' impedance d0, dmax, width
+    corner_weld_solref: tuple[float, float] = (
+        _d("fabric.corner_weld_solref[0]"),
+        1.0,
+    )  # [s, -] corner-to-carriage welds
+    corner_clamp_m: float = _d("fabric.corner_clamp_m")  # [m] length of each edge, from its corner, the corner's clamp
+    # holds straight at the carriage (0: a point attachment)
 
     def __post_init__(self) -> None:
         if self.resolution < 3 or self.resolution % 2 == 0:
@@ -125,53 +136,65 @@ class Fabric:
 @dataclass(frozen=True)
 class Contact:
     """Object-fabric contact, written on both the fabric and the object's geom so MuJoCo's mixing changes nothing."""
-    friction: tuple[float, float, float] = (_d("contact.friction[0]"), _d("contact.friction[1]"),
-                                            _d("contact.friction[2]"))   # sliding [-], torsional [m], rolling [m]
-    condim: int = 6                                              # 6: sliding, torsional and rolling (3: sliding only)
-    solref: tuple[float, float] = (_d("contact.solref[0]"), 1.0)   # [s, -] time constant, critical damping
-    solimp: tuple[float, float, float] = (_d("contact.solimp[0]"), _d("contact.solimp[1]"),
-                                          _d("contact.solimp[2]"))   # [-, -, m] d0, dmax, width
-    rolling_damping_per_s: float = _d("contact.rolling_damping_per_s")   # [1/s] viscous rolling resistance of the
-                                          # soft fabric, the rate at which a rolling sphere's speed decays on a level
-                                          # sheet; damping on the object's rotational dofs (MuJoCo's own rolling
-                                          # friction is Coulomb-like, the same at any speed)
+
+    friction: tuple[float, float, float] = (
+        _d("contact.friction[0]"),
+        _d("contact.friction[1]"),
+        _d("contact.friction[2]"),
+    )  # sliding [-], torsional [m], rolling [m]
+    condim: int = 6  # 6: sliding, torsional and rolling (3: sliding only)
+    solref: tuple[float, float] = (_d("contact.solref[0]"), 1.0)  # [s, -] time constant, critical damping
+    solimp: tuple[float, float, float] = (
+        _d("contact.solimp[0]"),
+        _d("contact.solimp[1]"),
+        _d("contact.solimp[2]"),
+    )  # [-, -, m] d0, dmax, width
+    rolling_damping_per_s: float = _d("contact.rolling_damping_per_s")  # [1/s] viscous rolling resistance of the
+    # soft fabric, the rate at which a rolling sphere's speed decays on a level
+    # sheet; damping on the object's rotational dofs (MuJoCo's own rolling
+    # friction is Coulomb-like, the same at any speed)
 
 
 @dataclass(frozen=True)
 class Solver:
     """Integration: Euler (flex elasticity is refused under the implicit integrators), Newton, at the reference step
     (2 kHz: the paper's 1 kHz is not converged, FIDELITIES)."""
-    timestep_s: float = DEFAULT_FIDELITY.timestep_s   # [s]
+
+    timestep_s: float = DEFAULT_FIDELITY.timestep_s  # [s]
     integrator: str = "Euler"
-    solver: str = "Newton"                # CG stalls on the stiff edges (iteration cap) and diverged in some settings
-    tolerance: float = 1e-6               # [-] solver stopping tolerance (SIM-NOTES)
+    solver: str = "Newton"  # CG stalls on the stiff edges (iteration cap) and diverged in some settings
+    tolerance: float = 1e-6  # [-] solver stopping tolerance (SIM-NOTES)
 
 
 @dataclass(frozen=True)
 class Camera:
     """Overhead camera looking straight down at the fabric; image right = +x, image up = +y."""
-    height_above_z0_m: float = 1.0        # [m] GUESS: not given in the paper
-    fovy_deg: float = 45.0                # [deg] vertical field of view: 0.83 m of fabric seen at 1 m
-    corner_markers: bool = False          # draw the tracker's four corner markers (host/markers.py) at z0
-    object_marker: bool = False           # and its marker on the object's top (not for a rolling sphere:
-                                          # the marker would roll away; its colour blob is tracked instead)
+
+    height_above_z0_m: float = 1.0  # [m] GUESS: not given in the paper
+    fovy_deg: float = 45.0  # [deg] vertical field of view: 0.83 m of fabric seen at 1 m
+    corner_markers: bool = False  # draw the tracker's four corner markers (host/markers.py) at z0
+    object_marker: bool = False  # and its marker on the object's top (not for a rolling sphere:
+    # the marker would roll away; its colour blob is tracked instead)
 
 
 @dataclass(frozen=True)
 class FallRule:
     """When the object counts as fallen off (any one suffices); see sim/README.md."""
-    outside_margin_m: float = _d("fall.outside_margin_m")   # [m] centre beyond the frame's edge (|x| > m/2 + margin
-                                                            # or |y| > n/2 + margin)
-    below_fabric_m: float = _d("fall.below_fabric_m")       # [m] centre below the fabric's lowest vertex by more
-    floor_z_m: float = 0.1                # [m] object centre below this height above the floor
 
-VISION_MODES = ("aruco", "blob")   # the tracker on rendered frames: ArUco marker, or colour blob
-MIN_STEPS_PER_TIMECONST = 2       # MuJoCo runs a constraint's time constant at no less than two steps (refsafe)
+    outside_margin_m: float = _d("fall.outside_margin_m")  # [m] centre beyond the frame's edge (|x| > m/2 + margin
+    # or |y| > n/2 + margin)
+    below_fabric_m: float = _d("fall.below_fabric_m")  # [m] centre below the fabric's lowest vertex by more
+    floor_z_m: float = 0.1  # [m] object centre below this height above the floor
+
+
+VISION_MODES = ("aruco", "blob")  # the tracker on rendered frames: ArUco marker, or colour blob
+MIN_STEPS_PER_TIMECONST = 2  # MuJoCo runs a constraint's time constant at no less than two steps (refsafe)
 
 
 @dataclass(frozen=True)
 class Rig:
     """Everything the model is generated from. Change a field with dataclasses.replace or with_object."""
+
     frame: Frame = field(default_factory=Frame)
     actuators: Actuators = field(default_factory=Actuators)
     fabric: Fabric = field(default_factory=Fabric)
@@ -187,24 +210,29 @@ class Rig:
 
     def time_constants_s(self) -> dict[str, float]:
         """[s] The constraints' time constants as MuJoCo is given them, by the plant parameter that sets each."""
-        return {"fabric.edge_solref[0]": self.fabric.edge_timeconst_s,
-                "fabric.corner_weld_solref[0]": self.fabric.corner_weld_solref[0],
-                "contact.solref[0]": self.contact.solref[0]}
+        return {
+            "fabric.edge_solref[0]": self.fabric.edge_timeconst_s,
+            "fabric.corner_weld_solref[0]": self.fabric.corner_weld_solref[0],
+            "contact.solref[0]": self.contact.solref[0],
+        }
 
     def stiffest(self) -> str:
         """Which parameter makes the stiffest constraint against the step, in words: what to change when the physics
         diverges (the bending stiffness, fabric.young_pa, is the other)."""
         key, tau = min(self.time_constants_s().items(), key=lambda kv: kv[1])
         n, step = self.fabric.resolution, self.solver.timestep_s
-        return (f"the stiffest constraint is {key} (a time constant of {tau * 1000:.3g} ms at {n} x {n} vertices, "
-                f"{tau / step:.3g} steps of {step * 1000:g} ms; MuJoCo runs it at no less than "
-                f"{MIN_STEPS_PER_TIMECONST}), then fabric.young_pa's bending: a smaller step, or a softer value of "
-                f"either, integrates")
+        return (
+            f"the stiffest constraint is {key} (a time constant of {tau * 1000:.3g} ms at {n} x {n} vertices, "
+            f"{tau / step:.3g} steps of {step * 1000:g} ms; MuJoCo runs it at no less than "
+            f"{MIN_STEPS_PER_TIMECONST}), then fabric.young_pa's bending: a smaller step, or a softer value of "
+            f"either, integrates"
+        )
 
     def with_vision(self, mode: str) -> Rig:
         """The same rig with the scene markers a tracker mode (VISION_MODES) needs: the corner markers, and for
         aruco the object's marker too."""
         if mode not in VISION_MODES:
             raise ValueError(f"vision mode must be one of {', '.join(VISION_MODES)}, got {mode!r}")
-        return dataclasses.replace(self, camera=dataclasses.replace(self.camera, corner_markers=True,
-                                                                    object_marker=mode == "aruco"))
+        return dataclasses.replace(
+            self, camera=dataclasses.replace(self.camera, corner_markers=True, object_marker=mode == "aruco")
+        )

@@ -1,4 +1,5 @@
 """An experiment's map from its results file: success rate per cell, the paper's totals and its regions."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -7,18 +8,19 @@ import numpy as np
 
 from .results_file import ResultsFile
 
-SUCCESS_REGION_AT = 0.9    # [-] cells with at least this success rate form the success region ...
-FAILURE_REGION_AT = 0.1    # [-] ... at most this the failure region; those between are uncertain
+SUCCESS_REGION_AT = 0.9  # [-] cells with at least this success rate form the success region ...
+FAILURE_REGION_AT = 0.1  # [-] ... at most this the failure region; those between are uncertain
 
 
 @dataclass(frozen=True)
 class Summary:
     """Per-cell rates and the paper's totals for one results file."""
-    rates: np.ndarray            # [cells, cells] success rate per cell, [iy, ix]; NaN where no trial ran
-    reach_rates: np.ndarray      # the same under the paper's stopping rule (within epsilon at any frame)
-    fell_rates: np.ndarray       # share of trials that fell off
+
+    rates: np.ndarray  # [cells, cells] success rate per cell, [iy, ix]; NaN where no trial ran
+    reach_rates: np.ndarray  # the same under the paper's stopping rule (within epsilon at any frame)
+    fell_rates: np.ndarray  # share of trials that fell off
     trials_per_cell: np.ndarray  # [cells, cells] trials counted in each cell
-    score: float                 # sum of per-cell success rates (the paper: 171.3 Manhattan, 108.2 Euclidean)
+    score: float  # sum of per-cell success rates (the paper: 171.3 Manhattan, 108.2 Euclidean)
     reach_score: float
     region_cells: dict[str, int]  # success / uncertain / failure: cells in each region
     cell_area_m2: float
@@ -32,17 +34,23 @@ class Summary:
         return self.region_cells[region] * self.cell_area_m2
 
     def to_json(self) -> dict:
-        return {"trials": self.trials, "score": round(self.score, 2), "reach_score": round(self.reach_score, 2),
-                "cells_run": int(np.isfinite(self.rates).sum()),
-                "regions": {name: {"cells": n, "area_m2": round(self.region_area_m2(name), 5)}
-                            for name, n in self.region_cells.items()},
-                "thresholds": {"success_at": SUCCESS_REGION_AT, "failure_at": FAILURE_REGION_AT}}
+        return {
+            "trials": self.trials,
+            "score": round(self.score, 2),
+            "reach_score": round(self.reach_score, 2),
+            "cells_run": int(np.isfinite(self.rates).sum()),
+            "regions": {
+                name: {"cells": n, "area_m2": round(self.region_area_m2(name), 5)}
+                for name, n in self.region_cells.items()
+            },
+            "thresholds": {"success_at": SUCCESS_REGION_AT, "failure_at": FAILURE_REGION_AT},
+        }
 
 
 def summarize(results: ResultsFile) -> Summary:
     p = results.protocol
     n = p.cells
-    counts = np.zeros((3, n * n))                  # successes, reaches, falls
+    counts = np.zeros((3, n * n))  # successes, reaches, falls
     totals = np.zeros(n * n)
     for r in results.records.values():
         totals[r["cell"]] += 1
@@ -50,11 +58,19 @@ def summarize(results: ResultsFile) -> Summary:
     with np.errstate(invalid="ignore", divide="ignore"):
         rates = np.where(totals > 0, counts / np.maximum(totals, 1), np.nan).reshape(3, n, n)
     done = np.isfinite(rates[0])
-    regions = {"success": int((rates[0][done] >= SUCCESS_REGION_AT).sum()),
-               "failure": int((rates[0][done] <= FAILURE_REGION_AT).sum())}
+    regions = {
+        "success": int((rates[0][done] >= SUCCESS_REGION_AT).sum()),
+        "failure": int((rates[0][done] <= FAILURE_REGION_AT).sum()),
+    }
     regions["uncertain"] = int(done.sum()) - regions["success"] - regions["failure"]
     f = p.rig().frame
-    return Summary(rates=rates[0], reach_rates=rates[1], fell_rates=rates[2],
-                   trials_per_cell=totals.reshape(n, n).astype(int),
-                   score=float(np.nansum(rates[0])), reach_score=float(np.nansum(rates[1])),
-                   region_cells=regions, cell_area_m2=f.size_x_m * f.size_y_m / n ** 2)
+    return Summary(
+        rates=rates[0],
+        reach_rates=rates[1],
+        fell_rates=rates[2],
+        trials_per_cell=totals.reshape(n, n).astype(int),
+        score=float(np.nansum(rates[0])),
+        reach_score=float(np.nansum(rates[1])),
+        region_cells=regions,
+        cell_area_m2=f.size_x_m * f.size_y_m / n**2,
+    )

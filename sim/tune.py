@@ -6,6 +6,7 @@ epsilon at any frame), summed over the sample's trials, which are drawn from the
 the paper's protocol on its seed 2026, runs trials the search never saw. Its settings are a file that
 `mantaray rig --settings` and the firmware take as they are (host/controller_settings.py).
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -26,7 +27,7 @@ from .experiment import Experiment, trials
 from .plant import Plant
 from .rig import DEFAULT_FIDELITY, Fidelity
 
-EVERY_PID = "pid.*."          # a knob on every PID the controller runs (x and y alike: the rig is symmetric)
+EVERY_PID = "pid.*."  # a knob on every PID the controller runs (x and y alike: the rig is symmetric)
 PID_MAX = {spec.name: spec.max for spec in m.ConfigurePid.FIELDS if spec.name != "axis"}
 
 
@@ -37,34 +38,50 @@ class Knob:
     A paper_gain knob is in the paper's units (its kP, kI, kD): the firmware gets it times the plant's reading of
     them (Plant.gain_scale, 180/pi on a plant that reads them per radian), so the paper's own gains are in range
     on every plant and the search starts from them."""
+
     key: str
     low: float
     high: float
-    scale: str = "linear"     # linear | log
+    scale: str = "linear"  # linear | log
     paper_gain: bool = False
-    choices = None            # (calibrate.suggest's interface: a knob is never categorical)
+    choices = None  # (calibrate.suggest's interface: a knob is never categorical)
 
     def search_bounds(self) -> tuple[float, float]:
         return self.low, self.high
 
 
-TILT = Knob("configure.tilt_limit", 5.0, m.Configure().tilt_limit)   # [deg] at most the geometric limit
-VELOCITY_FILTER = Knob("configure.velocity_filter", 0.0, 0.5)     # [s]
-POSITION_PID = [Knob("pid.*.kp", 3.0, 150.0, "log", paper_gain=True), Knob("pid.*.ki", 0.0, 100.0, paper_gain=True),
-                Knob("pid.*.kd", 0.0, 100.0, paper_gain=True),
-                Knob("pid.*.integral_limit", 1.0, m.PID_DEFAULTS[m.Axis.X]["integral_limit"])]
+TILT = Knob("configure.tilt_limit", 5.0, m.Configure().tilt_limit)  # [deg] at most the geometric limit
+VELOCITY_FILTER = Knob("configure.velocity_filter", 0.0, 0.5)  # [s]
+POSITION_PID = [
+    Knob("pid.*.kp", 3.0, 150.0, "log", paper_gain=True),
+    Knob("pid.*.ki", 0.0, 100.0, paper_gain=True),
+    Knob("pid.*.kd", 0.0, 100.0, paper_gain=True),
+    Knob("pid.*.integral_limit", 1.0, m.PID_DEFAULTS[m.Axis.X]["integral_limit"]),
+]
 #                 the paper's [deg/m], [deg/(m s)], [deg s/m]; [deg]
 SPACE = {
     "manhattan": [TILT, *POSITION_PID],
     "euclidean": [TILT, *POSITION_PID],
-    "scheduled": [TILT, *POSITION_PID, VELOCITY_FILTER,
-                  Knob("configure_schedule.edge_zone", 0.01, 0.25), Knob("configure_schedule.edge_gain", 0.0, 1.0),
-                  Knob("configure_schedule.edge_tilt", 0.0, 1.0), Knob("configure_schedule.edge_brake", 0.0, 10.0),
-                  Knob("configure_schedule.brake_speed", 0.0, 1.0)],
-    "cascade": [TILT, VELOCITY_FILTER, Knob("configure_cascade.position_gain", 0.3, 30.0, "log"),
-                Knob("configure_cascade.speed_limit", 0.02, 1.0, "log"),
-                Knob("pid.*.kp", 10.0, 2000.0, "log"), Knob("pid.*.ki", 0.0, 500.0), Knob("pid.*.kd", 0.0, 50.0),
-                Knob("pid.*.integral_limit", 1.0, m.PID_DEFAULTS[m.Axis.VX]["integral_limit"])],
+    "scheduled": [
+        TILT,
+        *POSITION_PID,
+        VELOCITY_FILTER,
+        Knob("configure_schedule.edge_zone", 0.01, 0.25),
+        Knob("configure_schedule.edge_gain", 0.0, 1.0),
+        Knob("configure_schedule.edge_tilt", 0.0, 1.0),
+        Knob("configure_schedule.edge_brake", 0.0, 10.0),
+        Knob("configure_schedule.brake_speed", 0.0, 1.0),
+    ],
+    "cascade": [
+        TILT,
+        VELOCITY_FILTER,
+        Knob("configure_cascade.position_gain", 0.3, 30.0, "log"),
+        Knob("configure_cascade.speed_limit", 0.02, 1.0, "log"),
+        Knob("pid.*.kp", 10.0, 2000.0, "log"),
+        Knob("pid.*.ki", 0.0, 500.0),
+        Knob("pid.*.kd", 0.0, 50.0),
+        Knob("pid.*.integral_limit", 1.0, m.PID_DEFAULTS[m.Axis.VX]["integral_limit"]),
+    ],
     #             [deg s/m], [deg/m], [deg s^2/m], [deg]
 }
 
@@ -77,8 +94,10 @@ def knobs(controller: str, per_axis: bool = False) -> list[Knob]:
     out = []
     for knob in SPACE[controller]:
         if knob.key.startswith(EVERY_PID):
-            name = knob.key[len(EVERY_PID):]
-            out += [dataclasses.replace(knob, key=f"pid.{axis.name.lower()}.{name}") for axis in controller_axes(controller)]
+            name = knob.key[len(EVERY_PID) :]
+            out += [
+                dataclasses.replace(knob, key=f"pid.{axis.name.lower()}.{name}") for axis in controller_axes(controller)
+            ]
         else:
             out.append(knob)
     return out
@@ -93,7 +112,9 @@ def settings_of(controller: str, values: dict[str, float], gain_scale: float = 1
         if key in paper:
             value = min(value * gain_scale, PID_MAX[key.rsplit(".", 1)[1]])
         if key.startswith(EVERY_PID):
-            flat.update({f"pid.{axis.name.lower()}.{key[len(EVERY_PID):]}": value for axis in controller_axes(controller)})
+            flat.update(
+                {f"pid.{axis.name.lower()}.{key[len(EVERY_PID) :]}": value for axis in controller_axes(controller)}
+            )
         else:
             flat[key] = value
     return ControllerSettings(controller, tuple(flat.items()))
@@ -103,11 +124,14 @@ def firmware_boot(controller: str) -> dict[str, float]:
     """What the firmware runs each knob's setting at after boot (its numbers: the gains as configure_pid takes them),
     by knob key, per axis and shared (pid.*. as the first PID's)."""
     axes = controller_axes(controller)
-    return {"configure.tilt_limit": m.Configure().tilt_limit, "configure.velocity_filter": m.Configure().velocity_filter,
-            **{f"{EVERY_PID}{k}": v for k, v in m.PID_DEFAULTS[axes[0]].items()},
-            **{f"pid.{a.name.lower()}.{k}": v for a in axes for k, v in m.PID_DEFAULTS[a].items()},
-            **{f"configure_schedule.{s.name}": getattr(m.ConfigureSchedule(), s.name) for s in m.ConfigureSchedule.FIELDS},
-            **{f"configure_cascade.{s.name}": getattr(m.ConfigureCascade(), s.name) for s in m.ConfigureCascade.FIELDS}}
+    return {
+        "configure.tilt_limit": m.Configure().tilt_limit,
+        "configure.velocity_filter": m.Configure().velocity_filter,
+        **{f"{EVERY_PID}{k}": v for k, v in m.PID_DEFAULTS[axes[0]].items()},
+        **{f"pid.{a.name.lower()}.{k}": v for a in axes for k, v in m.PID_DEFAULTS[a].items()},
+        **{f"configure_schedule.{s.name}": getattr(m.ConfigureSchedule(), s.name) for s in m.ConfigureSchedule.FIELDS},
+        **{f"configure_cascade.{s.name}": getattr(m.ConfigureCascade(), s.name) for s in m.ConfigureCascade.FIELDS},
+    }
 
 
 def boot_values(controller: str, per_axis: bool = False) -> dict[str, float]:
@@ -117,8 +141,9 @@ def boot_values(controller: str, per_axis: bool = False) -> dict[str, float]:
     return {k.key: float(np.clip(boot[k.key], k.low, k.high)) for k in knobs(controller, per_axis)}
 
 
-def start_values(settings: ControllerSettings, per_axis: bool = False,
-                 gain_scale: float = 1.0) -> tuple[dict[str, float], list[str]]:
+def start_values(
+    settings: ControllerSettings, per_axis: bool = False, gain_scale: float = 1.0
+) -> tuple[dict[str, float], list[str]]:
     """The knobs that set up these settings as the firmware runs them (settings_of's inverse: a paper_gain knob is
     the firmware's number divided by gain_scale; a setting the file leaves out is the firmware's boot value), each
     clipped into its range, and the knobs that had to be clipped: a candidate to start a search from, such as
@@ -129,11 +154,13 @@ def start_values(settings: ControllerSettings, per_axis: bool = False,
     out, clipped = {}, []
     for knob in knobs(settings.controller, per_axis):
         if knob.key.startswith(EVERY_PID):
-            name = knob.key[len(EVERY_PID):]
+            name = knob.key[len(EVERY_PID) :]
             each = {given.get(f"pid.{a}.{name}", boot[f"pid.{a}.{name}"]) for a in axes}
             if len(each) > 1:
-                raise SettingsError(f"the PIDs {', '.join(axes)} differ in {name}: a search with one set of gains "
-                                    f"for all cannot start there (search them apart: --per-axis)")
+                raise SettingsError(
+                    f"the PIDs {', '.join(axes)} differ in {name}: a search with one set of gains "
+                    f"for all cannot start there (search them apart: --per-axis)"
+                )
             value = each.pop()
         else:
             value = given.get(knob.key, boot[knob.key])
@@ -147,29 +174,38 @@ def start_values(settings: ControllerSettings, per_axis: bool = False,
 @dataclass(frozen=True)
 class TuningEvidence:
     """A controller's settings scored on a stratified sample of cells (findings.STRATA) of one object on one plant."""
+
     controller: str = "scheduled"
     object_name: str = "sphere"
-    alpha_m: float = 0.0                   # [m] the firmware's noise amplitude
+    alpha_m: float = 0.0  # [m] the firmware's noise amplitude
     plant: str = "paper"
-    cells_per_stratum: int = 4             # cells drawn from each of the five strata
+    cells_per_stratum: int = 4  # cells drawn from each of the five strata
     trials_per_cell: int = 3
-    duration_s: float = 10.0               # [s] T
-    seed: int = 31                         # the sample's and the sampler's; the final check uses another
-    resolution: int = DEFAULT_FIDELITY.resolution   # [vertices per side] (sim/rig.py, FIDELITIES)
+    duration_s: float = 10.0  # [s] T
+    seed: int = 31  # the sample's and the sampler's; the final check uses another
+    resolution: int = DEFAULT_FIDELITY.resolution  # [vertices per side] (sim/rig.py, FIDELITIES)
     timestep_s: float = DEFAULT_FIDELITY.timestep_s  # [s]
-    gains_in_paper_units: bool = True      # paper_gain knobs x Plant.gain_scale (part of the study's record)
-    prune: bool = False                    # score in rungs of the sample and stop a hopeless candidate early
+    gains_in_paper_units: bool = True  # paper_gain knobs x Plant.gain_scale (part of the study's record)
+    prune: bool = False  # score in rungs of the sample and stop a hopeless candidate early
     kind: str = "tuning"
     objective_names: tuple[str, ...] = ("targets missed under both success rules, per trial",)
-    penalty: tuple[float, ...] = (2.0,)    # every target missed twice: what settings that cannot run score
+    penalty: tuple[float, ...] = (2.0,)  # every target missed twice: what settings that cannot run score
 
     def experiment(self, settings: ControllerSettings, **changes) -> Experiment:
         """The sample's experiment with these settings (changes: another design, such as the full protocol)."""
-        design = dict(controller=self.controller, object_name=self.object_name, alpha_m=self.alpha_m,
-                      trials_per_cell=self.trials_per_cell, duration_s=self.duration_s, seed=self.seed,
-                      resolution=self.resolution, timestep_s=self.timestep_s, plant=self.plant,
-                      only_cells=F.stratified_sample(C.CELLS, self.cells_per_stratum, self.seed),
-                      settings=settings.values)
+        design = dict(
+            controller=self.controller,
+            object_name=self.object_name,
+            alpha_m=self.alpha_m,
+            trials_per_cell=self.trials_per_cell,
+            duration_s=self.duration_s,
+            seed=self.seed,
+            resolution=self.resolution,
+            timestep_s=self.timestep_s,
+            plant=self.plant,
+            only_cells=F.stratified_sample(C.CELLS, self.cells_per_stratum, self.seed),
+            settings=settings.values,
+        )
         return Experiment(**{**design, **changes})
 
     def score(self, experiment: Experiment, pool) -> tuple[tuple[float, ...], dict]:
@@ -187,9 +223,8 @@ class TuningEvidence:
         better half of the candidates' at that rung (their first rung's trials are the smallest resource)."""
         import optuna
 
-        first = len(F.STRATA) * self.trials_per_cell       # trials of the first rung (a smaller stratum: fewer)
-        return optuna.pruners.SuccessiveHalvingPruner(min_resource=first, reduction_factor=2,
-                                                      min_early_stopping_rate=0)
+        first = len(F.STRATA) * self.trials_per_cell  # trials of the first rung (a smaller stratum: fewer)
+        return optuna.pruners.SuccessiveHalvingPruner(min_resource=first, reduction_factor=2, min_early_stopping_rate=0)
 
     def evaluate_in_rungs(self, values: dict[str, float], pool, trial) -> tuple[tuple[float, ...], dict]:
         """evaluate() a rung at a time: after each, report the misses so far to the study's pruner, which may stop
@@ -222,15 +257,23 @@ class TuningEvidence:
         """The paper's Manhattan with its gains on the same sample: what the tuned settings are measured against."""
         return self.score(self.experiment(ControllerSettings("manhattan"), controller="manhattan"), pool)[1]
 
-    def final_experiment(self, settings: ControllerSettings, trials_per_cell: int, seed: int,
-                         cells: int = C.CELLS) -> Experiment:
+    def final_experiment(
+        self, settings: ControllerSettings, trials_per_cell: int, seed: int, cells: int = C.CELLS
+    ) -> Experiment:
         """The paper's whole protocol (every cell of its 20 x 20) with these settings, on a seed the search did not
         use."""
         return self.experiment(settings, only_cells=None, trials_per_cell=trials_per_cell, seed=seed, cells=cells)
 
 
-def final_check(evidence: TuningEvidence, settings: ControllerSettings, trials_per_cell: int, seed: int, pool,
-                path: Path, cells: int = C.CELLS) -> dict:
+def final_check(
+    evidence: TuningEvidence,
+    settings: ControllerSettings,
+    trials_per_cell: int,
+    seed: int,
+    pool,
+    path: Path,
+    cells: int = C.CELLS,
+) -> dict:
     """Run (or continue: path is a resumable results file) the full protocol with the settings; its summary."""
     from .executors import run
     from .progress import Progress
@@ -240,15 +283,21 @@ def final_check(evidence: TuningEvidence, settings: ControllerSettings, trials_p
     protocol = evidence.final_experiment(settings, trials_per_cell, seed, cells)
     results = ResultsFile.open(path, protocol)
     todo = results.missing()
-    total = cells ** 2 * trials_per_cell
+    total = cells**2 * trials_per_cell
     progress = Progress(total, initial=total - len(todo), unit="trial", label="tune: final check")
     try:
         run(results, pool.imap([(protocol, t) for t in todo]), lambda record: progress.update(1))
     finally:
         progress.close()
     summary = summarize(results)
-    return {"results": str(path), "seed": seed, "cells": cells, "trials_per_cell": trials_per_cell, **summary.to_json(),
-            "fell_off": round(float(np.nanmean(summary.fell_rates)), 4)}
+    return {
+        "results": str(path),
+        "seed": seed,
+        "cells": cells,
+        "trials_per_cell": trials_per_cell,
+        **summary.to_json(),
+        "fell_off": round(float(np.nanmean(summary.fell_rates)), 4),
+    }
 
 
 def open_tuning(path: Path, evidence: TuningEvidence, per_axis: bool = False, start: dict[str, float] | None = None):
@@ -263,8 +312,10 @@ def open_tuning(path: Path, evidence: TuningEvidence, per_axis: bool = False, st
             study.enqueue_trial(start)
             study.set_user_attr("start_from", start)
     elif start is not None and study.user_attrs.get("start_from") != start:
-        raise StartMismatch(f"the study in {path} began from other values than these: a start is for a new study "
-                            f"(continue it without one, or give another --out)")
+        raise StartMismatch(
+            f"the study in {path} began from other values than these: a start is for a new study "
+            f"(continue it without one, or give another --out)"
+        )
     return study
 
 
@@ -277,8 +328,7 @@ def _score(records: list[dict]) -> tuple[tuple[float, ...], dict]:
         kept = cells.setdefault(str(r["cell"]), [0, 0])
         kept[0] += (not r["success"]) + (not r["reached"])
         kept[1] += 1
-    return (2.0 - rates["success"] - rates["reached"],), {**rates, "trials": len(records), "passed": 0,
-                                                         "cells": cells}
+    return (2.0 - rates["success"] - rates["reached"],), {**rates, "trials": len(records), "passed": 0, "cells": cells}
 
 
 def replay_pruned(evidence: TuningEvidence, candidates: list) -> list[dict]:
@@ -289,13 +339,16 @@ def replay_pruned(evidence: TuningEvidence, candidates: list) -> list[dict]:
     on it, and its misses per trial where it would have completed (None where it would have been stopped)."""
     import optuna
 
-    replay = optuna.create_study(direction="minimize", pruner=evidence.pruner(),
-                                 sampler=optuna.samplers.RandomSampler(seed=0))   # draws nothing that is used
+    replay = optuna.create_study(
+        direction="minimize", pruner=evidence.pruner(), sampler=optuna.samplers.RandomSampler(seed=0)
+    )  # draws nothing that is used
     out = []
     for t in candidates:
         if "cells" not in t.user_attrs["details"]:
-            raise ValueError(f"candidate #{t.number} has no misses per cell (scored before they were kept, or its "
-                             f"physics diverged): it cannot be replayed")
+            raise ValueError(
+                f"candidate #{t.number} has no misses per cell (scored before they were kept, or its "
+                f"physics diverged): it cannot be replayed"
+            )
         cells = t.user_attrs["details"]["cells"]
         trial = replay.ask()
         misses = n = 0
@@ -330,9 +383,9 @@ def best_settings(study, evidence: TuningEvidence) -> ControllerSettings | None:
     return dataclasses.replace(settings, plant=evidence.plant)
 
 
-CONFIRMED = "confirmed"      # the study's user attribute: {RESOLUTION:TIMESTEP: {candidate number: its score}}, one
-                             # fidelity per study
-CONFIRMED_NOW = "confirmed_now"   # ... and the candidates the last confirm() ranked, whose best is the answer
+CONFIRMED = "confirmed"  # the study's user attribute: {RESOLUTION:TIMESTEP: {candidate number: its score}}, one
+# fidelity per study
+CONFIRMED_NOW = "confirmed_now"  # ... and the candidates the last confirm() ranked, whose best is the answer
 
 
 def confirm(study, evidence: TuningEvidence, at: Fidelity, k: int, pool, progress=None) -> dict:
@@ -343,12 +396,15 @@ def confirm(study, evidence: TuningEvidence, at: Fidelity, k: int, pool, progres
     if (at.resolution, at.timestep_s) == (evidence.resolution, evidence.timestep_s):
         raise ValueError(f"the search already ran at {at.label}: confirm at a finer fidelity than it screened at")
     finer = dataclasses.replace(evidence, resolution=at.resolution, timestep_s=at.timestep_s, prune=False)
-    ranked = sorted((t for t in C.completed(study) if t.user_attrs["details"]["passed"] >= 0),
-                    key=lambda t: t.values[0])[:k]
+    ranked = sorted(
+        (t for t in C.completed(study) if t.user_attrs["details"]["passed"] >= 0), key=lambda t: t.values[0]
+    )[:k]
     kept = study.user_attrs.get(CONFIRMED, {})
     if kept and at.spec not in kept:
-        raise ValueError(f"this study's best candidates were confirmed at {', '.join(kept)}, not {at.spec}: confirm "
-                         f"at that fidelity, or search anew (another --out)")
+        raise ValueError(
+            f"this study's best candidates were confirmed at {', '.join(kept)}, not {at.spec}: confirm "
+            f"at that fidelity, or search anew (another --out)"
+        )
     study.set_user_attr(CONFIRMED_NOW, [t.number for t in ranked])
     scores = kept.get(at.spec, {})
     for t in ranked:
@@ -361,12 +417,18 @@ def confirm(study, evidence: TuningEvidence, at: Fidelity, k: int, pool, progres
     screened = [t.values[0] for t in ranked]
     there = [scores[str(t.number)]["misses"] for t in ranked]
     best = ranked[int(np.argmin(there))] if ranked else None
-    return {"fidelity": at.label, "spec": at.spec, "candidates": len(ranked),
-            "rank_correlation": F.rank_correlation(np.array(screened), np.array(there)) if len(ranked) > 1 else None,
-            "best": None if best is None else {"number": best.number, "screened_misses": best.values[0],
-                                               **scores[str(best.number)]},
-            "scores": {str(t.number): {"screened": t.values[0], "confirmed": scores[str(t.number)]["misses"]}
-                       for t in ranked}}
+    return {
+        "fidelity": at.label,
+        "spec": at.spec,
+        "candidates": len(ranked),
+        "rank_correlation": F.rank_correlation(np.array(screened), np.array(there)) if len(ranked) > 1 else None,
+        "best": None
+        if best is None
+        else {"number": best.number, "screened_misses": best.values[0], **scores[str(best.number)]},
+        "scores": {
+            str(t.number): {"screened": t.values[0], "confirmed": scores[str(t.number)]["misses"]} for t in ranked
+        },
+    }
 
 
 def confirmed_at(study) -> str | None:
@@ -381,7 +443,7 @@ def confirmed_best(study):
     kept = study.user_attrs.get(CONFIRMED, {})
     if not kept:
         return None
-    (scores,) = kept.values()                 # confirm() keeps one fidelity's
+    (scores,) = kept.values()  # confirm() keeps one fidelity's
     now = [str(n) for n in study.user_attrs.get(CONFIRMED_NOW, [])]
     number = min(now, key=lambda n: scores[n]["misses"])
     return next(t for t in C.completed(study) if t.number == int(number))
@@ -393,6 +455,7 @@ def history_figure(study, evidence: TuningEvidence, baseline: dict | None, path:
     if not done:
         return None
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -402,12 +465,17 @@ def history_figure(study, evidence: TuningEvidence, baseline: dict | None, path:
     ax.plot(numbers, misses, "o", ms=3, color="0.5", label="candidate")
     ax.plot(numbers, np.minimum.accumulate(misses), "-", color="C0", label="best so far")
     if baseline is not None:
-        ax.axhline(2.0 - baseline["success"] - baseline["reached"], color="C3", ls="--",
-                   label="the paper's Manhattan, its gains")
+        ax.axhline(
+            2.0 - baseline["success"] - baseline["reached"],
+            color="C3",
+            ls="--",
+            label="the paper's Manhattan, its gains",
+        )
     ax.set_xlabel("candidate")
     ax.set_ylabel("targets missed per trial, both rules (0..2)")
-    ax.set_title(f"tuning {evidence.controller}: {evidence.object_name}, α = {evidence.alpha_m:g} m, "
-                 f"{evidence.plant} plant")
+    ax.set_title(
+        f"tuning {evidence.controller}: {evidence.object_name}, α = {evidence.alpha_m:g} m, {evidence.plant} plant"
+    )
     ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=120)
@@ -415,31 +483,50 @@ def history_figure(study, evidence: TuningEvidence, baseline: dict | None, path:
     return path
 
 
-def write_report(study, evidence: TuningEvidence, out: Path, baseline: dict | None, final: dict | None = None,
-                 confirmation: dict | None = None) -> dict:
+def write_report(
+    study,
+    evidence: TuningEvidence,
+    out: Path,
+    baseline: dict | None,
+    final: dict | None = None,
+    confirmation: dict | None = None,
+) -> dict:
     """OUT/settings.toml (the best settings), report.json and history.png."""
     best = confirmed_best(study) or C.best_trial(study)
     settings = best_settings(study, evidence)
-    def here(path) -> str:       # a path of the report's, from its own folder (which may be copied elsewhere)
+
+    def here(path) -> str:  # a path of the report's, from its own folder (which may be copied elsewhere)
         return os.path.relpath(path, out)
 
-    report = {"evidence": dataclasses.asdict(evidence), "candidates": len(C.completed(study)),
-              "pruned": len(C.finished(study)) - len(C.completed(study)),
-              "trials_run": sum(t.user_attrs.get("details", {}).get("trials", 0) for t in C.finished(study)),
-              "baseline_on_the_sample": baseline,
-              "best": None if best is None else {"number": best.number, "misses": best.values[0],
-                                                 **best.user_attrs["details"],
-                                                 "knobs": best.user_attrs["values"],   # SPACE's units: paper_gain ones the paper's
-                                                 "settings": dict(settings.values)},  # the firmware's numbers
-              "confirmation": confirmation,
-              "final_check": None if final is None else {**final, "results": here(final["results"]),
-                                                         "figures": [here(f) for f in final.get("figures", [])]}}
+    report = {
+        "evidence": dataclasses.asdict(evidence),
+        "candidates": len(C.completed(study)),
+        "pruned": len(C.finished(study)) - len(C.completed(study)),
+        "trials_run": sum(t.user_attrs.get("details", {}).get("trials", 0) for t in C.finished(study)),
+        "baseline_on_the_sample": baseline,
+        "best": None
+        if best is None
+        else {
+            "number": best.number,
+            "misses": best.values[0],
+            **best.user_attrs["details"],
+            "knobs": best.user_attrs["values"],  # SPACE's units: paper_gain ones the paper's
+            "settings": dict(settings.values),
+        },  # the firmware's numbers
+        "confirmation": confirmation,
+        "final_check": None
+        if final is None
+        else {**final, "results": here(final["results"]), "figures": [here(f) for f in final.get("figures", [])]},
+    }
     if settings is not None:
-        (out / "settings.toml").write_text(settings.dumps(
-            f"{evidence.controller} settings tuned by mantaray sim tune for the {evidence.object_name} "
-            f"(α = {evidence.alpha_m:g} m) on the {evidence.plant} plant: candidate #{best.number} of "
-            f"{report['candidates']}\nuse: mantaray rig --settings settings.toml, or mantaray sim run (or sim heatmap) "
-            f"--settings settings.toml, which runs on the plant named here"))
+        (out / "settings.toml").write_text(
+            settings.dumps(
+                f"{evidence.controller} settings tuned by mantaray sim tune for the {evidence.object_name} "
+                f"(α = {evidence.alpha_m:g} m) on the {evidence.plant} plant: candidate #{best.number} of "
+                f"{report['candidates']}\nuse: mantaray rig --settings settings.toml, or mantaray sim run (or sim heatmap) "
+                f"--settings settings.toml, which runs on the plant named here"
+            )
+        )
     figure = history_figure(study, evidence, baseline, out / "history.png")
     report["figure"] = None if figure is None else here(figure)
     (out / "report.json").write_text(json.dumps(report, indent=1) + "\n")

@@ -1,4 +1,5 @@
 """Video of a trial from the scene's overhead camera, rendered offscreen (EGL without a display: sim/__init__.py)."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -8,11 +9,11 @@ import numpy as np
 
 from . import mjcf as J
 
-FPS_RANGE = (1.0, 240.0)   # [1/s] video frame rates a recorder takes
+FPS_RANGE = (1.0, 240.0)  # [1/s] video frame rates a recorder takes
 
 
-TARGET_RGBA = (1.0, 0.0, 1.0, 0.5)   # the target's tolerance disk in the video: translucent magenta
-DISK_HALF_THICKNESS_M = 0.0005       # [m]
+TARGET_RGBA = (1.0, 0.0, 1.0, 0.5)  # the target's tolerance disk in the video: translucent magenta
+DISK_HALF_THICKNESS_M = 0.0005  # [m]
 
 
 class Recorder:
@@ -27,7 +28,7 @@ class Recorder:
         self.renderer = mujoco.Renderer(model, height, width)
         self.frames: list = []
         self.next_s: float | None = None
-        self._target: tuple[np.ndarray, float, float] | None = None   # (centre [m, world], radius [m], t0 [s])
+        self._target: tuple[np.ndarray, float, float] | None = None  # (centre [m, world], radius [m], t0 [s])
 
     def mark_target(self, target_m, tolerance_m: float, z_m: float, t0_s: float) -> None:
         """Show the target as a disk of radius tolerance_m at height z_m [m, world], and the time since t0_s [s]."""
@@ -49,9 +50,14 @@ class Recorder:
         centre, radius, t0 = self._target
         scene = self.renderer.scene
         if scene.ngeom < scene.maxgeom:
-            mujoco.mjv_initGeom(scene.geoms[scene.ngeom], mujoco.mjtGeom.mjGEOM_CYLINDER,
-                                np.array([radius, radius, DISK_HALF_THICKNESS_M]), centre, np.eye(3).ravel(),
-                                np.array(TARGET_RGBA, dtype=np.float32))
+            mujoco.mjv_initGeom(
+                scene.geoms[scene.ngeom],
+                mujoco.mjtGeom.mjGEOM_CYLINDER,
+                np.array([radius, radius, DISK_HALF_THICKNESS_M]),
+                centre,
+                np.eye(3).ravel(),
+                np.array(TARGET_RGBA, dtype=np.float32),
+            )
             scene.ngeom += 1
         frame = np.ascontiguousarray(self.renderer.render())
         cv2.putText(frame, f"t = {data.time - t0:5.2f} s", (10, 30), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (255, 255, 255), 2)

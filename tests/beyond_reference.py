@@ -1,4 +1,5 @@
 """Independent float64 model of the controllers beyond the paper (PROTOCOL.md, Controllers) to check the C++ against."""
+
 # Written from PROTOCOL.md's equations, not from the firmware source:
 #   velocity     v <- v + dt / (tau + dt) ((p - p_prev) / dt - v), 0 at start and after a restart
 #   scheduled    w = clamp(1 - (h - |p|) / edge_zone, 0, 1); kP, kI x (1 - w (1 - edge_gain)); kD x (1 + w edge_brake);
@@ -17,17 +18,17 @@ import paper_reference as ref
 
 @dataclass
 class Schedule:
-    edge_zone: float = 0.05     # [m]
-    edge_gain: float = 1.0      # [-]
-    edge_tilt: float = 1.0      # [-]
-    edge_brake: float = 0.0     # [-]
-    brake_speed: float = 0.0    # [m/s] 0: off
+    edge_zone: float = 0.05  # [m]
+    edge_gain: float = 1.0  # [-]
+    edge_tilt: float = 1.0  # [-]
+    edge_brake: float = 0.0  # [-]
+    brake_speed: float = 0.0  # [m/s] 0: off
 
 
 @dataclass
 class Cascade:
     position_gain: float = 3.0  # [1/s]
-    speed_limit: float = 0.15   # [m/s]
+    speed_limit: float = 0.15  # [m/s]
 
 
 def bounded(x: float, low: float, high: float) -> float:
@@ -38,6 +39,7 @@ def bounded(x: float, low: float, high: float) -> float:
 @dataclass
 class BoundedPid:
     """The paper's PID (paper_reference.Pid) with an output range [low, high] instead of ±limit."""
+
     integral: float = 0.0
 
     def update(self, g: ref.Gains, error: float, error_rate: float, dt: float, low: float, high: float) -> float:
@@ -52,13 +54,14 @@ class BoundedPid:
 @dataclass
 class BeyondController:
     """'scheduled' (gains x, y) or 'cascade' (gains vx, vy); step() as paper_reference.Controller's."""
+
     kind: str
     m: float
     n: float
-    tilt_limit: float           # [deg]
-    alpha: float                # [m]
+    tilt_limit: float  # [deg]
+    alpha: float  # [m]
     gains: dict[str, ref.Gains]
-    velocity_filter: float      # [s]
+    velocity_filter: float  # [s]
     schedule: Schedule = field(default_factory=Schedule)
     cascade: Cascade = field(default_factory=Cascade)
     seed: int = 1
@@ -75,7 +78,7 @@ class BeyondController:
     def _scheduled(self, axis: str, p: float, half: float, error: float, rate: float, v: float, dt: float) -> float:
         s, g = self.schedule, self.gains[axis]
         w_edge = {side: min(max(1.0 - (half - side * p) / s.edge_zone, 0.0), 1.0) for side in (1, -1)}
-        w = max(w_edge.values())   # the nearer edge's
+        w = max(w_edge.values())  # the nearer edge's
         ease = 1.0 - w * (1.0 - s.edge_gain)
         gains = ref.Gains(g.kp * ease, g.ki * ease, g.kd * (1.0 + w * s.edge_brake), g.integral_limit)
         high, low = (side * self.tilt_limit * (1.0 - w_edge[side] * (1.0 - s.edge_tilt)) for side in (1, -1))
@@ -87,8 +90,9 @@ class BeyondController:
     def _cascade(self, axis: str, error: float, v: float, acceleration: float, dt: float) -> float:
         c = self.cascade
         wanted = bounded(c.position_gain * error, -c.speed_limit, c.speed_limit)
-        return self.pids[axis].update(self.gains[axis], wanted - v, -acceleration, dt, -self.tilt_limit,
-                                      self.tilt_limit)
+        return self.pids[axis].update(
+            self.gains[axis], wanted - v, -acceleration, dt, -self.tilt_limit, self.tilt_limit
+        )
 
     def step(self, target: tuple[float, float], position: tuple[float, float], dt: float) -> ref.Step:
         rate_known = self.prev is not None and dt > 0

@@ -1,4 +1,5 @@
 """Judging a run of the conformance suite: it passed, against the clock it names, and skipped only the other clock's tests."""
+
 from __future__ import annotations
 
 import re
@@ -13,9 +14,10 @@ def assert_suite_passed(result: subprocess.CompletedProcess, clock: str) -> None
     out = result.stdout
     summary = out.strip().splitlines()[-1] if out.strip() else ""
     assert result.returncode == 0, f"conformance suite failed ({clock} clock):\n{out[-6000:]}\n{result.stderr}"
-    assert re.search(r"\d+ passed", summary) and not re.search(r"\d+ (failed|errors?|xfailed|xpassed)\b", summary), \
+    assert re.search(r"\d+ passed", summary) and not re.search(r"\d+ (failed|errors?|xfailed|xpassed)\b", summary), (
         summary
-    assert f"clock {clock}" in out                          # the suite really ran against a firmware with that clock
+    )
+    assert f"clock {clock}" in out  # the suite really ran against a firmware with that clock
     skipped = re.search(r"(\d+) skipped", summary)
     reasons = re.findall(r"^SKIPPED \[(\d+)\] [^:]+:\d+: (.*)$", out, flags=re.MULTILINE)
     expected = f"needs a firmware with the {OTHER[clock]} clock; this one has the {clock} clock"

@@ -1,5 +1,6 @@
 """Pytest configuration of the repository's tests: that they test this checkout, the conformance suite's plugin
 (--port, fixtures), headless GL, the firmware's C API for the tests that call the transform directly."""
+
 import ctypes
 from pathlib import Path
 
@@ -15,8 +16,10 @@ def pytest_configure(config):
     """Another checkout's editable install would answer the imports, and these tests would test that one."""
     here = Path(__file__).resolve().parent.parent
     if REPO != here:
-        raise pytest.UsageError(f"the mantaray package imported is the checkout in {REPO}, not this one ({here}): "
-                                f"run `make setup` (scripts/setup.sh) here first")
+        raise pytest.UsageError(
+            f"the mantaray package imported is the checkout in {REPO}, not this one ({here}): "
+            f"run `make setup` (scripts/setup.sh) here first"
+        )
 
 
 @pytest.fixture(scope="session")

@@ -1,4 +1,5 @@
 """Independent float64 NumPy model of the paper's controllers (Methods, Algorithms 1 and 2) to check the C++ against."""
+
 # Written from the paper's equations, not from the firmware source:
 #   Manhattan normal   n = (sin θzx, sin θzy, cos θzx)                               (Algorithm 1, line 7)
 #   Euclidean normal   n = (e_x/d sin θ, e_y/d sin θ, cos θ) for d > 0, (0, 0, 1) for d = 0  (eq. normal_eu)
@@ -120,8 +121,9 @@ class Pid:
         d = g.kd * error_rate
         candidate = float(clamp(self.integral + g.ki * error * dt, g.integral_limit))
         total = p + candidate + d
-        winding_up = (total > output_limit and candidate > self.integral) or \
-                     (total < -output_limit and candidate < self.integral)
+        winding_up = (total > output_limit and candidate > self.integral) or (
+            total < -output_limit and candidate < self.integral
+        )
         if not winding_up:
             self.integral = candidate
         return float(clamp(p + self.integral + d, output_limit))

@@ -1,4 +1,5 @@
 """A synthetic overhead camera for the tests: pinhole projection of the rig's ArUco markers, known ground truth."""
+
 from __future__ import annotations
 
 import math
@@ -22,9 +23,9 @@ def intrinsics() -> np.ndarray:
 def camera(height_m: float, xy_m=(0.0, 0.0), tilt_deg: float = 0.0):
     """(rvec, tvec) of a camera looking down at the fabric from height_m above xy_m, tilted about x."""
     a = math.radians(tilt_deg)
-    down = np.array([[1, 0, 0], [0, -1, 0], [0, 0, -1]], dtype=float)           # image right +x, image down -y
+    down = np.array([[1, 0, 0], [0, -1, 0], [0, 0, -1]], dtype=float)  # image right +x, image down -y
     tilt = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
-    rotation = tilt @ down                                                         # world -> camera
+    rotation = tilt @ down  # world -> camera
     centre = np.array([xy_m[0], xy_m[1], height_m])
     return cv2.Rodrigues(rotation)[0], -rotation @ centre
 
@@ -34,14 +35,23 @@ def render(object_xy=None, marker_height_m=0.0, cam=None, hide_corner=None, nois
     rvec, tvec = cam if cam is not None else camera(1.0)
     k = intrinsics()
     image = np.full((H, W), 140, np.float64)
-    patches = [(LAYOUT.corner_ids[i], c, LAYOUT.corner_size_m, 0.0) for i, c in enumerate(LAYOUT.corner_centres_m())
-               if i != hide_corner]
+    patches = [
+        (LAYOUT.corner_ids[i], c, LAYOUT.corner_size_m, 0.0)
+        for i, c in enumerate(LAYOUT.corner_centres_m())
+        if i != hide_corner
+    ]
     if object_xy is not None:
         patches.append((LAYOUT.object_id, np.asarray(object_xy), LAYOUT.object_size_m, marker_height_m))
     for marker_id, centre, size, z in patches:
         half = size * quiet_scale(LAYOUT) / 2
-        world = np.array([[centre[0] - half, centre[1] + half, z], [centre[0] + half, centre[1] + half, z],
-                          [centre[0] + half, centre[1] - half, z], [centre[0] - half, centre[1] - half, z]])
+        world = np.array(
+            [
+                [centre[0] - half, centre[1] + half, z],
+                [centre[0] + half, centre[1] + half, z],
+                [centre[0] + half, centre[1] - half, z],
+                [centre[0] - half, centre[1] - half, z],
+            ]
+        )
         pixels, _ = cv2.projectPoints(world, rvec, tvec, k, None)
         src = np.array([[0, 0], [TEXTURE_PX, 0], [TEXTURE_PX, TEXTURE_PX], [0, TEXTURE_PX]], np.float32)
         warp = cv2.getPerspectiveTransform(src, pixels.reshape(4, 2).astype(np.float32))

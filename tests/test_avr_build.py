@@ -1,4 +1,5 @@
 """scripts/avr_build.py: the Uno image links, fits its budget, takes its flags from platformio.ini and boots."""
+
 from __future__ import annotations
 
 import configparser
@@ -29,6 +30,8 @@ sys.modules[spec.name] = avr_build  # dataclasses look their module up while the
 spec.loader.exec_module(avr_build)
 
 HAS_ARDUINO_CORE = (avr_build.ARDUINO_AVR / "cores" / "arduino").is_dir()
+
+
 # One rule for the whole suite: what scripts/setup.sh installs or builds is required, and a test without it fails
 # saying what is missing (never a skip: a green run means every test ran).
 def _require(present: bool, what: str) -> None:
@@ -43,8 +46,10 @@ def arduino_core() -> None:
 
 @pytest.fixture
 def avr_toolchain() -> None:
-    _require(shutil.which("avr-g++") is not None and HAS_ARDUINO_CORE,
-             "the Debian packages gcc-avr, binutils-avr, avr-libc and arduino-core-avr")
+    _require(
+        shutil.which("avr-g++") is not None and HAS_ARDUINO_CORE,
+        "the Debian packages gcc-avr, binutils-avr, avr-libc and arduino-core-avr",
+    )
 
 
 @pytest.fixture
@@ -91,8 +96,11 @@ def compile_commands(dry_run_stdout: str) -> list[str]:
 def test_elf_is_built_and_fits_the_budget(build):
     out, sizes = build
     assert (out / "firmware.elf").is_file() and (out / "firmware.hex").is_file()
-    berkeley = subprocess.run(["avr-size", str(out / "firmware.elf")], capture_output=True, text=True,
-                              check=True).stdout.splitlines()[1].split()
+    berkeley = (
+        subprocess.run(["avr-size", str(out / "firmware.elf")], capture_output=True, text=True, check=True)
+        .stdout.splitlines()[1]
+        .split()
+    )
     text, data, bss = (int(n) for n in berkeley[:3])
     assert sizes["flash"]["used"] == text + data
     assert sizes["ram"]["used"] == data + bss
@@ -156,7 +164,7 @@ def test_repository_ini_flags_are_the_ones_used():
     result = run_script("--dry-run")
     assert result.returncode == 0, result.stderr
     cxx = [c for c in compile_commands(result.stdout) if c.startswith("avr-g++")]
-    linker = [flag for flag in build_flags if flag.startswith("-Wl,")]   # PlatformIO gives these to the link only
+    linker = [flag for flag in build_flags if flag.startswith("-Wl,")]  # PlatformIO gives these to the link only
     assert cxx and all(f" {flag} " in f" {c} " for c in cxx for flag in build_flags if flag not in linker)
     assert not any("-std=gnu++11" in c for c in cxx)  # build_unflags
     link = [c for c in result.stdout.splitlines() if c.startswith("avr-g++") and " -c " not in f" {c} "]
@@ -185,8 +193,13 @@ def test_missing_arduino_core_names_the_debian_package(monkeypatch, capsys, tmp_
 
 def test_core_has_no_arduino_or_avr_includes():
     board_include = re.compile(r'#\s*include\s*[<"](Arduino\.h|avr/|util/|HardwareSerial|WProgram)')
-    offenders = [f"{path.name}:{n}" for path in sorted(CORE.iterdir()) if path.suffix in (".h", ".cpp")
-                 for n, line in enumerate(path.read_text().splitlines(), 1) if board_include.search(line)]
+    offenders = [
+        f"{path.name}:{n}"
+        for path in sorted(CORE.iterdir())
+        if path.suffix in (".h", ".cpp")
+        for n, line in enumerate(path.read_text().splitlines(), 1)
+        if board_include.search(line)
+    ]
     assert not offenders
 
 
@@ -195,8 +208,9 @@ def simavr_uart(elf: Path, want: int, deadline_s: float = 20.0) -> bytes:
 
     simavr prints UART output in green chunks of up to 256 bytes on stderr, each byte below 0x20 as '.'.
     """
-    proc = subprocess.Popen(["simavr", "-m", "atmega328p", "-f", "16000000", str(elf)],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    proc = subprocess.Popen(
+        ["simavr", "-m", "atmega328p", "-f", "16000000", str(elf)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+    )
     raw, uart = b"", b""
     try:
         deadline = time.monotonic() + deadline_s

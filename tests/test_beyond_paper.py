@@ -1,5 +1,6 @@
 """The paired comparison benchmarks/beyond_paper.py publishes (McNemar's counts and z, the outer band's falls), and
 the committed trials it and paper_heatmaps.py start from."""
+
 import gzip
 import math
 import sys
@@ -9,14 +10,20 @@ from hypothesis import strategies as st
 
 from mantaray.paths import REPO
 
-sys.path.insert(0, str(REPO / "benchmarks"))   # a script, and its sibling paper_heatmaps.py
+sys.path.insert(0, str(REPO / "benchmarks"))  # a script, and its sibling paper_heatmaps.py
 
 import beyond_paper as B  # noqa: E402
 import paper_heatmaps  # noqa: E402
 
 FLAGS = ("success", "reached", "fell_off")
-record = st.fixed_dictionaries({"success": st.booleans(), "reached": st.booleans(), "fell_off": st.booleans(),
-                                "target_m": st.tuples(st.floats(-0.25, 0.25), st.floats(-0.25, 0.25))})
+record = st.fixed_dictionaries(
+    {
+        "success": st.booleans(),
+        "reached": st.booleans(),
+        "fell_off": st.booleans(),
+        "target_m": st.tuples(st.floats(-0.25, 0.25), st.floats(-0.25, 0.25)),
+    }
+)
 trials = st.dictionaries(st.tuples(st.integers(0, 399), st.integers(0, 9)), record, max_size=60)
 
 
@@ -30,7 +37,7 @@ def test_mcnemar_counts_the_discordant_pairs_of_the_common_trials(a, b, key):
     assert (out["paired"], out["only_tuned"], out["only_paper"]) == (len(common), only_a, only_b)
     expected_z = (only_a - only_b) / math.sqrt(only_a + only_b) if only_a + only_b else 0.0
     assert out["z"] == round(expected_z, 2)
-    swapped = B.mcnemar(b, a, key)       # the test is antisymmetric: swapping the controllers flips the sign
+    swapped = B.mcnemar(b, a, key)  # the test is antisymmetric: swapping the controllers flips the sign
     assert (swapped["only_tuned"], swapped["only_paper"], swapped["z"]) == (only_b, only_a, -out["z"])
 
 
@@ -68,10 +75,10 @@ def test_compare_says_which_file_is_missing_and_what_runs_it(tmp_path, monkeypat
 def test_restore_starts_from_the_committed_trials_once_and_never_over_what_out_holds(tmp_path):
     committed = tmp_path / "committed.jsonl.gz"
     committed.write_bytes(gzip.compress(b'{"header": 1}\n{"key": "0:0"}\n'))
-    results = tmp_path / "out" / "run" / "results.jsonl"        # out/ and the run's folder do not exist yet
+    results = tmp_path / "out" / "run" / "results.jsonl"  # out/ and the run's folder do not exist yet
     assert paper_heatmaps.restore(results, committed)
     assert paper_heatmaps.trials_in(results) == 1
-    results.write_bytes(b'{"header": 1}\n{"key": "0:0"}\n{"key": "0:1"}\n')   # the run went on
+    results.write_bytes(b'{"header": 1}\n{"key": "0:0"}\n{"key": "0:1"}\n')  # the run went on
     assert not paper_heatmaps.restore(results, committed)
     assert paper_heatmaps.trials_in(results) == 2
     assert not paper_heatmaps.restore(tmp_path / "other" / "results.jsonl", tmp_path / "none.jsonl.gz")

@@ -1,5 +1,6 @@
 """`mantaray sim calibrate`: the search space honours the declared ranges, a tiny search resumes after an interruption,
 the log evidence recovers what wrote the log."""
+
 from __future__ import annotations
 
 import json
@@ -25,13 +26,35 @@ from mantaray.sim.executors import LocalPool
 from mantaray.sim.plant import Plant
 
 FAST = {"resolution": 11, "timestep_s": 0.002}
-TINY = ["--params", "contact.rolling_damping_per_s,fabric.size_m", "--cells-per-stratum", "1", "--trials-per-cell",
-        "1", "--duration", "0.6", "--jobs", "1", "--seed", "5", "--resolution", "11", "--timestep", "0.002"]
+TINY = [
+    "--params",
+    "contact.rolling_damping_per_s,fabric.size_m",
+    "--cells-per-stratum",
+    "1",
+    "--trials-per-cell",
+    "1",
+    "--duration",
+    "0.6",
+    "--jobs",
+    "1",
+    "--seed",
+    "5",
+    "--resolution",
+    "11",
+    "--timestep",
+    "0.002",
+]
 
 
 def _cli(*args: str, **kwargs) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "calibrate", *args], cwd=REPO,
-                          capture_output=True, text=True, timeout=600, **kwargs)
+    return subprocess.run(
+        [sys.executable, "-m", "mantaray.cli", "sim", "calibrate", *args],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        **kwargs,
+    )
 
 
 def test_every_searched_value_lies_in_its_declared_range():
@@ -62,8 +85,12 @@ def _running_with_params(db) -> bool:
     and they come one by one)."""
     searched = len(TINY[TINY.index("--params") + 1].split(","))
     with sqlite3.connect(db) as con:
-        return con.execute("select count(*) from trial_params p join trials t on p.trial_id = t.trial_id "
-                           "where t.state = 'RUNNING'").fetchone()[0] >= searched
+        return (
+            con.execute(
+                "select count(*) from trial_params p join trials t on p.trial_id = t.trial_id where t.state = 'RUNNING'"
+            ).fetchone()[0]
+            >= searched
+        )
 
 
 @pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM])
@@ -71,15 +98,20 @@ def test_a_tiny_search_is_interrupted_and_the_same_command_continues_it(tmp_path
     out = tmp_path / "cal"
     # 50 candidates: far more than can finish between the probe seeing one and the signal, even on a loaded machine;
     # the search's size is not part of its configuration, so the continuation asks for fewer
-    proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "sim", "calibrate", *TINY, "--candidates", "50",
-                             "--out", str(out)], cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mantaray.cli", "sim", "calibrate", *TINY, "--candidates", "50", "--out", str(out)],
+        cwd=REPO,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 300
-    while time.monotonic() < deadline:             # interrupt once the first candidate is in and the second runs
+    while time.monotonic() < deadline:  # interrupt once the first candidate is in and the second runs
         try:
             states = [s for _, s in _study_rows(out / "study.db")] if (out / "study.db").exists() else []
             if states.count("COMPLETE") >= 1 and _running_with_params(out / "study.db"):
                 break
-        except sqlite3.OperationalError:           # the file exists before Optuna has made its tables
+        except sqlite3.OperationalError:  # the file exists before Optuna has made its tables
             pass
         time.sleep(0.2)
     proc.send_signal(stop)
@@ -97,7 +129,7 @@ def test_a_tiny_search_is_interrupted_and_the_same_command_continues_it(tmp_path
     study = optuna.load_study(study_name=C.STUDY_NAME, storage=f"sqlite:///{out / 'study.db'}")
     failed = [t for t in study.trials if t.state == optuna.trial.TrialState.FAIL]
     done = [t for t in study.trials if t.state == optuna.trial.TrialState.COMPLETE]
-    assert failed and any(t.params == failed[0].params for t in done)    # the interrupted candidate ran again
+    assert failed and any(t.params == failed[0].params for t in done)  # the interrupted candidate ran again
     for t in done:
         for key, value in t.user_attrs["values"].items():
             P.lookup(key).check(value)
@@ -112,14 +144,17 @@ def test_a_study_with_other_options_is_refused_in_one_line(tmp_path):
     assert other.returncode == 2 and "another configuration" in other.stderr and "Traceback" not in other.stderr
 
 
-@pytest.mark.parametrize("args, needle", [
-    (["--set", "fabric.size_m=0.9"], "outside its declared range"),
-    (["--params", "fabric.sizes"], "not a declared parameter"),
-    (["--set", "reading.pid_unit=grad"], "must be one of deg, rad"),
-    (["--params", "fabric.size_m", "--set", "fabric.size_m=0.55"], "nothing to search"),
-    (["--log", "/nonexistent/run.jsonl"], "cannot read the rig log"),
-    (["--trials-per-cell", "0"], "trials per cell"),
-])
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--set", "fabric.size_m=0.9"], "outside its declared range"),
+        (["--params", "fabric.sizes"], "not a declared parameter"),
+        (["--set", "reading.pid_unit=grad"], "must be one of deg, rad"),
+        (["--params", "fabric.size_m", "--set", "fabric.size_m=0.55"], "nothing to search"),
+        (["--log", "/nonexistent/run.jsonl"], "cannot read the rig log"),
+        (["--trials-per-cell", "0"], "trials per cell"),
+    ],
+)
 def test_bad_options_are_refused_in_one_line(args, needle):
     result = _cli(*args, "--candidates", "0", "--out", "/tmp/mantaray-never-written")
     assert result.returncode == 2 and needle in result.stderr and "Traceback" not in result.stderr
@@ -150,30 +185,50 @@ def test_replaying_a_log_on_its_own_plant_retraces_it_and_on_another_does_not(sy
     run = read_run_log(path)
     same = L.trajectory_error_m(L.replay(run, Plant().set(HIDDEN).rig(**FAST)), run.xy_m)
     other = L.trajectory_error_m(L.replay(run, Plant().rig(**FAST)), run.xy_m)
-    assert same < 1e-6 and other > 1e-3          # the replay is exact: the same physics, the same commands
+    assert same < 1e-6 and other > 1e-3  # the replay is exact: the same physics, the same commands
 
 
 def test_a_log_fit_prefers_the_hidden_value(synthetic_log):
     path, _ = synthetic_log
-    evidence = L.LogEvidence(logs=(str(path),), **FAST)        # the fidelity the log was written at
+    evidence = L.LogEvidence(logs=(str(path),), **FAST)  # the fidelity the log was written at
     with LocalPool(1) as pool:
-        errors = {beta: evidence.evaluate({"contact.rolling_damping_per_s": beta}, pool)[0][0] for beta in (1.0, 2.0, 4.0)}
+        errors = {
+            beta: evidence.evaluate({"contact.rolling_damping_per_s": beta}, pool)[0][0] for beta in (1.0, 2.0, 4.0)
+        }
     assert min(errors, key=errors.get) == 2.0
 
 
 def test_a_log_search_runs_end_to_end_from_the_command_line(synthetic_log, tmp_path):
     path, _ = synthetic_log
-    result = _cli("--log", str(path), "--params", "contact.rolling_damping_per_s", "--candidates", "3", "--jobs", "1",
-                  "--horizon", "1.5", "--out", str(tmp_path / "fit"), "--json")
+    result = _cli(
+        "--log",
+        str(path),
+        "--params",
+        "contact.rolling_damping_per_s",
+        "--candidates",
+        "3",
+        "--jobs",
+        "1",
+        "--horizon",
+        "1.5",
+        "--out",
+        str(tmp_path / "fit"),
+        "--json",
+    )
     assert result.returncode == 0, result.stderr
     report = json.loads(result.stdout)
     assert report["evidence"] == "log" and report["candidates"] == 3
     assert "run.jsonl" in report["best"]["details"]["errors_m"]
 
 
-@pytest.mark.parametrize("text, needle", [("", "does not start with a config line"),
-                                          ('{"kind": "config"}\nnot json\n{}\n', "is not JSON"),
-                                          ('{"kind": "config"}\n', "no frame in which the object was seen")])
+@pytest.mark.parametrize(
+    "text, needle",
+    [
+        ("", "does not start with a config line"),
+        ('{"kind": "config"}\nnot json\n{}\n', "is not JSON"),
+        ('{"kind": "config"}\n', "no frame in which the object was seen"),
+    ],
+)
 def test_a_file_that_is_not_a_rig_log_is_refused_with_a_reason(tmp_path, text, needle):
     path = tmp_path / "bad.jsonl"
     path.write_text(text)
@@ -183,6 +238,7 @@ def test_a_file_that_is_not_a_rig_log_is_refused_with_a_reason(tmp_path, text, n
 
 class _Toy:
     """Evidence without physics: the objective is |size - 0.55|; sizes above 0.58 'diverge'."""
+
     kind = "toy"
     seed = 1
     objective_names = ("distance",)
@@ -190,6 +246,7 @@ class _Toy:
 
     def evaluate(self, values, pool):
         from mantaray.sim.model import SimulationUnstable
+
         if values["fabric.size_m"] > 0.58:
             raise SimulationUnstable("toy divergence")
         return (abs(values["fabric.size_m"] - 0.55),), {"passed": 0}
@@ -198,8 +255,12 @@ class _Toy:
 def _toy_study(path):
     evidence = _Toy()
     keys = C.searched(["fabric.size_m"], {})
-    study = optuna.create_study(storage=f"sqlite:///{path}", study_name=C.STUDY_NAME, load_if_exists=True,
-                                sampler=optuna.samplers.RandomSampler(seed=2))
+    study = optuna.create_study(
+        storage=f"sqlite:///{path}",
+        study_name=C.STUDY_NAME,
+        load_if_exists=True,
+        sampler=optuna.samplers.RandomSampler(seed=2),
+    )
     return study, evidence, keys
 
 
@@ -212,13 +273,14 @@ def test_an_unstable_candidate_scores_the_penalty_and_is_never_the_best(tmp_path
     assert all(t.user_attrs["values"]["fabric.size_m"] > 0.58 for t in unstable)
     best = C.best_trial(study)
     assert best.user_attrs["values"]["fabric.size_m"] <= 0.58 and best.values[0] == min(
-        t.values[0] for t in done if t not in unstable)
+        t.values[0] for t in done if t not in unstable
+    )
 
 
 def test_a_candidate_left_running_by_a_killed_search_is_queued_again(tmp_path):
     study, evidence, keys = _toy_study(tmp_path / "toy.db")
     orphan = study.ask()
-    size = C.suggest(orphan, keys[0])                 # the search was killed here: the trial stays RUNNING
+    size = C.suggest(orphan, keys[0])  # the search was killed here: the trial stays RUNNING
     C.requeue_abandoned(study, {p.key for p in keys})
     assert study.trials[orphan.number].state == optuna.trial.TrialState.FAIL
     C.run_study(study, evidence, keys, {}, 1, pool=None)
@@ -228,7 +290,7 @@ def test_a_candidate_left_running_by_a_killed_search_is_queued_again(tmp_path):
 def test_a_candidate_killed_while_its_values_were_drawn_fails_and_is_not_queued(tmp_path):
     """Values drawn in part are no candidate: queued, they would run with the rest drawn afresh, as another one."""
     study, evidence, keys = _toy_study(tmp_path / "toy.db")
-    orphan = study.ask()                              # killed before its values were drawn
+    orphan = study.ask()  # killed before its values were drawn
     C.requeue_abandoned(study, {p.key for p in keys})
     assert study.trials[orphan.number].state == optuna.trial.TrialState.FAIL
     assert not study.get_trials(states=(optuna.trial.TrialState.WAITING,))

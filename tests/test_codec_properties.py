@@ -1,4 +1,5 @@
 """Property tests of codec + framing: message round trips, garbage tolerance, resynchronisation, bit-flip detection."""
+
 from __future__ import annotations
 
 import enum
@@ -101,10 +102,11 @@ def test_every_message_round_trips(msg, seq):
 @pytest.mark.parametrize("cls", MESSAGE_CLASSES, ids=lambda c: c.NAME)
 def test_every_message_type_round_trips(cls):
     """Each type on its own, so a rarely drawn type still gets its share of examples."""
+
     @settings(max_examples=25, deadline=None)
     @given(msg=messages(classes=(cls,)), seq=st.integers(0, 255))
     def check(msg, seq):
-        frame, = FrameDecoder().feed(encode_frame(msg, seq))
+        (frame,) = FrameDecoder().feed(encode_frame(msg, seq))
         assert_same_message(frame.message(), msg)
         assert frame.message().encode_payload() == msg.encode_payload()
 
@@ -118,7 +120,7 @@ def test_round_trip_in_arbitrary_chunks(msg, seq, chunks):
     decoder, out, i, k = FrameDecoder(), [], 0, 0
     while i < len(wire):
         n = chunks[k % len(chunks)]
-        out += decoder.feed(wire[i:i + n])
+        out += decoder.feed(wire[i : i + n])
         i, k = i + n, k + 1
     assert len(out) == 2 and out[0] == out[1]
     assert_same_message(out[0].message(), msg)
@@ -126,14 +128,17 @@ def test_round_trip_in_arbitrary_chunks(msg, seq, chunks):
 
 # ------------------------------------------------------------------------------------- garbage
 @FAST
-@given(garbage=st.one_of(st.binary(max_size=400),
-                         st.lists(st.sampled_from([0, 1, 2, 0xFF, 0x7F, 0x10]), max_size=300).map(bytes)),
-       chunks=st.lists(st.integers(1, 64), min_size=1, max_size=30))
+@given(
+    garbage=st.one_of(
+        st.binary(max_size=400), st.lists(st.sampled_from([0, 1, 2, 0xFF, 0x7F, 0x10]), max_size=300).map(bytes)
+    ),
+    chunks=st.lists(st.integers(1, 64), min_size=1, max_size=30),
+)
 def test_garbage_never_raises_and_yields_at_most_one_item_per_delimiter(garbage, chunks):
     decoder, out, i, k = FrameDecoder(), [], 0, 0
     while i < len(garbage):
         n = chunks[k % len(chunks)]
-        out += decoder.feed(garbage[i:i + n])
+        out += decoder.feed(garbage[i : i + n])
         assert len(decoder._buf) <= m.MAX_WIRE - 1  # bounded, as the Uno's buffer is
         i, k = i + n, k + 1
     assert len(out) <= garbage.count(0)
@@ -151,8 +156,7 @@ def test_garbage_never_raises_and_yields_at_most_one_item_per_delimiter(garbage,
 
 
 @FAST
-@given(garbage=st.binary(max_size=200), msg=messages(), seq=st.integers(0, 255),
-       chunk=st.integers(1, 50))
+@given(garbage=st.binary(max_size=200), msg=messages(), seq=st.integers(0, 255), chunk=st.integers(1, 50))
 @example(garbage=b"\x01" * 120, msg=m.Identify(), seq=1, chunk=7)  # an oversized run first
 @example(garbage=b"\x05\x01", msg=m.Stop(), seq=0, chunk=1)  # a COBS code pointing past the end
 def test_a_frame_after_garbage_and_one_delimiter_is_recovered(garbage, msg, seq, chunk):
@@ -160,7 +164,7 @@ def test_a_frame_after_garbage_and_one_delimiter_is_recovered(garbage, msg, seq,
     decoder = FrameDecoder()
     out = []
     for i in range(0, len(stream), chunk):
-        out += decoder.feed(stream[i:i + chunk])
+        out += decoder.feed(stream[i : i + chunk])
     assert out, "the frame was lost"
     last = out[-1]
     assert isinstance(last, Frame)
@@ -228,7 +232,7 @@ def test_known_structural_flip_that_crc16_misses():
     frame layer can and cannot promise (CRC-16 catches a random corruption with probability 1 - 2^-16).
     """
     wire = bytes.fromhex("0410a7f60102020502833502010401a6020304bf00")
-    sent, = FrameDecoder().feed(wire)
+    (sent,) = FrameDecoder().feed(wire)
     assert isinstance(sent, Frame) and sent.id == m.ObjectPosition.ID
     out = FrameDecoder().feed(flipped(wire, 32))
     frames = [item for item in out if isinstance(item, Frame)]

@@ -1,4 +1,5 @@
 """Property: whatever the host sends (NaN, inf, huge, invalid settings), no actuator command leaves ±0.25 m."""
+
 from __future__ import annotations
 
 import ctypes
@@ -31,9 +32,30 @@ def finite(x: float) -> bool:
 
 
 # ------------------------------------------------------------------------------------- strategies
-EXTREMES = [math.nan, math.inf, -math.inf, 3.4028234663852886e38, -3.4028234663852886e38, 1e30, -1e30, 1e10,
-            -1e10, 1.401298464324817e-45, -1.401298464324817e-45, 1e-30, 0.0, -0.0, 0.25, -0.25,
-            f32(0.25000003), -f32(0.25000003), 0.5, -0.5, 4.5e-23, -4.5e-23]
+EXTREMES = [
+    math.nan,
+    math.inf,
+    -math.inf,
+    3.4028234663852886e38,
+    -3.4028234663852886e38,
+    1e30,
+    -1e30,
+    1e10,
+    -1e10,
+    1.401298464324817e-45,
+    -1.401298464324817e-45,
+    1e-30,
+    0.0,
+    -0.0,
+    0.25,
+    -0.25,
+    f32(0.25000003),
+    -f32(0.25000003),
+    0.5,
+    -0.5,
+    4.5e-23,
+    -4.5e-23,
+]
 
 
 def f32s(lo: float, hi: float) -> st.SearchStrategy[float]:
@@ -64,13 +86,16 @@ def wild_configures(draw) -> m.Configure:
 
     return m.Configure(
         controller=draw(st.one_of(st.sampled_from(list(m.Controller)), st.integers(0, 255))),
-        module_x=f("module_x", 0.1, 10.0), module_y=f("module_y", 0.1, 10.0),
-        tilt_limit=f("tilt_limit", 0.1, 89.0), tolerance=f("tolerance", 0.001, 0.5),
+        module_x=f("module_x", 0.1, 10.0),
+        module_y=f("module_y", 0.1, 10.0),
+        tilt_limit=f("tilt_limit", 0.1, 89.0),
+        tolerance=f("tolerance", 0.001, 0.5),
         noise_amplitude=f("noise_amplitude", 0.0, 0.25),
         noise_seed=draw(st.integers(0, 2**32 - 1)),
         deadman=draw(st.one_of(st.integers(20, 60000), st.integers(0, 0xFFFF))),
         telemetry_period=draw(st.one_of(st.just(0), st.integers(5, 200), st.integers(0, 0xFFFF))),
-        velocity_filter=f("velocity_filter", 0.0, 10.0))
+        velocity_filter=f("velocity_filter", 0.0, 10.0),
+    )
 
 
 @st.composite
@@ -80,10 +105,17 @@ def valid_configures(draw) -> m.Configure:
     steepest = math.degrees(math.atan(RANGE / ((module_x + module_y) / 2)))
     tilt = f32(max(0.1, steepest * draw(st.sampled_from([1.0, 1.0 + 1e-7, 0.999]) | st.floats(0.01, 1.0))))
     return m.Configure(
-        controller=draw(st.sampled_from(list(m.Controller))), module_x=module_x, module_y=module_y,
-        tilt_limit=tilt, tolerance=draw(f32s(0.001, 0.5)), noise_amplitude=draw(f32s(0.0, 0.25)),
-        noise_seed=draw(st.integers(0, 2**32 - 1)), deadman=draw(st.integers(20, 60000)),
-        telemetry_period=draw(st.sampled_from([0, 5, 100, 60000])), velocity_filter=draw(f32s(0.0, 10.0)))
+        controller=draw(st.sampled_from(list(m.Controller))),
+        module_x=module_x,
+        module_y=module_y,
+        tilt_limit=tilt,
+        tolerance=draw(f32s(0.001, 0.5)),
+        noise_amplitude=draw(f32s(0.0, 0.25)),
+        noise_seed=draw(st.integers(0, 2**32 - 1)),
+        deadman=draw(st.integers(20, 60000)),
+        telemetry_period=draw(st.sampled_from([0, 5, 100, 60000])),
+        velocity_filter=draw(f32s(0.0, 10.0)),
+    )
 
 
 def configures() -> st.SearchStrategy[m.Configure]:
@@ -93,24 +125,32 @@ def configures() -> st.SearchStrategy[m.Configure]:
 @st.composite
 def configure_pids(draw) -> m.ConfigurePid:
     if draw(st.booleans()):  # all valid, the extremes included
+
         def gain(hi):
             return draw(st.one_of(f32s(0.0, hi), st.sampled_from([0.0, hi])))
+
         axis = draw(st.sampled_from(list(m.Axis)))
     else:
+
         def gain(hi):
             return draw(st.one_of(f32s(0.0, hi), f32s(0.0, hi), wild_floats()))
+
         axis = draw(st.one_of(st.sampled_from(list(m.Axis)), st.integers(0, 255)))
-    return m.ConfigurePid(axis=axis, kp=gain(10000.0), ki=gain(10000.0), kd=gain(10000.0),
-                          integral_limit=gain(90.0))
+    return m.ConfigurePid(axis=axis, kp=gain(10000.0), ki=gain(10000.0), kd=gain(10000.0), integral_limit=gain(90.0))
 
 
 @st.composite
 def controller_settings(draw) -> m.Message:
     """configure_schedule or configure_cascade: each field within its bounds, its extremes included, or anything."""
     cls = draw(st.sampled_from([m.ConfigureSchedule, m.ConfigureCascade]))
-    return cls(**{spec.name: draw(field_value(spec, st.one_of(f32s(spec.min, spec.max),
-                                                               st.sampled_from([spec.min, spec.max]))))
-                  for spec in cls.FIELDS})
+    return cls(
+        **{
+            spec.name: draw(
+                field_value(spec, st.one_of(f32s(spec.min, spec.max), st.sampled_from([spec.min, spec.max])))
+            )
+            for spec in cls.FIELDS
+        }
+    )
 
 
 OPS = st.one_of(
@@ -121,11 +161,15 @@ OPS = st.one_of(
     st.tuples(st.just("start"), st.none()),
     st.tuples(st.just("stop"), st.none()),
     st.tuples(st.just("emergency_stop"), st.none()),
-    st.tuples(st.just("jog"), st.tuples(st.one_of(st.integers(0, 3), st.integers(0, 255)),
-                                        st.one_of(f32s(-0.25, 0.25), wild_floats()))),
+    st.tuples(
+        st.just("jog"),
+        st.tuples(st.one_of(st.integers(0, 3), st.integers(0, 255)), st.one_of(f32s(-0.25, 0.25), wild_floats())),
+    ),
     st.tuples(st.just("clock"), st.integers(0, 120_000)),
-    st.tuples(st.just("positions"), st.lists(st.tuples(positions(), positions(), st.booleans(),
-                                                        st.integers(1, 200_000)), min_size=1, max_size=12)),
+    st.tuples(
+        st.just("positions"),
+        st.lists(st.tuples(positions(), positions(), st.booleans(), st.integers(1, 200_000)), min_size=1, max_size=12),
+    ),
 )
 
 
@@ -141,8 +185,9 @@ class Model:
         self.target: tuple[float, float] | None = None
 
     def inside(self, x: float, y: float, c: m.Configure) -> bool:
-        return -0.5 * f32(c.module_x) <= x <= 0.5 * f32(c.module_x) and \
-            -0.5 * f32(c.module_y) <= y <= 0.5 * f32(c.module_y)
+        return -0.5 * f32(c.module_x) <= x <= 0.5 * f32(c.module_x) and -0.5 * f32(c.module_y) <= y <= 0.5 * f32(
+            c.module_y
+        )
 
     def bounds(self, cls, msg) -> tuple[E, int] | None:
         """The schema's field-local checks as the host runs them before sending (Message.check): the firmware's
@@ -236,14 +281,14 @@ class Rig:
         """Every telemetry received so far: commands and measured positions within the actuator range."""
         while self.link.receive() is not None:  # unsolicited telemetry still queued
             pass
-        for msg in self.telemetry[self.checked:]:
+        for msg in self.telemetry[self.checked :]:
             for value in msg.command + msg.measured:
                 assert math.isfinite(value) and abs(value) <= RANGE + SLACK, msg
         self.checked = len(self.telemetry)
 
     def expect(self, msg, refusal: tuple[E, int] | None) -> None:
         try:
-            self.link.command(msg, checked=False)   # the firmware's refusals are under test
+            self.link.command(msg, checked=False)  # the firmware's refusals are under test
         except CommandRefused as refused:
             assert refusal is not None, f"{msg} refused: {refused}"
             assert (refused.nack.code, refused.nack.field) == (refusal[0], refusal[1]), (msg, refused.nack)
@@ -254,14 +299,19 @@ class Rig:
     def position(self, x: float, y: float, visible: bool, gap_us: int) -> m.Telemetry | None:
         self.frame = (self.frame + 1) & 0xFFFF
         self.capture_us = (self.capture_us + gap_us) & 0xFFFFFFFF
-        msg = m.ObjectPosition(frame=self.frame, capture_time=self.capture_us, x=x, y=y,
-                               flags=m.PositionFlags(0) if visible else m.PositionFlags.NOT_VISIBLE)
+        msg = m.ObjectPosition(
+            frame=self.frame,
+            capture_time=self.capture_us,
+            x=x,
+            y=y,
+            flags=m.PositionFlags(0) if visible else m.PositionFlags.NOT_VISIBLE,
+        )
         config, refusal = self.model.config, None
         if visible and not finite(f32(x)):
             refusal = (E.NOT_FINITE, 2)
         elif visible and not finite(f32(y)):
             refusal = (E.NOT_FINITE, 3)
-        elif visible and abs(f32(x)) > f32(config.module_x):      # beyond the module by more than half of it
+        elif visible and abs(f32(x)) > f32(config.module_x):  # beyond the module by more than half of it
             refusal = (E.OUT_OF_RANGE, 2)
         elif visible and abs(f32(y)) > f32(config.module_y):
             refusal = (E.OUT_OF_RANGE, 3)
@@ -312,8 +362,9 @@ class Rig:
 
 
 # ------------------------------------------------------------------------------------------ tests
-@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow,
-                                                                  HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
 @given(ops=st.lists(OPS, min_size=1, max_size=25))
 def test_random_command_sequences_keep_every_command_in_range(capi, ops):
     rig = Rig(capi)
@@ -322,12 +373,17 @@ def test_random_command_sequences_keep_every_command_in_range(capi, ops):
     rig.check_bounds()
 
 
-@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow,
-                                                                 HealthCheck.function_scoped_fixture])
-@given(config=configures(), pids=st.lists(st.one_of(configure_pids(), controller_settings()), max_size=3),
-       target=st.tuples(f32s(-0.05, 0.05), f32s(-0.05, 0.05)),
-       frames=st.lists(st.tuples(positions(), positions(), st.booleans(), st.integers(1, 200_000)),
-                       min_size=1, max_size=40))
+@settings(
+    max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
+@given(
+    config=configures(),
+    pids=st.lists(st.one_of(configure_pids(), controller_settings()), max_size=3),
+    target=st.tuples(f32s(-0.05, 0.05), f32s(-0.05, 0.05)),
+    frames=st.lists(
+        st.tuples(positions(), positions(), st.booleans(), st.integers(1, 200_000)), min_size=1, max_size=40
+    ),
+)
 def test_running_controller_keeps_every_command_in_range(capi, config, pids, target, frames):
     """Configured (or refused), started, then fed extreme positions: the control path itself is bounded."""
     rig = Rig(capi)
@@ -339,9 +395,7 @@ def test_running_controller_keeps_every_command_in_range(capi, config, pids, tar
     rig.run("positions", frames)
 
 
-EXTREME_PIDS = [
-    m.ConfigurePid(axis=axis, kp=10000.0, ki=10000.0, kd=10000.0, integral_limit=90.0) for axis in m.Axis
-]
+EXTREME_PIDS = [m.ConfigurePid(axis=axis, kp=10000.0, ki=10000.0, kd=10000.0, integral_limit=90.0) for axis in m.Axis]
 
 
 @pytest.mark.parametrize("controller", list(m.Controller), ids=lambda c: c.name.lower())
@@ -350,26 +404,45 @@ def test_extreme_gains_modules_and_noise(capi, controller, module):
     """Maximal gains and noise, the steepest tilt each module allows, and positions all over the float range."""
     rig = Rig(capi)
     tilt = float(np.float32(capi.mr_max_tilt_deg(*module, RANGE)))
-    rig.run("configure", m.Configure(controller=controller, module_x=module[0], module_y=module[1],
-                                     tilt_limit=tilt, noise_amplitude=0.25, noise_seed=12345, deadman=60000,
-                                     telemetry_period=5))
+    rig.run(
+        "configure",
+        m.Configure(
+            controller=controller,
+            module_x=module[0],
+            module_y=module[1],
+            tilt_limit=tilt,
+            noise_amplitude=0.25,
+            noise_seed=12345,
+            deadman=60000,
+            telemetry_period=5,
+        ),
+    )
     for pid in EXTREME_PIDS:
         rig.run("configure_pid", pid)
     rig.run("set_target", (module[0] / 2, -module[1] / 2))
     rig.run("start", None)
     rng = np.random.default_rng(42)
     values = EXTREMES + list(rng.uniform(-1, 1, 30))
-    frames = [(float(x), float(y), True, int(g)) for x, y, g in
-              zip(rng.permutation(values * 2), rng.permutation(values * 2), rng.integers(1, 100_000, 2 * len(values)), strict=True)]
+    frames = [
+        (float(x), float(y), True, int(g))
+        for x, y, g in zip(
+            rng.permutation(values * 2),
+            rng.permutation(values * 2),
+            rng.integers(1, 100_000, 2 * len(values)),
+            strict=True,
+        )
+    ]
     rig.run("positions", frames)
     extremes = [t for t in rig.telemetry if t.state in (m.State.RUNNING, m.State.REACHED)]
     assert extremes and max(abs(c) for t in extremes for c in t.command) >= 0.2  # the limits were reached
 
 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(sides=st.tuples(f32s(0.1, 10.0), f32s(0.1, 10.0)),
-       fractions=st.tuples(st.floats(-1, 1), st.floats(-1, 1)),
-       error=st.tuples(f32s(-10, 10), f32s(-10, 10)))
+@given(
+    sides=st.tuples(f32s(0.1, 10.0), f32s(0.1, 10.0)),
+    fractions=st.tuples(st.floats(-1, 1), st.floats(-1, 1)),
+    error=st.tuples(f32s(-10, 10), f32s(-10, 10)),
+)
 def test_raw_transform_stays_in_range_within_the_tilt_limit(capi, sides, fractions, error):
     """Within |theta| <= atan(range / ((m + n) / 2)) the unclamped plane keeps every corner in range, for
     both normals (Manhattan: tan(theta) (m + n) / 2 at worst; Euclidean: tan(theta) sqrt(m^2 + n^2) / 2)."""
@@ -396,13 +469,25 @@ def test_non_finite_positions_are_refused_and_change_nothing(capi, seed):
     """A run with NaN/inf positions interleaved equals the run without them, telemetry for telemetry."""
     rng = np.random.default_rng(seed)
     bad_values = [math.nan, math.inf, -math.inf]
-    valid = [(float(x), float(y), int(g)) for x, y, g in zip(rng.uniform(-0.3, 0.3, 60), rng.uniform(-0.3, 0.3, 60),
-                                                               rng.integers(20_000, 120_000, 60), strict=True)]
+    valid = [
+        (float(x), float(y), int(g))
+        for x, y, g in zip(
+            rng.uniform(-0.3, 0.3, 60), rng.uniform(-0.3, 0.3, 60), rng.integers(20_000, 120_000, 60), strict=True
+        )
+    ]
 
     def run(with_bad: bool) -> list[tuple]:
         rig = Rig(capi)
-        rig.run("configure", m.Configure(controller=m.Controller(seed % 2), noise_amplitude=0.05, noise_seed=seed,
-                                         deadman=60000, telemetry_period=0))
+        rig.run(
+            "configure",
+            m.Configure(
+                controller=m.Controller(seed % 2),
+                noise_amplitude=0.05,
+                noise_seed=seed,
+                deadman=60000,
+                telemetry_period=0,
+            ),
+        )
         rig.run("set_target", (0.1, -0.1))
         rig.run("start", None)
         seen = []
@@ -418,7 +503,6 @@ def test_non_finite_positions_are_refused_and_change_nothing(capi, seed):
     assert run(with_bad=True) == run(with_bad=False)
 
 
-
 def _unchecked_spec(**fields):
     """A TrialSpec built without its own checks, to see what its commands would do to a firmware."""
     from dataclasses import fields as dc_fields
@@ -427,28 +511,46 @@ def _unchecked_spec(**fields):
 
     spec = object.__new__(TrialSpec)
     for f in dc_fields(TrialSpec):
-        object.__setattr__(spec, f.name, fields.get(f.name, f.default if f.default_factory is dataclasses.MISSING
-                                                    else f.default_factory()))
+        object.__setattr__(
+            spec,
+            f.name,
+            fields.get(f.name, f.default if f.default_factory is dataclasses.MISSING else f.default_factory()),
+        )
     return spec
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(tolerance=st.one_of(f32s(0.001, 0.5), f32s(0.001, 0.5), f32s(0.0, 0.6), wild_floats()),
-       alpha=st.one_of(f32s(0.0, 0.25), f32s(0.0, 0.25), f32s(-0.05, 0.3), wild_floats()),
-       gains=st.one_of(st.none(), st.tuples(st.one_of(f32s(0.0, 10000.0), f32s(0.0, 12000.0), wild_floats()),
-                                            f32s(0.0, 100.0), f32s(0.0, 100.0),
-                                            st.one_of(f32s(0.0, 90.0), f32s(0.0, 95.0), wild_floats()))),
-       controller=st.sampled_from(list(m.Controller)))
-def test_a_trial_spec_is_refused_exactly_when_the_firmware_would_refuse_its_commands(tolerance, alpha, gains,
-                                                                                      controller):
+@given(
+    tolerance=st.one_of(f32s(0.001, 0.5), f32s(0.001, 0.5), f32s(0.0, 0.6), wild_floats()),
+    alpha=st.one_of(f32s(0.0, 0.25), f32s(0.0, 0.25), f32s(-0.05, 0.3), wild_floats()),
+    gains=st.one_of(
+        st.none(),
+        st.tuples(
+            st.one_of(f32s(0.0, 10000.0), f32s(0.0, 12000.0), wild_floats()),
+            f32s(0.0, 100.0),
+            f32s(0.0, 100.0),
+            st.one_of(f32s(0.0, 90.0), f32s(0.0, 95.0), wild_floats()),
+        ),
+    ),
+    controller=st.sampled_from(list(m.Controller)),
+)
+def test_a_trial_spec_is_refused_exactly_when_the_firmware_would_refuse_its_commands(
+    tolerance, alpha, gains, controller
+):
     """The host checks a trial's settings against the schema before any firmware sees them (TrialSpec), and
     that check agrees with the firmware: what it lets through is accepted, what it refuses the firmware refuses."""
     from mantaray.sim.bridge import TrialSpec
     from mantaray.sim.experiment import controller_gains
 
     name = controller.name.lower()
-    fields = dict(start_m=(0.0, 0.0), target_m=(0.1, -0.1), controller=name, tolerance_m=tolerance, alpha_m=alpha,
-                  gains=controller_gains(name, gains))
+    fields = dict(
+        start_m=(0.0, 0.0),
+        target_m=(0.1, -0.1),
+        controller=name,
+        tolerance_m=tolerance,
+        alpha_m=alpha,
+        gains=controller_gains(name, gains),
+    )
     try:
         TrialSpec(**fields)
         refused_by_host = None

@@ -1,4 +1,5 @@
 """Runs the protocol conformance suite against the virtual MCU, simulated and wall clock, as `mantaray conformance` does."""
+
 from __future__ import annotations
 
 import os
@@ -23,8 +24,14 @@ def vmcu_built() -> None:
 def conformance(*args: str, timeout: float = 180) -> subprocess.CompletedProcess:
     """`mantaray conformance ARGS -- -rs` in a fresh interpreter (the suite needs its own pytest session); -rs names
     every skip's reason."""
-    return subprocess.run([sys.executable, "-m", "mantaray.cli", "conformance", *args, "--", "-rs"], cwd=REPO,
-                          capture_output=True, text=True, timeout=timeout, env=os.environ.copy())
+    return subprocess.run(
+        [sys.executable, "-m", "mantaray.cli", "conformance", *args, "--", "-rs"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=os.environ.copy(),
+    )
 
 
 def test_suite_passes_on_the_simulated_clock(vmcu_built):

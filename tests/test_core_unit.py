@@ -1,4 +1,5 @@
 """Runs the firmware's C++ unit tests (doctest: core_tests, board_tests in the build dir) so pytest's summary includes them."""
+
 from __future__ import annotations
 
 import re
@@ -9,7 +10,7 @@ import pytest
 from mantaray.paths import NotBuilt, native_artifact
 
 # [test cases] fewer means the binary is stale or lost test files
-MIN_TEST_CASES = {"core_tests": 110, "board_tests": 12, "board_tests_analog": 11}   # analog: no silent-I2C case
+MIN_TEST_CASES = {"core_tests": 110, "board_tests": 12, "board_tests_analog": 11}  # analog: no silent-I2C case
 
 
 @pytest.mark.parametrize("name", MIN_TEST_CASES)

@@ -1,5 +1,6 @@
 """The fidelity gate: its paired tests on drawn outcomes, the runs it refuses to pair, the start shift of its noise
 floor, the model identity that keeps results files apart, and the command end to end on a tiny sample."""
+
 from __future__ import annotations
 
 import dataclasses
@@ -32,21 +33,21 @@ def test_mcnemar_counts_discordant_pairs_and_its_p_is_symmetric_and_a_probabilit
     assert d.only_a == sum(x and not y for x, y in outcomes) and d.only_b == sum(y and not x for x, y in outcomes)
     assert d.pairs == len(outcomes)
     assert 0 < d.p_two_sided <= 1
-    assert P.discordance(b, a).p_two_sided == pytest.approx(d.p_two_sided)   # the test does not favour either run
-    assert d.p_more_in_a + P.discordance(b, a).p_more_in_a >= 1 - 1e-12   # the two one-sided tails cover everything
+    assert P.discordance(b, a).p_two_sided == pytest.approx(d.p_two_sided)  # the test does not favour either run
+    assert d.p_more_in_a + P.discordance(b, a).p_more_in_a >= 1 - 1e-12  # the two one-sided tails cover everything
 
 
 @settings(max_examples=100, deadline=None)
 @given(n=st.integers(1, 80), data=st.data())
 def test_binomial_tail_is_the_sum_of_the_fair_binomial_and_falls_with_k(n, data):
     k = data.draw(st.integers(0, n))
-    exact = sum(math.comb(n, i) for i in range(k, n + 1)) / 2 ** n
+    exact = sum(math.comb(n, i) for i in range(k, n + 1)) / 2**n
     assert P.binomial_tail(k, n) == pytest.approx(exact)
     assert P.binomial_tail(k + 1, n) <= P.binomial_tail(k, n)
 
 
 def test_mcnemar_finds_a_one_sided_split_and_not_an_even_one():
-    assert P.Discordance(100, 20, 2).p_two_sided < 1e-3      # 20 against 2: a bias
+    assert P.Discordance(100, 20, 2).p_two_sided < 1e-3  # 20 against 2: a bias
     assert P.Discordance(100, 11, 11).p_two_sided == 1.0
     assert P.Discordance(100, 0, 0).p_two_sided == 1.0
 
@@ -60,29 +61,39 @@ def test_bootstrap_interval_holds_the_mean_and_covers_a_true_shift_as_often_as_i
         ci = P.mean_interval(d, level=0.95, seed=int(rng.integers(1 << 31)))
         assert ci.low <= ci.mean <= ci.high
         missed += not ci.low <= shift <= ci.high
-    assert missed <= 12                                   # 5 expected of 100 at a 95 % level
+    assert missed <= 12  # 5 expected of 100 at a 95 % level
 
 
 def test_bootstrap_of_nothing_is_nan_and_a_bad_level_is_refused():
     assert math.isnan(P.mean_interval([]).mean)
-    few = P.mean_interval([0.01, 0.02, 0.005, 0.03, 0.01], level=0.995)   # one-signed, but only five
+    few = P.mean_interval([0.01, 0.02, 0.005, 0.03, 0.01], level=0.995)  # one-signed, but only five
     assert few.n == 5 and few.mean == pytest.approx(0.015) and math.isnan(few.low) and math.isnan(few.high)
     with pytest.raises(ValueError, match="level"):
         P.mean_interval([1.0], level=1.5)
 
 
 # ------------------------------------------------------------------------------------------- the gate's verdict
-def _results(tmp_path: Path, name: str, protocol: E.Experiment, outcomes: list[tuple[bool, bool, bool]],
-             later_s: float = 0.0):
+def _results(
+    tmp_path: Path, name: str, protocol: E.Experiment, outcomes: list[tuple[bool, bool, bool]], later_s: float = 0.0
+):
     """A results file of protocol whose trials have the given (success, reached, fell_off), in trial order, and a
     time to reach and a final error drawn from the trial's seed (the same trial, the same draw), later_s later."""
     results = R.ResultsFile(tmp_path / f"{name}.jsonl", protocol)
-    for trial, (success, reached, fell) in zip(E.trials(protocol), outcomes, strict=False):   # fewer outcomes: an unfinished run
+    for trial, (success, reached, fell) in zip(
+        E.trials(protocol), outcomes, strict=False
+    ):  # fewer outcomes: an unfinished run
         draw = np.random.default_rng(trial.seed).random(2)
-        results.records[trial.key] = {"key": trial.key, "cell": trial.cell, "k": trial.k, "success": success,
-                                      "reached": reached, "fell_off": fell, "target_m": list(trial.target_m),
-                                      "time_to_reach_s": 1.0 + 8.0 * draw[0] + later_s if reached else None,
-                                      "final_error_m": (0.02 if success else 0.05) * draw[1]}
+        results.records[trial.key] = {
+            "key": trial.key,
+            "cell": trial.cell,
+            "k": trial.k,
+            "success": success,
+            "reached": reached,
+            "fell_off": fell,
+            "target_m": list(trial.target_m),
+            "time_to_reach_s": 1.0 + 8.0 * draw[0] + later_s if reached else None,
+            "final_error_m": (0.02 if success else 0.05) * draw[1],
+        }
     return results
 
 
@@ -92,9 +103,14 @@ def _sample_runs(tmp_path, finer_outcomes, candidate_outcomes, floor_outcomes, l
     finer = sample.protocol(arm, G.FIDELITIES["reference"])
     candidate = dataclasses.replace(sample.protocol(arm, G.FIDELITIES["fast"]), **changes)
     floor = sample.protocol(arm, G.FIDELITIES["reference"], G.PERTURBATION_M)
-    return [G.Runs("manhattan", _results(tmp_path, "candidate", candidate, candidate_outcomes, later_s),
-                   _results(tmp_path, "finer", finer, finer_outcomes),
-                   _results(tmp_path, "floor", floor, floor_outcomes))]
+    return [
+        G.Runs(
+            "manhattan",
+            _results(tmp_path, "candidate", candidate, candidate_outcomes, later_s),
+            _results(tmp_path, "finer", finer, finer_outcomes),
+            _results(tmp_path, "floor", floor, floor_outcomes),
+        )
+    ]
 
 
 def _draw(rng, n, p_reach):
@@ -110,7 +126,7 @@ def _flip(outcomes, rng, share):
     return [r if rng.random() < share else o for o, r in zip(outcomes, redrawn, strict=True)]
 
 
-SEEDS = [int(s) for s in np.random.default_rng(2026).integers(0, 2 ** 32, 60)]   # the drawn samples below
+SEEDS = [int(s) for s in np.random.default_rng(2026).integers(0, 2**32, 60)]  # the drawn samples below
 
 
 def test_a_candidate_that_scatters_like_the_floor_keeps_the_outcomes_but_for_the_stated_false_alarms(tmp_path):
@@ -130,7 +146,7 @@ def test_a_candidate_that_falls_off_more_changes_the_outcomes(tmp_path):
     for seed in SEEDS[:20]:
         rng = np.random.default_rng(seed)
         finer = _draw(rng, 200, 0.5)
-        candidate = [(False, False, True) if rng.random() < 0.3 else o for o in finer]   # a third more falls
+        candidate = [(False, False, True) if rng.random() < 0.3 else o for o in finer]  # a third more falls
         report = G.compare(_sample_runs(tmp_path, finer, candidate, _flip(finer, rng, 0.05)))
         assert report["verdict"] == G.CHANGES
         assert any(c.startswith("fell off: a bias") for c in report["changed"])
@@ -163,8 +179,10 @@ def test_an_unfinished_sample_has_no_verdict(tmp_path):
     assert report["pairs"] == 150 and report["verdict"] is None and not report["complete"]
 
 
-@pytest.mark.parametrize("field, value", [("object_name", "cube"), ("plant", "paper"), ("seed", 5),
-                                          ("controller", "euclidean"), ("duration_s", 5.0)])
+@pytest.mark.parametrize(
+    "field, value",
+    [("object_name", "cube"), ("plant", "paper"), ("seed", 5), ("controller", "euclidean"), ("duration_s", 5.0)],
+)
 def test_the_gate_refuses_runs_of_other_trials_and_names_the_field(tmp_path, field, value):
     finer = _draw(np.random.default_rng(0), 200, 0.5)
     runs = _sample_runs(tmp_path, finer, finer, finer, **{field: value})
@@ -202,8 +220,7 @@ def test_an_arm_is_a_controller_or_a_settings_file_and_nothing_else(tmp_path):
 
 
 @settings(max_examples=100, deadline=None)
-@given(seed=st.integers(0, 2 ** 31), cell=st.integers(0, 399), k=st.integers(0, 20),
-       shift=st.floats(1e-6, 0.01))
+@given(seed=st.integers(0, 2**31), cell=st.integers(0, 399), k=st.integers(0, 20), shift=st.floats(1e-6, 0.01))
 def test_a_start_shift_moves_the_start_that_far_and_changes_nothing_else(seed, cell, k, shift):
     plain = E.Experiment(seed=seed)
     moved = E.make_trial(dataclasses.replace(plain, start_shift_m=shift), MODULE, cell, k)
@@ -212,7 +229,7 @@ def test_a_start_shift_moves_the_start_that_far_and_changes_nothing_else(seed, c
     distance = math.dist(moved.start_m, trial.start_m)
     assert distance <= shift + 1e-12
     assert all(abs(v) <= 0.25 for v in moved.start_m)
-    if all(abs(v) <= 0.25 - shift for v in trial.start_m):          # away from the workspace's edge: the full shift
+    if all(abs(v) <= 0.25 - shift for v in trial.start_m):  # away from the workspace's edge: the full shift
         assert distance == pytest.approx(shift)
 
 
@@ -229,44 +246,72 @@ def test_a_results_file_of_another_model_is_not_continued_and_says_how_to_start_
     R.ResultsFile.open(path, protocol)
     header, rest = path.read_text().split("\n", 1)
     stored = json.loads(header)
-    stored["model"]["mjcf_sha1"] = "0" * 16               # as if the generator had changed since
+    stored["model"]["mjcf_sha1"] = "0" * 16  # as if the generator had changed since
     path.write_text(json.dumps(stored) + "\n" + rest)
     with pytest.raises(E.ExperimentMismatch, match="Start it again"):
         R.ResultsFile.open(path, protocol)
-    del stored["model"]                                   # written before files recorded their model
+    del stored["model"]  # written before files recorded their model
     path.write_text(json.dumps(stored) + "\n" + rest)
     with pytest.raises(E.ExperimentMismatch, match="before results files recorded"):
         R.ResultsFile.open(path, protocol)
-    assert R.ResultsFile.load(path).protocol == protocol   # still read for figures and comparisons
+    assert R.ResultsFile.load(path).protocol == protocol  # still read for figures and comparisons
 
 
 # ------------------------------------------------------------------------------------------- the command
 def _gate(tmp_path, *extra):
-    return subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "fidelity", "--candidate", "5:0.002",
-                           "--finer", "7:0.002", "--cells-per-stratum", "1", "--trials-per-cell", "1",
-                           "--duration", "0.5", "--trials-dir", str(tmp_path / "trials"), "--out",
-                           str(tmp_path / "gate"), "--jobs", "1", *extra], capture_output=True, text=True, timeout=300)
+    return subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "mantaray.cli",
+            "sim",
+            "fidelity",
+            "--candidate",
+            "5:0.002",
+            "--finer",
+            "7:0.002",
+            "--cells-per-stratum",
+            "1",
+            "--trials-per-cell",
+            "1",
+            "--duration",
+            "0.5",
+            "--trials-dir",
+            str(tmp_path / "trials"),
+            "--out",
+            str(tmp_path / "gate"),
+            "--jobs",
+            "1",
+            *extra,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
 
 
 def test_the_command_runs_the_three_runs_writes_its_report_and_resumes_without_rerunning(tmp_path):
     first = _gate(tmp_path, "--controller", "manhattan")
     assert first.returncode in (0, 1), first.stderr
     files = sorted((tmp_path / "trials").iterdir())
-    assert [f.name.split("seed77_")[1] for f in files] == ["5x5_2ms.jsonl", "7x7_2ms.jsonl",
-                                                           "7x7_2ms_moved0.1mm.jsonl"]
+    assert [f.name.split("seed77_")[1] for f in files] == ["5x5_2ms.jsonl", "7x7_2ms.jsonl", "7x7_2ms_moved0.1mm.jsonl"]
     report = json.loads((tmp_path / "gate" / "report.json").read_text())
     assert report["pairs"] == 5 and report["verdict"] in (G.KEEPS, G.CHANGES)
     assert "Verdict" in (tmp_path / "gate" / "report.md").read_text()
     before = {f: f.read_bytes() for f in files}
     again = _gate(tmp_path, "--controller", "manhattan")
     assert again.returncode == first.returncode
-    assert {f: f.read_bytes() for f in files} == before          # nothing ran twice
+    assert {f: f.read_bytes() for f in files} == before  # nothing ran twice
     assert json.loads((tmp_path / "gate" / "report.json").read_text())["outcomes"] == report["outcomes"]
 
 
 def test_the_command_says_what_is_wrong_with_its_input_in_one_line(tmp_path):
-    for extra, said in ((("--candidate", "14:0.002"), "odd"), (("--controller", "nonsense"), "neither"),
-                        (("--shift", "0.5"), "start shift"), (("--shift", "0"), "must move every start"),
-                        (("--candidate", "7:0.002"), "nothing to compare")):
+    for extra, said in (
+        (("--candidate", "14:0.002"), "odd"),
+        (("--controller", "nonsense"), "neither"),
+        (("--shift", "0.5"), "start shift"),
+        (("--shift", "0"), "must move every start"),
+        (("--candidate", "7:0.002"), "nothing to compare"),
+    ):
         run = _gate(tmp_path, *extra)
         assert run.returncode == 2 and said in run.stderr and "Traceback" not in run.stderr, run.stderr

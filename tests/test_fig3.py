@@ -1,4 +1,5 @@
 """The Fig. 3 experiment's design (objects, alphas, targets from the seed) and its figure, on synthetic runs."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -25,14 +26,25 @@ def test_another_controller_runs_the_same_targets_with_its_settings():
     tuned = ControllerSettings("scheduled", (("configure_schedule.edge_tilt", 0.4),))
     paper = fig3_jobs("polyester", {}, seed=3, resolution=11, timestep_s=0.002)
     jobs = fig3_jobs("polyester", {}, seed=3, resolution=11, timestep_s=0.002, settings=tuned)
-    assert [t for _, t in jobs] == [t for _, t in paper]                  # paired: the same targets and seeds
+    assert [t for _, t in jobs] == [t for _, t in paper]  # paired: the same targets and seeds
     assert all(p.controller == "scheduled" and p.settings == tuned.values for p, _ in jobs)
 
 
 def test_the_figure_draws_a_column_per_object(tmp_path):
     rng = np.random.default_rng(0)
-    runs = {name: [{"path_m": np.cumsum(rng.normal(0, 0.01, (20, 2)), axis=0).tolist(),
-                    "tilt_deg": rng.normal(0, 10, (20, 2)).tolist(), "target_m": [0.1, -0.1], "reached": True,
-                    "fell_off": False, "alpha_m": alpha} for _ in range(2)] for name, alpha in F.FIG3_ALPHA_M.items()}
+    runs = {
+        name: [
+            {
+                "path_m": np.cumsum(rng.normal(0, 0.01, (20, 2)), axis=0).tolist(),
+                "tilt_deg": rng.normal(0, 10, (20, 2)).tolist(),
+                "target_m": [0.1, -0.1],
+                "reached": True,
+                "fell_off": False,
+                "alpha_m": alpha,
+            }
+            for _ in range(2)
+        ]
+        for name, alpha in F.FIG3_ALPHA_M.items()
+    }
     path = fig3_figure(runs, 0.02, (0.5, 0.5), 26.57, "synthetic", tmp_path / "fig3.png")
     assert path.exists() and path.stat().st_size > 20_000

@@ -1,4 +1,5 @@
 """The paper's findings F1-F6 computed from synthetic trial records: zones, strata, the shape index, totals, verdicts."""
+
 from __future__ import annotations
 
 import math
@@ -18,7 +19,7 @@ def _records(rate_of, seed=0, trials=10, cells=None):
     drawn with probability rate_of(x, y) (deterministic from the seed)."""
     rng = np.random.default_rng(seed)
     out = []
-    for cell in (range(CELLS * CELLS) if cells is None else cells):
+    for cell in range(CELLS * CELLS) if cells is None else cells:
         x, y = F.cell_centre(cell, CELLS)
         for k in range(trials):
             ok = bool(rng.random() < rate_of(x, y))
@@ -37,7 +38,7 @@ def test_the_strata_partition_the_grid_as_declared():
 
 
 @settings(max_examples=40, deadline=None)
-@given(seed=st.integers(0, 2 ** 31), per=st.integers(1, 8))
+@given(seed=st.integers(0, 2**31), per=st.integers(1, 8))
 def test_a_stratified_sample_draws_from_every_stratum_from_the_seed_alone(seed, per):
     sample = F.stratified_sample(CELLS, per, seed)
     assert sample == F.stratified_sample(CELLS, per, seed)
@@ -74,13 +75,15 @@ def test_a_stratified_sample_estimates_the_total_of_a_map_constant_within_strata
     level = {"centre": 1.0, "axes": 0.6, "diagonals": 0.4, "edges": 0.2, "corners": 0.1}
     exact = sum(len(v) * level[k] for k, v in F.strata_cells(CELLS).items())
     sample = F.stratified_sample(CELLS, 4, seed=5)
-    sampled = []                               # ten trials a cell with exactly the stratum's rate
+    sampled = []  # ten trials a cell with exactly the stratum's rate
     for c in sample:
         x, y = F.cell_centre(c, CELLS)
         n = 10
         hits = round(level[F.stratum(x, y)] * n)
-        sampled += [{"cell": c, "k": k, "target_m": [x, y], "success": k < hits, "reached": k < hits,
-                     "fell_off": False} for k in range(n)]
+        sampled += [
+            {"cell": c, "k": k, "target_m": [x, y], "success": k < hits, "reached": k < hits, "fell_off": False}
+            for k in range(n)
+        ]
     assert F.map_stats(sampled, CELLS, "end").total == pytest.approx(exact)
 
 
@@ -94,8 +97,8 @@ def test_the_shape_index_tells_a_square_map_from_a_diamond(norm, sign):
 def test_the_findings_hold_on_a_map_made_to_match_the_paper_and_fail_on_a_swapped_one():
     # A square map (rate falling with the L-inf norm) totalling ~174 whose corners stay above 10 %, and a
     # diamond (falling with the L1 norm) totalling ~106 with empty corners: the paper's Fig. 2a-b in outline.
-    square = lambda x, y: float(np.clip((0.25 - max(abs(x), abs(y))) / 0.19, 0, 1))      # noqa: E731
-    diamond = lambda x, y: float(np.clip((0.21 - abs(x) - abs(y)) / 0.06, 0, 1))         # noqa: E731
+    square = lambda x, y: float(np.clip((0.25 - max(abs(x), abs(y))) / 0.19, 0, 1))  # noqa: E731
+    diamond = lambda x, y: float(np.clip((0.21 - abs(x) - abs(y)) / 0.06, 0, 1))  # noqa: E731
     m = F.map_stats(_records(square, seed=1, trials=20), CELLS, "end")
     e = F.map_stats(_records(diamond, seed=2, trials=20), CELLS, "end")
     verdicts = {f.name: f.holds for f in F.heatmap_findings(m, e)}
@@ -118,7 +121,7 @@ def test_f6_needs_every_object_five_times_and_every_trial_reached():
     assert F.fig3_finding(full).holds
     one_fell = full[:-1] + [{"object": "bunny", "reached": True, "fell_off": True}]
     assert not F.fig3_finding(one_fell).holds
-    assert not F.fig3_finding(full[5:]).holds                 # the sphere's five missing
+    assert not F.fig3_finding(full[5:]).holds  # the sphere's five missing
     assert F.fig3_finding([]).holds is None
 
 
@@ -130,9 +133,11 @@ def test_a_measure_the_trials_cannot_give_makes_its_objective_nan_not_zero():
 
 
 def test_totals_are_scaled_to_the_papers_400_cells():
-    ten = [{"cell": c, "k": 0, "target_m": list(F.cell_centre(c, 10)), "success": True, "reached": True,
-            "fell_off": False} for c in range(100)]
-    assert F.map_stats(ten, 10, "end").total == pytest.approx(400.0)     # every cell of a 10 x 10 grid succeeds
+    ten = [
+        {"cell": c, "k": 0, "target_m": list(F.cell_centre(c, 10)), "success": True, "reached": True, "fell_off": False}
+        for c in range(100)
+    ]
+    assert F.map_stats(ten, 10, "end").total == pytest.approx(400.0)  # every cell of a 10 x 10 grid succeeds
 
 
 def test_a_map_with_one_rate_everywhere_has_no_shape():

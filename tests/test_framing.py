@@ -1,4 +1,5 @@
 """Frame layer against known answers: CRC-16, COBS, every protocol/vectors.json vector, and generate.py --check."""
+
 from __future__ import annotations
 
 import binascii
@@ -199,8 +200,11 @@ def test_vector_decodes_byte_by_byte(vector):
     assert out == FrameDecoder().feed(wire)
 
 
-SINGLE_FRAMES = [v for v in VECTORS["vectors"] if len(v["yields"]) == 1 and v["yields"][0]["yield"] == "frame"
-                 and bytes.fromhex(v["wire"]).count(0) == 1]
+SINGLE_FRAMES = [
+    v
+    for v in VECTORS["vectors"]
+    if len(v["yields"]) == 1 and v["yields"][0]["yield"] == "frame" and bytes.fromhex(v["wire"]).count(0) == 1
+]
 
 
 def test_vectors_cover_every_message():
@@ -240,15 +244,21 @@ def test_vector_crc_error_is_one_bit_off_a_valid_frame():
 
 # ---------------------------------------------------------------------------------- generate.py
 def test_generator_check_passes():
-    result = subprocess.run([sys.executable, str(PROTOCOL / "generate.py"), "--check"],
-                            capture_output=True, text=True, cwd=REPO, timeout=60)
+    result = subprocess.run(
+        [sys.executable, str(PROTOCOL / "generate.py"), "--check"], capture_output=True, text=True, cwd=REPO, timeout=60
+    )
     assert result.returncode == 0, result.stderr
 
 
 def test_vectors_are_what_their_generator_writes():
     """vectors.json is written by protocol/make_vectors.py from cases stated once; a hand edit is caught."""
-    result = subprocess.run([sys.executable, str(PROTOCOL / "make_vectors.py"), "--check"],
-                            capture_output=True, text=True, cwd=REPO, timeout=60)
+    result = subprocess.run(
+        [sys.executable, str(PROTOCOL / "make_vectors.py"), "--check"],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=60,
+    )
     assert result.returncode == 0, result.stderr
 
 
@@ -259,7 +269,7 @@ def test_vector_generator_check_fails_on_an_edited_copy(tmp_path, monkeypatch):
     edited.write_text(make_vectors.render().replace('"seq": 6', '"seq": 7', 1))
     monkeypatch.setattr(make_vectors, "VECTORS", edited)
     assert make_vectors.main(["--check"]) == 1
-    assert make_vectors.main([]) == 0 and make_vectors.main(["--check"]) == 0   # rewritten: fresh again
+    assert make_vectors.main([]) == 0 and make_vectors.main(["--check"]) == 0  # rewritten: fresh again
 
 
 def _load_generate(path: Path):

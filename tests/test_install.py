@@ -1,6 +1,7 @@
 """`pip install .` (not editable) into a fresh virtual environment gives a working mantaray outside the checkout:
 the wheel carries the native firmware (built by scikit-build-core from CMakeLists.txt) and every data file the
 package reads, and what its commands import comes with it (the environment sees none of this machine's packages)."""
+
 from __future__ import annotations
 
 import json
@@ -24,13 +25,19 @@ def installed(tmp_path_factory):
     """A fresh virtual environment (python3 -m venv, no system site packages) with the wheel built from this checkout
     installed by its own pip, dependencies from the package index: (wheel, the environment's bin folder)."""
     root = tmp_path_factory.mktemp("install")
-    venv = subprocess.run([sys.executable, "-m", "venv", str(root / "venv")], capture_output=True, text=True,
-                          timeout=300)
+    venv = subprocess.run(
+        [sys.executable, "-m", "venv", str(root / "venv")], capture_output=True, text=True, timeout=300
+    )
     assert venv.returncode == 0, venv.stderr
     bin_dir = root / "venv" / "bin"
     pip = [str(bin_dir / "python"), "-m", "pip", "-q"]
-    build = subprocess.run([*pip, "wheel", "--no-deps", "-w", str(root / "dist"), str(REPO)], capture_output=True,
-                           text=True, timeout=900, env=_env())
+    build = subprocess.run(
+        [*pip, "wheel", "--no-deps", "-w", str(root / "dist"), str(REPO)],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        env=_env(),
+    )
     assert build.returncode == 0, build.stderr
     (wheel,) = (root / "dist").glob("mantaray-*.whl")
     install = subprocess.run([*pip, "install", str(wheel)], capture_output=True, text=True, timeout=900, env=_env())
@@ -39,33 +46,48 @@ def installed(tmp_path_factory):
 
 
 def _run_installed(bin_dir, program: str, *args: str, cwd) -> subprocess.CompletedProcess:
-    return subprocess.run([str(bin_dir / program), *args], capture_output=True, text=True, timeout=300, cwd=cwd,
-                          env=_env())
+    return subprocess.run(
+        [str(bin_dir / program), *args], capture_output=True, text=True, timeout=300, cwd=cwd, env=_env()
+    )
 
 
 def test_the_wheel_carries_the_native_firmware_and_the_data_files(installed):
     wheel, _ = installed
     names = set(zipfile.ZipFile(wheel).namelist())
-    for name in ("mantaray/native/libmantaray_capi.so", "mantaray/native/mantaray-vmcu", "mantaray/protocol/schema.toml",
-                 "mantaray/protocol/rig.toml", "mantaray/protocol/rig.py", "mantaray/sim/plant.toml",
-                 "mantaray/sim/assets/bunny.obj", "mantaray/protocol/conformance/plugin.py"):
+    for name in (
+        "mantaray/native/libmantaray_capi.so",
+        "mantaray/native/mantaray-vmcu",
+        "mantaray/protocol/schema.toml",
+        "mantaray/protocol/rig.toml",
+        "mantaray/protocol/rig.py",
+        "mantaray/sim/plant.toml",
+        "mantaray/sim/assets/bunny.obj",
+        "mantaray/protocol/conformance/plugin.py",
+    ):
         assert name in names, name
     assert not any("__pycache__" in n for n in names)
 
 
 def test_the_installed_package_runs_the_main_job_outside_the_checkout(installed, tmp_path):
     _, bin_dir = installed
-    where = _run_installed(bin_dir, "python", "-c", "import mantaray.paths as p, mantaray.sim.bridge as b; "
-                           "print(p.native_artifact('libmantaray_capi.so')); print(b.__file__)", cwd=tmp_path)
+    where = _run_installed(
+        bin_dir,
+        "python",
+        "-c",
+        "import mantaray.paths as p, mantaray.sim.bridge as b; "
+        "print(p.native_artifact('libmantaray_capi.so')); print(b.__file__)",
+        cwd=tmp_path,
+    )
     assert where.returncode == 0, where.stderr
     venv = str(bin_dir.parent)
-    assert all(line.startswith(venv) for line in where.stdout.split())      # nothing from the checkout
+    assert all(line.startswith(venv) for line in where.stdout.split())  # nothing from the checkout
     vmcu = _run_installed(bin_dir, "mantaray", "vmcu", "--identify-only", cwd=tmp_path)
     assert vmcu.returncode == 0 and "matches this host" in vmcu.stdout, vmcu.stderr
-    run = _run_installed(bin_dir, "mantaray", "sim", "run", "--duration", "0.5", "--json", "--out",
-                         str(tmp_path / "out"), cwd=tmp_path)
+    run = _run_installed(
+        bin_dir, "mantaray", "sim", "run", "--duration", "0.5", "--json", "--out", str(tmp_path / "out"), cwd=tmp_path
+    )
     result = json.loads(run.stdout.splitlines()[-1])
-    assert run.returncode == 1 and not result["success"], run.stderr   # 0.10 m short after 0.5 s: a result, exit 1
+    assert run.returncode == 1 and not result["success"], run.stderr  # 0.10 m short after 0.5 s: a result, exit 1
     assert result["camera_frames"] == 7 and (tmp_path / "out").is_dir()
 
 

@@ -1,4 +1,5 @@
 """The packages' layering: the protocol needs nothing of ours, the host never needs the simulation (or MuJoCo)."""
+
 from __future__ import annotations
 
 import ast
@@ -12,8 +13,12 @@ from mantaray.paths import REPO
 
 # package folder -> the mantaray packages its modules may import (besides itself and the shared top-level modules);
 # the conformance suite is a client of the protocol through the host's link
-ALLOWED = {"protocol": set(), "protocol/conformance": {"protocol", "host"}, "host": {"protocol"},
-           "sim": {"protocol", "host"}}
+ALLOWED = {
+    "protocol": set(),
+    "protocol/conformance": {"protocol", "host"},
+    "host": {"protocol"},
+    "sim": {"protocol", "host"},
+}
 PACKAGE_OF = {"protocol": "protocol", "protocol/conformance": "protocol", "host": "host", "sim": "sim"}
 SHARED = {"mantaray.paths", "mantaray.outputs", "mantaray.plots", "mantaray.arguments"}
 
@@ -46,17 +51,20 @@ def test_each_package_imports_only_the_layers_below_it(folder):
 
 def test_the_rig_command_runs_without_loading_the_simulation(tmp_path):
     """The rig's figure and command line load no physics engine: what a rig owner without MuJoCo would run."""
-    code = ("import sys, numpy as np\n"
-            "from mantaray.cli import build_parser\n"
-            "from mantaray.plots import path_phase_figure\n"
-            "import mantaray.host.cli, mantaray.host.session, mantaray.host.tracker\n"
-            "build_parser().parse_args(['rig', '--port', '/dev/null', '--camera', '0', '--target', '0,0'])\n"
-            "path_phase_figure(np.zeros((3, 2)), np.zeros((3, 2)), (0, 0), [(0.1, 0)], 0.02, 't', (0.5, 0.5), 26.6,"
-            " sys.argv[1])\n"
-            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'mujoco' or m.startswith('mantaray.sim.')"
-            " and m not in ('mantaray.sim.cli', 'mantaray.sim.objects', 'mantaray.sim.parameters',"
-            " 'mantaray.sim.plant', 'mantaray.sim.rig')))\n")
-    proc = subprocess.run([sys.executable, "-c", code, str(tmp_path / "figure.png")], capture_output=True,
-                          text=True, timeout=120)
+    code = (
+        "import sys, numpy as np\n"
+        "from mantaray.cli import build_parser\n"
+        "from mantaray.plots import path_phase_figure\n"
+        "import mantaray.host.cli, mantaray.host.session, mantaray.host.tracker\n"
+        "build_parser().parse_args(['rig', '--port', '/dev/null', '--camera', '0', '--target', '0,0'])\n"
+        "path_phase_figure(np.zeros((3, 2)), np.zeros((3, 2)), (0, 0), [(0.1, 0)], 0.02, 't', (0.5, 0.5), 26.6,"
+        " sys.argv[1])\n"
+        "print(sorted(m for m in sys.modules if m.split('.')[0] == 'mujoco' or m.startswith('mantaray.sim.')"
+        " and m not in ('mantaray.sim.cli', 'mantaray.sim.objects', 'mantaray.sim.parameters',"
+        " 'mantaray.sim.plant', 'mantaray.sim.rig')))\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", code, str(tmp_path / "figure.png")], capture_output=True, text=True, timeout=120
+    )
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "[]"

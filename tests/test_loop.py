@@ -1,5 +1,6 @@
 """The closed loop the rig and the simulation share: frames numbered and timed as the protocol says, unseen and
 dropped frames recorded without an answer, the tolerance judged with and without a hold, the run ended by its stop rules."""
+
 from __future__ import annotations
 
 import math
@@ -16,19 +17,23 @@ from mantaray.protocol import messages as m
 
 
 def _telemetry(frame: int) -> m.Telemetry:
-    return m.Telemetry(position_frame=frame, state=m.State.RUNNING, tilt_zx=1.0, tilt_zy=-2.0,
-                       command=(0.01, 0.02, 0.03, 0.04))
+    return m.Telemetry(
+        position_frame=frame, state=m.State.RUNNING, tilt_zx=1.0, tilt_zy=-2.0, command=(0.01, 0.02, 0.03, 0.04)
+    )
 
 
 def test_frames_are_numbered_timed_and_flagged_as_the_protocol_says():
     sent = []
     loop = ClosedLoop(lambda msg: sent.append(msg) or _telemetry(msg.frame), time_base_us=0xFFFF_FF00, frame=0xFFFE)
     loop.step(0.0, (0.01, -0.02), (0.1, 0.1))
-    loop.step(0.5, None, (0.1, 0.1))                     # not seen
-    loop.step(1.0, (math.nan, 0.0), (0.1, 0.1))          # a tracker's NaN is not seen either
-    assert [msg.frame for msg in sent] == [0xFFFF, 0, 1]                                 # u16, wraps
-    assert [msg.capture_time for msg in sent] == [0xFFFF_FF00, (0xFFFF_FF00 + 500_000) & 0xFFFFFFFF,
-                                                  (0xFFFF_FF00 + 1_000_000) & 0xFFFFFFFF]   # u32 on the firmware clock
+    loop.step(0.5, None, (0.1, 0.1))  # not seen
+    loop.step(1.0, (math.nan, 0.0), (0.1, 0.1))  # a tracker's NaN is not seen either
+    assert [msg.frame for msg in sent] == [0xFFFF, 0, 1]  # u16, wraps
+    assert [msg.capture_time for msg in sent] == [
+        0xFFFF_FF00,
+        (0xFFFF_FF00 + 500_000) & 0xFFFFFFFF,
+        (0xFFFF_FF00 + 1_000_000) & 0xFFFFFFFF,
+    ]  # u32 on the firmware clock
     assert [bool(msg.flags & m.PositionFlags.NOT_VISIBLE) for msg in sent] == [False, True, True]
     assert (sent[0].x, sent[0].y) == (0.01, -0.02)
     rows = loop.arrays()
@@ -40,7 +45,7 @@ def test_a_dropped_frame_uses_up_its_number_and_records_no_answer():
     loop = ClosedLoop(lambda msg: _telemetry(msg.frame) if msg.frame != 3 else None, on_telemetry=applied.append)
     loop.step(0.0, (0.0, 0.0), (0.0, 0.0))
     loop.dropped(0.1, (0.0, 0.0))
-    loop.step(0.2, (0.0, 0.0), (0.0, 0.0))               # frame 3: no telemetry came
+    loop.step(0.2, (0.0, 0.0), (0.0, 0.0))  # frame 3: no telemetry came
     loop.step(0.3, (0.0, 0.0), (0.0, 0.0))
     rows = loop.arrays()
     assert loop.frame == 4 and [t.position_frame for t in applied] == [1, 4]
@@ -85,17 +90,17 @@ def test_run_ends_at_the_first_frame_within_only_when_told_to_stop_there(xs, sto
     why = loop.run(_frames(xs), Tolerance(0.02), stop_when_reached=stop, on_frame=lambda f, t: seen.append(t))
     first = next((k for k, x in enumerate(xs) if abs(x) < 0.02), None)
     if stop and first is not None:
-        assert why == STOPPED_REACHED and len(sent) == first          # the frame judged within is not sent
+        assert why == STOPPED_REACHED and len(sent) == first  # the frame judged within is not sent
     else:
         assert why == STOPPED_BY_SOURCE and len(sent) == len(xs)
-    assert [t.position_frame for t in seen] == sent                  # on_frame sees each sent frame's answer
+    assert [t.position_frame for t in seen] == sent  # on_frame sees each sent frame's answer
 
 
 def test_run_records_dropped_frames_and_ends_when_a_delivery_says_so():
     delivered = []
     frames = _frames([0.2, 0.2, 0.2, 0.2])
     frames[1].dropped = True
-    frames[2].deliver = lambda: delivered.append(2) or False        # the object fell on the way to the firmware
+    frames[2].deliver = lambda: delivered.append(2) or False  # the object fell on the way to the firmware
     loop = ClosedLoop(lambda msg: _telemetry(msg.frame))
     assert loop.run(frames, Tolerance(0.02), stop_when_reached=True) == STOPPED_BY_SOURCE
     rows = loop.arrays()

@@ -1,5 +1,6 @@
 """Writing the marker sheet: a write that fails part-way (a full disk) leaves the old sheet or none, never a cut one,
 and the command says so in one line with exit status 2."""
+
 from __future__ import annotations
 
 import errno
@@ -15,7 +16,7 @@ from matplotlib.figure import Figure
 from mantaray.host import marker_sheet as M
 from mantaray.outputs import OutputError
 
-FILE_LIMIT_BYTES = 8000      # a sheet is ~30 kB as a PDF, more as a PNG: the write fails part-way, as on a full disk
+FILE_LIMIT_BYTES = 8000  # a sheet is ~30 kB as a PDF, more as a PNG: the write fails part-way, as on a full disk
 
 
 def _file_size_limit() -> None:
@@ -28,8 +29,14 @@ def _file_size_limit() -> None:
 def test_a_write_cut_off_part_way_leaves_no_file_and_says_so_in_one_line(tmp_path, name):
     """matplotlib's PDF writer answers a failed write with an AttributeError; the command names the OSError."""
     out = tmp_path / name
-    run = subprocess.run([sys.executable, "-m", "mantaray.cli", "markers", "--out", str(out)], cwd=tmp_path,
-                         preexec_fn=_file_size_limit, capture_output=True, text=True, timeout=120)
+    run = subprocess.run(
+        [sys.executable, "-m", "mantaray.cli", "markers", "--out", str(out)],
+        cwd=tmp_path,
+        preexec_fn=_file_size_limit,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert run.returncode == 2
     assert run.stderr.splitlines() == [f"mantaray markers: cannot write {out}: File too large"]
     assert list(tmp_path.iterdir()) == []

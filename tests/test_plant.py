@@ -1,4 +1,5 @@
 """The declared parameter space (sim/plant.toml) and plants: ranges honoured, defaults in one place, the README in step."""
+
 from __future__ import annotations
 
 import math
@@ -47,14 +48,17 @@ def test_a_plant_sets_any_value_within_range_on_the_field_it_names(data):
     assert _rig_value(rig, p) == pytest.approx(value)
 
 
-@pytest.mark.parametrize("key, value, needle", [
-    ("fabric.size_m", 0.7, r"outside its declared range \[0.5, 0.6\] m"),
-    ("contact.rolling_damping_per_s", -1, "outside its declared range"),
-    ("fabric.mass_kg", math.nan, "outside its declared range"),
-    ("fabric.mass_kg", "heavy", "must be a number"),
-    ("reading.pid_unit", "grad", "must be one of deg, rad"),
-    ("fabric.size", 0.5, "is not a declared parameter"),
-])
+@pytest.mark.parametrize(
+    "key, value, needle",
+    [
+        ("fabric.size_m", 0.7, r"outside its declared range \[0.5, 0.6\] m"),
+        ("contact.rolling_damping_per_s", -1, "outside its declared range"),
+        ("fabric.mass_kg", math.nan, "outside its declared range"),
+        ("fabric.mass_kg", "heavy", "must be a number"),
+        ("reading.pid_unit", "grad", "must be one of deg, rad"),
+        ("fabric.size", 0.5, "is not a declared parameter"),
+    ],
+)
 def test_a_value_outside_its_range_or_an_undeclared_key_is_refused(key, value, needle):
     with pytest.raises(P.ParameterError, match=needle):
         Plant().set({key: value})
@@ -85,8 +89,9 @@ def test_the_readme_table_is_generated_from_the_declared_table():
     readme = (REPO / "sim" / "README.md").read_text()
     block = re.search(r"<!-- parameters: begin.*?-->\n(.*?)\n<!-- parameters: end -->", readme, re.S)
     assert block, "sim/README.md has no generated parameter table"
-    assert block.group(1).strip() == P.markdown_table().strip(), \
+    assert block.group(1).strip() == P.markdown_table().strip(), (
         "sim/README.md's parameter table is stale: python3 -m mantaray.sim.parameters --write-readme"
+    )
 
 
 def test_the_radian_reading_scales_the_papers_gains_and_nothing_else():
@@ -95,7 +100,7 @@ def test_the_radian_reading_scales_the_papers_gains_and_nothing_else():
     assert gains["x"].kp == pytest.approx(paper["kp"] * 180 / math.pi)
     assert gains["y"].kd == pytest.approx(paper["kd"] * 180 / math.pi)
     assert gains["x"].integral_limit == paper["integral_limit"]
-    assert controller_gains("euclidean", None, 1.0) == {}     # degrees: the firmware's own defaults
+    assert controller_gains("euclidean", None, 1.0) == {}  # degrees: the firmware's own defaults
     protocol = Experiment(cells=2, trials_per_cell=1, plant_set=(("reading.pid_unit", "rad"),), controller="euclidean")
     spec = trial_spec(protocol, trials(protocol)[0])
     assert spec.gains["radial"].ki == pytest.approx(m.PID_DEFAULTS[m.Axis.RADIAL]["ki"] * 180 / math.pi)

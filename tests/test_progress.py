@@ -1,4 +1,5 @@
 """Progress of long runs: plain timestamped lines with an ETA when the output is not a terminal."""
+
 from __future__ import annotations
 
 import io
@@ -25,7 +26,7 @@ def test_progress_lines_are_spaced_out_but_the_last_one_is_always_printed():
     for _ in range(50):
         progress.update()
     assert [line.split(" ", 1)[1] for line in out.getvalue().splitlines()][-1].startswith("50/50 trials")
-    assert len(out.getvalue().splitlines()) == 2          # the first, then the last
+    assert len(out.getvalue().splitlines()) == 2  # the first, then the last
 
 
 def test_disabled_progress_prints_nothing():
@@ -42,13 +43,21 @@ def test_a_quantity_such_as_simulated_time_prints_with_its_own_units():
         progress.update(t_s - progress.done)
     lines = out.getvalue().splitlines()
     assert [line.split(" ", 1)[1].split(",")[0] for line in lines] == [
-        "sim run: 0.5/2.0 simulated s", "sim run: 1.2/2.0 simulated s", "sim run: 2.0/2.0 simulated s"]
+        "sim run: 0.5/2.0 simulated s",
+        "sim run: 1.2/2.0 simulated s",
+        "sim run: 2.0/2.0 simulated s",
+    ]
 
 
 def test_sim_run_prints_progress_lines_when_its_output_goes_to_a_log(tmp_path):
     import subprocess
     import sys
-    run = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "run", "--duration", "0.5", "--out",
-                          str(tmp_path)], capture_output=True, text=True, timeout=300)
-    assert run.returncode == 1, run.stderr                        # 0.5 s is too short to get there: a result
+
+    run = subprocess.run(
+        [sys.executable, "-m", "mantaray.cli", "sim", "run", "--duration", "0.5", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert run.returncode == 1, run.stderr  # 0.5 s is too short to get there: a result
     assert re.search(r"^\d\d:\d\d:\d\d sim run: 0\.5/0\.5 simulated s", run.stderr, re.MULTILINE), run.stderr

@@ -1,4 +1,5 @@
 """The C++ transform and controllers against the independent float64 model of the paper (tests/paper_reference.py)."""
+
 from __future__ import annotations
 
 import ctypes
@@ -160,20 +161,33 @@ class RunConfig:
 
 def random_config(rng, kind: str, deadman: int = 60000) -> RunConfig:
     def gains() -> ref.Gains:
-        return ref.Gains(*(f32(v) for v in (rng.uniform(0, 120), rng.uniform(0, 60), rng.uniform(0, 25),
-                                             rng.uniform(0.5, 30))))
-    return RunConfig(kind=kind,
-                     tilt_limit=f32(rng.uniform(3.0, 26.5)),
-                     alpha=f32(rng.uniform(0.0, 0.1)),
-                     seed=int(rng.integers(0, 2**32)),
-                     deadman=deadman,
-                     telemetry_period=int(rng.choice([0, 0, 5, 40])),
-                     gains={"x": gains(), "y": gains(), "radial": gains(), "vx": gains(), "vy": gains()},
-                     velocity_filter=f32(rng.choice([0.0, rng.uniform(0.0, 0.5)])),
-                     schedule=beyond.Schedule(*(f32(v) for v in (rng.uniform(0.005, 0.6), rng.uniform(0, 1),
-                                                                 rng.uniform(0, 1), rng.uniform(0, 20),
-                                                                 rng.choice([0.0, rng.uniform(0.01, 2.0)])))),
-                     cascade=beyond.Cascade(f32(rng.uniform(0, 20)), f32(rng.uniform(0.001, 1.0))))
+        return ref.Gains(
+            *(f32(v) for v in (rng.uniform(0, 120), rng.uniform(0, 60), rng.uniform(0, 25), rng.uniform(0.5, 30)))
+        )
+
+    return RunConfig(
+        kind=kind,
+        tilt_limit=f32(rng.uniform(3.0, 26.5)),
+        alpha=f32(rng.uniform(0.0, 0.1)),
+        seed=int(rng.integers(0, 2**32)),
+        deadman=deadman,
+        telemetry_period=int(rng.choice([0, 0, 5, 40])),
+        gains={"x": gains(), "y": gains(), "radial": gains(), "vx": gains(), "vy": gains()},
+        velocity_filter=f32(rng.choice([0.0, rng.uniform(0.0, 0.5)])),
+        schedule=beyond.Schedule(
+            *(
+                f32(v)
+                for v in (
+                    rng.uniform(0.005, 0.6),
+                    rng.uniform(0, 1),
+                    rng.uniform(0, 1),
+                    rng.uniform(0, 20),
+                    rng.choice([0.0, rng.uniform(0.01, 2.0)]),
+                )
+            )
+        ),
+        cascade=beyond.Cascade(f32(rng.uniform(0, 20)), f32(rng.uniform(0.001, 1.0))),
+    )
 
 
 class Harness:
@@ -183,22 +197,41 @@ class Harness:
         self.cfg = cfg
         self.link = Link(InProcessTransport(simulated_clock=True))  # a fresh boot: the core's state is global
         self.link.identify()
-        self.link.command(m.Configure(
-            controller=m.Controller[cfg.kind.upper()], module_x=0.5, module_y=0.5, tilt_limit=cfg.tilt_limit,
-            tolerance=0.02, noise_amplitude=cfg.alpha, noise_seed=cfg.seed, deadman=cfg.deadman,
-            telemetry_period=cfg.telemetry_period, velocity_filter=cfg.velocity_filter))
+        self.link.command(
+            m.Configure(
+                controller=m.Controller[cfg.kind.upper()],
+                module_x=0.5,
+                module_y=0.5,
+                tilt_limit=cfg.tilt_limit,
+                tolerance=0.02,
+                noise_amplitude=cfg.alpha,
+                noise_seed=cfg.seed,
+                deadman=cfg.deadman,
+                telemetry_period=cfg.telemetry_period,
+                velocity_filter=cfg.velocity_filter,
+            )
+        )
         for axis in m.Axis:
             g = cfg.gains.get(axis.name.lower())
             if g is not None:
-                self.link.command(m.ConfigurePid(axis=axis, kp=g.kp, ki=g.ki, kd=g.kd,
-                                                 integral_limit=g.integral_limit))
+                self.link.command(m.ConfigurePid(axis=axis, kp=g.kp, ki=g.ki, kd=g.kd, integral_limit=g.integral_limit))
         self.link.command(m.ConfigureSchedule(**vars(cfg.schedule)))
         self.link.command(m.ConfigureCascade(**vars(cfg.cascade)))
         if cfg.kind in ("manhattan", "euclidean"):
             self.model = ref.Controller(cfg.kind, 0.5, 0.5, cfg.tilt_limit, cfg.alpha, cfg.gains, cfg.seed)
         else:
-            self.model = beyond.BeyondController(cfg.kind, 0.5, 0.5, cfg.tilt_limit, cfg.alpha, cfg.gains,
-                                                 cfg.velocity_filter, cfg.schedule, cfg.cascade, cfg.seed)
+            self.model = beyond.BeyondController(
+                cfg.kind,
+                0.5,
+                0.5,
+                cfg.tilt_limit,
+                cfg.alpha,
+                cfg.gains,
+                cfg.velocity_filter,
+                cfg.schedule,
+                cfg.cascade,
+                cfg.seed,
+            )
         self.frame = 0
         self.capture_us = 1_000_000
         self.clock_us = 0
@@ -236,15 +269,17 @@ class Harness:
         self.frame = (self.frame + 1) & 0xFFFF
         x, y = f32(x), f32(y)
         flags = m.PositionFlags(0) if visible else m.PositionFlags.NOT_VISIBLE
-        tel = self.link.position(m.ObjectPosition(frame=self.frame, capture_time=self.capture_us & 0xFFFFFFFF,
-                                                  x=x, y=y, flags=flags))
+        tel = self.link.position(
+            m.ObjectPosition(frame=self.frame, capture_time=self.capture_us & 0xFFFFFFFF, x=x, y=y, flags=flags)
+        )
         assert tel.faults == 0, tel
         assert tel.position_frame == self.frame
         assert tel.measured == tel.command  # the native HAL's actuators are ideal
         if not visible:
             held = self.last_telemetry or m.Telemetry()  # level after start
-            assert (tel.tilt_zx, tel.tilt_zy, tel.command) == (held.tilt_zx, held.tilt_zy, held.command), \
+            assert (tel.tilt_zx, tel.tilt_zy, tel.command) == (held.tilt_zx, held.tilt_zy, held.command), (
                 "commands hold while the object is not visible"
+            )
             self.last_telemetry = tel
             return tel
         self.clock_since_valid_us = 0
@@ -264,9 +299,12 @@ class Harness:
         """A visible measurement no controller may see (NaN, inf, off the module): refused, naming the field, and
         nothing of it is kept (the next frame's dt, velocity and commands are as if it never came)."""
         with pytest.raises(CommandRefused) as refused:
-            self.link.position(m.ObjectPosition(frame=(self.frame + 1) & 0xFFFF, capture_time=self.capture_us & 0xFFFFFFFF,
-                                                x=f32(x), y=f32(y)))
-        x_bad = not (math.isfinite(x) and abs(x) <= 0.5)            # the module's half side is 0.5 m here
+            self.link.position(
+                m.ObjectPosition(
+                    frame=(self.frame + 1) & 0xFFFF, capture_time=self.capture_us & 0xFFFFFFFF, x=f32(x), y=f32(y)
+                )
+            )
+        x_bad = not (math.isfinite(x) and abs(x) <= 0.5)  # the module's half side is 0.5 m here
         bad = x if x_bad else y
         assert refused.value.code == (m.ErrorCode.OUT_OF_RANGE if math.isfinite(bad) else m.ErrorCode.NOT_FINITE)
         names = [spec.name for spec in m.ObjectPosition.FIELDS]
@@ -363,15 +401,15 @@ def test_a_schedule_wider_than_half_the_module_limits_each_side_by_its_own_edge(
             h.advance(100_000)
             tilt[p, target] = h.position(p, 0.0).tilt_zx
 
-    def limit(distance_to_edge: float) -> float:   # [deg] the schedule's limit toward an edge that far away
+    def limit(distance_to_edge: float) -> float:  # [deg] the schedule's limit toward an edge that far away
         w = min(max(1.0 - distance_to_edge / zone, 0.0), 1.0)
         return cfg.tilt_limit * (1.0 - w * (1.0 - edge_tilt))
 
     for p in (1e-4, -1e-4, 0.1, -0.1):
-        assert tilt[p, 0.25] == pytest.approx(limit(0.25 - p), abs=0.01), (p, tilt)      # toward +x
-        assert tilt[p, -0.25] == pytest.approx(-limit(0.25 + p), abs=0.01), (p, tilt)    # toward -x
+        assert tilt[p, 0.25] == pytest.approx(limit(0.25 - p), abs=0.01), (p, tilt)  # toward +x
+        assert tilt[p, -0.25] == pytest.approx(-limit(0.25 + p), abs=0.01), (p, tilt)  # toward -x
     assert abs(tilt[1e-4, 0.25] - tilt[-1e-4, 0.25]) < 0.01 and abs(tilt[1e-4, -0.25] - tilt[-1e-4, -0.25]) < 0.01
-    assert abs(tilt[0.1, 0.25]) < abs(tilt[0.1, -0.25]) - 0.05   # off the centre the nearer edge limits more
+    assert abs(tilt[0.1, 0.25]) < abs(tilt[0.1, -0.25]) - 0.05  # off the centre the nearer edge limits more
 
 
 def test_paper_gains_and_defaults_match():
@@ -379,8 +417,10 @@ def test_paper_gains_and_defaults_match():
     for kind in ("manhattan", "euclidean"):
         rng = np.random.default_rng(5 if kind == "manhattan" else 6)
         defaults = m.PID_DEFAULTS
-        gains = {name: ref.Gains(*(f32(defaults[axis][k]) for k in ("kp", "ki", "kd", "integral_limit")))
-                 for axis, name in ((m.Axis.X, "x"), (m.Axis.Y, "y"), (m.Axis.RADIAL, "radial"))}
+        gains = {
+            name: ref.Gains(*(f32(defaults[axis][k]) for k in ("kp", "ki", "kd", "integral_limit")))
+            for axis, name in ((m.Axis.X, "x"), (m.Axis.Y, "y"), (m.Axis.RADIAL, "radial"))
+        }
         cfg = RunConfig(kind, f32(26.565051), 0.0, 1, 500, 0, gains)
         h = Harness(cfg)
         drive(h, rng, steps=100)

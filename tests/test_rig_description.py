@@ -1,5 +1,6 @@
 """protocol/rig.toml is the one rig description: checked against itself and the schema, reported by the firmware at
 identify, compared by the host, and the source of the simulation's and the references' rig constants."""
+
 from __future__ import annotations
 
 import copy
@@ -27,16 +28,19 @@ def test_the_committed_description_passes_its_checks(description):
     G.check(*description)
 
 
-@pytest.mark.parametrize("edit, needle", [
-    (lambda r, s: r["board"]["pwm_pin"].update(value=[3, 5, 6]), "3 values for 4 actuators"),
-    (lambda r, s: r["board"]["pwm_pin"].update(value=[3, 5, 6, 7]), "pin 7 has no PWM"),
-    (lambda r, s: r["board"]["dir_pin"].update(value=[4, 7, 8, 13]), "a pin is used twice ([13])"),
-    (lambda r, s: r["board"]["bench_pin"].update(value=20), "the Uno has no pin 20"),
-    (lambda r, s: r["core"]["encoder_counts"].update(identify="encoder_cpr"), "no u16 field 'encoder_cpr'"),
-    (lambda r, s: r["core"]["actuator_range_m"].update(value=0.3), "configure.tilt_limit default"),
-    (lambda r, s: r["core"]["module_size_x_m"].update(value=0.6), "configure.module_x default"),
-    (lambda r, s: r["core"]["motor_speed_rpm"].pop("type"), "needs value, doc and a type"),
-])
+@pytest.mark.parametrize(
+    "edit, needle",
+    [
+        (lambda r, s: r["board"]["pwm_pin"].update(value=[3, 5, 6]), "3 values for 4 actuators"),
+        (lambda r, s: r["board"]["pwm_pin"].update(value=[3, 5, 6, 7]), "pin 7 has no PWM"),
+        (lambda r, s: r["board"]["dir_pin"].update(value=[4, 7, 8, 13]), "a pin is used twice ([13])"),
+        (lambda r, s: r["board"]["bench_pin"].update(value=20), "the Uno has no pin 20"),
+        (lambda r, s: r["core"]["encoder_counts"].update(identify="encoder_cpr"), "no u16 field 'encoder_cpr'"),
+        (lambda r, s: r["core"]["actuator_range_m"].update(value=0.3), "configure.tilt_limit default"),
+        (lambda r, s: r["core"]["module_size_x_m"].update(value=0.6), "configure.module_x default"),
+        (lambda r, s: r["core"]["motor_speed_rpm"].pop("type"), "needs value, doc and a type"),
+    ],
+)
 def test_a_description_that_contradicts_itself_the_uno_or_the_schema_is_refused(description, edit, needle):
     rig_toml, schema = copy.deepcopy(description)
     edit(rig_toml, schema)
@@ -53,11 +57,12 @@ def test_the_firmware_reports_the_rig_it_was_built_for_at_identify():
 
 
 def test_a_board_built_with_another_pulley_is_named_in_a_warning(monkeypatch):
-    monkeypatch.setitem(rig.REPORTED, "pulley_circumference", 0.045)      # as if this host's rig.toml said 0.045
+    monkeypatch.setitem(rig.REPORTED, "pulley_circumference", 0.045)  # as if this host's rig.toml said 0.045
     link = Link(InProcessTransport(simulated_clock=True))
     link.identify()
-    assert link.rig_differences == ["pulley_circumference is 0.04 m/rev on the board, 0.045 m/rev in this host's "
-                                     "protocol/rig.toml"]
+    assert link.rig_differences == [
+        "pulley_circumference is 0.04 m/rev on the board, 0.045 m/rev in this host's protocol/rig.toml"
+    ]
 
 
 @pytest.mark.parametrize("name, value", [("actuator_range", 0.3), ("actuator_count", 6)])
@@ -75,7 +80,7 @@ def test_the_bridge_refuses_a_simulated_rig_whose_travel_is_not_the_firmwares():
 
 def test_the_simulation_and_the_references_take_the_rig_from_the_description():
     assert Rig().frame.size_x_m == rig.MODULE_SIZE_X_M and Rig().frame.size_y_m == rig.MODULE_SIZE_Y_M
-    assert Actuators().range_m == rig.ACTUATOR_RANGE_M == ref.ACTUATOR_RANGE     # the paper's ±0.25 m
+    assert Actuators().range_m == rig.ACTUATOR_RANGE_M == ref.ACTUATOR_RANGE  # the paper's ±0.25 m
     assert Actuators().motor_speed_rpm == rig.MOTOR_SPEED_RPM
     pulley = P.lookup("actuators.pulley_circumference_m")
-    assert pulley.low <= rig.PULLEY_CIRCUMFERENCE_M <= pulley.high     # the board's pulley is a plausible plant
+    assert pulley.low <= rig.PULLEY_CIRCUMFERENCE_M <= pulley.high  # the board's pulley is a plausible plant

@@ -1,4 +1,5 @@
 """The firmware in the loop: the native virtual MCU drives the MuJoCo rig over a pty (and in-process for fault tests)."""
+
 from __future__ import annotations
 
 import json
@@ -24,7 +25,7 @@ from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
 from mantaray.sim.model import SimulationUnstable
 from mantaray.sim.rig import Rig
 
-CENTRAL_SEED = 1        # the draw of the central trials below
+CENTRAL_SEED = 1  # the draw of the central trials below
 
 
 def central_trials(n: int = 8) -> list[E.Trial]:
@@ -51,8 +52,8 @@ def test_central_trials_reach_the_target(sphere_bridge, controller):
     for trial in central_trials():
         result = sphere_bridge.run(TrialSpec(trial.start_m, trial.target_m, controller=controller, seed=trial.seed))
         assert result.watch.clean, result.watch.messages
-        assert len(result.t_s) == 121 or result.fell_off       # 12 Hz for 10 s, frames 0..120
-        assert np.all(np.abs(result.command_m) <= 0.25)        # what the firmware sent stays in range
+        assert len(result.t_s) == 121 or result.fell_off  # 12 Hz for 10 s, frames 0..120
+        assert np.all(np.abs(result.command_m) <= 0.25)  # what the firmware sent stays in range
         reached += result.time_to_reach_s is not None and not result.fell_off
     assert reached >= 6, reached
 
@@ -64,7 +65,7 @@ def test_stopping_when_reached_ends_at_the_first_frame_within_tolerance_as_the_p
     assert full.time_to_reach_s is not None and stopped.time_to_reach_s == full.time_to_reach_s
     assert stopped.success and stopped.final_error_m < stopped.spec.tolerance_m
     assert stopped.t_s[-1] < stopped.time_to_reach_s and len(stopped.t_s) < len(full.t_s)
-    assert np.array_equal(stopped.true_xy_m, full.true_xy_m[:len(stopped.t_s)])   # the same trial up to there
+    assert np.array_equal(stopped.true_xy_m, full.true_xy_m[: len(stopped.t_s)])  # the same trial up to there
 
 
 def test_same_seed_gives_the_same_trajectory(sphere_bridge):
@@ -73,7 +74,7 @@ def test_same_seed_gives_the_same_trajectory(sphere_bridge):
     assert np.array_equal(first.true_xy_m, second.true_xy_m)
     assert np.array_equal(first.command_m, second.command_m)
     other = sphere_bridge.run(TrialSpec(spec.start_m, spec.target_m, duration_s=4.0, alpha_m=0.02, seed=6))
-    assert not np.array_equal(first.command_m, other.command_m)   # the seed drives the firmware's noise
+    assert not np.array_equal(first.command_m, other.command_m)  # the seed drives the firmware's noise
 
 
 def test_commands_from_telemetry_reach_the_simulated_actuators(sphere_bridge):
@@ -82,10 +83,10 @@ def test_commands_from_telemetry_reach_the_simulated_actuators(sphere_bridge):
     result = sphere_bridge.run(TrialSpec((0.0, 0.0), (0.1, 0.0), duration_s=1.0))
     model, data = sphere_bridge.model, sphere_bridge.data
     commanded = result.command_m[-1]
-    assert result.tilt_deg[-1, 0] > 0 and commanded[1] > 0     # target at +x: the +x corners lowered
-    M.step_until(model, data, data.time + 3.0)               # time for the belts at their speed to get there
+    assert result.tilt_deg[-1, 0] > 0 and commanded[1] > 0  # target at +x: the +x corners lowered
+    M.step_until(model, data, data.time + 3.0)  # time for the belts at their speed to get there
     lifts = np.array([data.joint(f"lift{i}").qpos[0] for i in range(J.N_ACTUATORS)])
-    assert np.allclose(lifts, commanded, atol=1e-3), (lifts, commanded)   # [m] within a servo's steady error
+    assert np.allclose(lifts, commanded, atol=1e-3), (lifts, commanded)  # [m] within a servo's steady error
 
 
 def test_a_cube_with_noise_ends_closer_than_it_started():
@@ -103,9 +104,9 @@ def test_realtime_mode_runs_against_a_wall_clock_firmware():
     with VirtualMcu(clock="wall") as vmcu:
         bridge = Bridge(Link(SerialTransport(vmcu.path)), Rig(), lockstep=False)
         result = bridge.run(TrialSpec((0.0, 0.0), (0.05, 0.0), duration_s=1.0))
-    assert result.wall_time_s >= 1.0                       # paced to the wall clock
+    assert result.wall_time_s >= 1.0  # paced to the wall clock
     assert len(result.t_s) == 13 and result.watch.clean
-    assert np.all(result.state >= 0)                       # every frame was answered
+    assert np.all(result.state >= 0)  # every frame was answered
 
 
 def test_lockstep_refuses_a_wall_clock_firmware():
@@ -137,6 +138,7 @@ class Tamper:
 def _telemetry_rule(frame_to_tamper: int, copies: int):
     def rule(msg) -> int:
         return copies if isinstance(msg, m.Telemetry) and msg.position_frame == frame_to_tamper else 1
+
     return rule
 
 
@@ -168,7 +170,7 @@ def test_a_firmware_reset_mid_trial_is_reported():
             nonlocal writes
             writes += 1
             if writes == 40:
-                transport.power_cycle()   # power cycle: the firmware boots afresh, idle, clock 0
+                transport.power_cycle()  # power cycle: the firmware boots afresh, idle, clock 0
             transport.write(data)
 
         def read(self, timeout_s: float) -> bytes:
@@ -181,7 +183,7 @@ def test_a_firmware_reset_mid_trial_is_reported():
     result = bridge.run(TrialSpec((0.0, 0.0), (0.05, 0.0), duration_s=2.0))
     assert result.watch.firmware_resets == 1 and not result.watch.clean
     assert any("firmware reset" in text for text in result.watch.messages)
-    assert m.State.IDLE in result.state.tolist()           # what a reset firmware reports: it is idle again
+    assert m.State.IDLE in result.state.tolist()  # what a reset firmware reports: it is idle again
 
 
 def test_dropped_camera_frames_are_counted_and_not_sent(sphere_bridge):
@@ -197,14 +199,19 @@ def test_dropped_camera_frames_are_counted_and_not_sent(sphere_bridge):
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "run", *args], cwd=REPO,
-                          capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "mantaray.cli", "sim", "run", *args],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
 
 
 def test_sim_run_prints_json_and_writes_the_figure(tmp_path):
     proc = _cli("--duration", "2", "--json", "--out", str(tmp_path), "--start", "0.02,0", "--target", "0.0,0.0")
     result = json.loads(proc.stdout)
-    assert proc.returncode == (0 if result["success"] else 1), proc.stderr     # the exit status says the outcome
+    assert proc.returncode == (0 if result["success"] else 1), proc.stderr  # the exit status says the outcome
     for key in ("success", "final_error_m", "time_to_reach_s", "fell_off", "sim_time_s", "wall_time_s"):
         assert key in result
     assert result["sim_time_s"] == pytest.approx(2.0, abs=0.01)
@@ -230,25 +237,28 @@ def test_sim_run_takes_negative_points_and_names_each_trial_apart(tmp_path):
     assert len(list(tmp_path.glob("*.npz"))) == 2
 
 
-@pytest.mark.parametrize("args, needle", [
-    (("--start", "0.4,0"), "outside the fabric"),
-    (("--target", "abc"), "expected two numbers"),
-    (("--rate", "0"), "camera rate"),
-    (("--latency", "0.2"), "camera latency"),
-    (("--duration", "-1"), "duration"),
-    (("--object", "teapot"), "invalid choice"),
-    (("--target", "-0.05"), "expected two numbers"),
-    (("--seed", "-1"), "seed must be"),
-    (("--alpha", "-1"), "noise amplitude alpha: -1 m is outside 0..0.25 m"),
-    (("--tolerance", "0"), "tolerance epsilon: 0 m is outside 0.001..0.5 m"),
-    (("--video", "--video-fps", "0"), "--video-fps must be 1..240"),
-    (("--out", "/proc/version/sub"), "cannot write into /proc/version/sub"),
-])
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (("--start", "0.4,0"), "outside the fabric"),
+        (("--target", "abc"), "expected two numbers"),
+        (("--rate", "0"), "camera rate"),
+        (("--latency", "0.2"), "camera latency"),
+        (("--duration", "-1"), "duration"),
+        (("--object", "teapot"), "invalid choice"),
+        (("--target", "-0.05"), "expected two numbers"),
+        (("--seed", "-1"), "seed must be"),
+        (("--alpha", "-1"), "noise amplitude alpha: -1 m is outside 0..0.25 m"),
+        (("--tolerance", "0"), "tolerance epsilon: 0 m is outside 0.001..0.5 m"),
+        (("--video", "--video-fps", "0"), "--video-fps must be 1..240"),
+        (("--out", "/proc/version/sub"), "cannot write into /proc/version/sub"),
+    ],
+)
 def test_sim_run_refuses_bad_input_in_one_line_before_any_work(args, needle, tmp_path):
     proc = _cli(*args)
     assert proc.returncode == 2, proc.stderr
     assert "Traceback" not in proc.stderr and needle in proc.stderr
-    assert "sim s in" not in proc.stdout          # refused before a trial ran
+    assert "sim s in" not in proc.stdout  # refused before a trial ran
 
 
 def test_sim_run_drives_the_rig_from_a_firmware_on_a_given_port(tmp_path):
@@ -256,7 +266,7 @@ def test_sim_run_drives_the_rig_from_a_firmware_on_a_given_port(tmp_path):
     with VirtualMcu(clock="sim") as vmcu:
         proc = _cli("--port", vmcu.path, "--duration", "1", "--json", "--out", str(tmp_path))
     result = json.loads(proc.stdout)
-    assert proc.returncode == (0 if result["success"] else 1), proc.stderr   # the exit status says the outcome
+    assert proc.returncode == (0 if result["success"] else 1), proc.stderr  # the exit status says the outcome
     assert result["sim_time_s"] == pytest.approx(1.0, abs=0.01)
 
 
@@ -279,11 +289,11 @@ def test_a_second_bridge_on_a_used_firmware_picks_up_its_clock():
 def test_physics_diverging_mid_trial_is_refused_at_the_step_it_happens():
     """MuJoCo resets a diverged state to time 0 and carries on; the trial must stop there, not step on from the reset."""
     bridge = Bridge(Link(InProcessTransport(simulated_clock=True)), Rig())
-    bridge.model.opt.timestep = 0.05     # 50x the rig's step: the stiff fabric blows up within a few steps
+    bridge.model.opt.timestep = 0.05  # 50x the rig's step: the stiff fabric blows up within a few steps
     warnings_per_step = []
 
-    class StepWatch:                     # the bridge offers every physics step to its recorder
-        def mark_target(self, target_m, tolerance_m, z_m, t0_s) -> None:   # the recorder's other call: unused
+    class StepWatch:  # the bridge offers every physics step to its recorder
+        def mark_target(self, target_m, tolerance_m, z_m, t0_s) -> None:  # the recorder's other call: unused
             pass
 
         def capture(self, data) -> None:
@@ -292,10 +302,26 @@ def test_physics_diverging_mid_trial_is_refused_at_the_step_it_happens():
     bridge.recorder = StepWatch()
     with pytest.raises(SimulationUnstable, match="diverged before trial time"):
         bridge.run(TrialSpec((0.0, 0.0), (0.05, 0.0), duration_s=1.0))
-    assert warnings_per_step[-1] == 1 and warnings_per_step.count(1) == 1   # stopped on the first diverged step
+    assert warnings_per_step[-1] == 1 and warnings_per_step.count(1) == 1  # stopped on the first diverged step
 
 
 def test_sim_run_from_a_corner_the_sheet_does_not_reach_is_a_usage_error_not_a_traceback(tmp_path):
-    run = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "run", "--start", "0.25,0.25", "--duration",
-                          "0.5", "--out", str(tmp_path)], capture_output=True, text=True, timeout=120)
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "mantaray.cli",
+            "sim",
+            "run",
+            "--start",
+            "0.25,0.25",
+            "--duration",
+            "0.5",
+            "--out",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert run.returncode == 2 and "not over the hanging sheet" in run.stderr and "Traceback" not in run.stderr

@@ -1,4 +1,5 @@
 """MuJoCo model of the rig: every scene compiles and steps without warnings, objects rest, corners roll the sphere."""
+
 from __future__ import annotations
 
 import mujoco
@@ -11,11 +12,11 @@ from mantaray.sim.objects import OBJECTS
 from mantaray.sim.rig import Rig
 
 RIG = Rig()
-REST_SPEED_M_PER_S = 0.02      # [m/s] "at rest" for the test: well below rolling, above the fabric's jitter
-REST_SPIN_RAD_PER_S = 0.5      # [rad/s]
-STEP_S = 2.0                   # [s] each scene is stepped this long after the object is placed
-CORNER_DROP_M = 0.1            # [m] how far one corner is lowered in the rolling test
-ROLL_S = 2.5                   # [s] the drop takes 0.5 s at 0.2 m/s; the sphere rolls in the rest
+REST_SPEED_M_PER_S = 0.02  # [m/s] "at rest" for the test: well below rolling, above the fabric's jitter
+REST_SPIN_RAD_PER_S = 0.5  # [rad/s]
+STEP_S = 2.0  # [s] each scene is stepped this long after the object is placed
+CORNER_DROP_M = 0.1  # [m] how far one corner is lowered in the rolling test
+ROLL_S = 2.5  # [s] the drop takes 0.5 s at 0.2 m/s; the sphere rolls in the rest
 
 
 def _warnings(data: mujoco.MjData) -> dict[str, int]:
@@ -31,7 +32,7 @@ def test_alternating_mesh_is_mirror_symmetric():
     for mirror in (lambda p: (n - 1 - p[0], p[1]), lambda p: (p[0], n - 1 - p[1])):
         mapped = {tuple(sorted(int(q[0] * n + q[1]) for q in (mirror(xy[a]), mirror(xy[b])))) for a, b in edges}
         assert mapped == edges
-    for i in range(J.N_ACTUATORS):   # every corner cell's diagonal ends on the corner vertex
+    for i in range(J.N_ACTUATORS):  # every corner cell's diagonal ends on the corner vertex
         assert sum(J.corner_vertex(n, i) in t for t in tris) == 2
 
 
@@ -42,10 +43,11 @@ def test_written_scene_compiles_as_plain_xml(tmp_path, name):
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     assert model.nu == J.N_ACTUATORS and model.nflex == 1
-    assert np.allclose(data.cam("overhead").xmat.reshape(3, 3)[:, 2], [0, 0, 1])   # looks straight down (-z)
+    assert np.allclose(data.cam("overhead").xmat.reshape(3, 3)[:, 2], [0, 0, 1])  # looks straight down (-z)
     for i, (sx, sy) in enumerate(J.CORNERS):
-        assert np.allclose(data.body(f"carriage{i}").xpos,
-                           [sx * RIG.frame.size_x_m / 2, sy * RIG.frame.size_y_m / 2, RIG.frame.z0_m])
+        assert np.allclose(
+            data.body(f"carriage{i}").xpos, [sx * RIG.frame.size_x_m / 2, sy * RIG.frame.size_y_m / 2, RIG.frame.z0_m]
+        )
 
 
 def _seeded_steps(model: mujoco.MjModel, data: mujoco.MjData, seed: int, steps: int) -> np.ndarray:
@@ -74,7 +76,7 @@ def test_the_written_scene_is_the_model_that_runs(tmp_path):
     rig = RIG.with_object(str(rng.choice(list(OBJECTS))))
     loaded, data = M.load(rig)
     written = mujoco.MjModel.from_xml_path(str(J.write_model(rig, tmp_path)))
-    for name in dir(loaded):   # every compiled array but the keyframe load() fills and the asset paths (other folders)
+    for name in dir(loaded):  # every compiled array but the keyframe load() fills and the asset paths (other folders)
         a = getattr(loaded, name)
         if isinstance(a, np.ndarray) and not name.startswith(("key_", "paths", "_sizes")):
             assert np.array_equal(a, getattr(written, name), equal_nan=True), name
@@ -86,7 +88,7 @@ def test_the_written_scene_is_the_model_that_runs(tmp_path):
 
 def test_the_object_joints_step_as_a_free_joint_with_its_rotation_damped(sphere_scene, tmp_path):
     """Three slides and a ball (mjcf.OBJECT_SLIDES, OBJECT_TURN) are a free joint whose rotation alone is damped."""
-    model, data = sphere_scene[0], mujoco.MjData(sphere_scene[0])   # the fixture's data stays in the rest state
+    model, data = sphere_scene[0], mujoco.MjData(sphere_scene[0])  # the fixture's data stays in the rest state
     spec = mujoco.MjSpec.from_file(str(J.write_model(RIG, tmp_path)))
     body = spec.body(J.OBJECT)
     for joint in list(body.joints):
@@ -94,7 +96,7 @@ def test_the_object_joints_step_as_a_free_joint_with_its_rotation_damped(sphere_
     body.add_freejoint()
     free = spec.compile()
     dof = free.jnt_dofadr[free.body_jntadr[free.body(J.OBJECT).id]]
-    free.dof_damping[dof + 3:dof + 6] = J.rolling_damping(RIG)
+    free.dof_damping[dof + 3 : dof + 6] = J.rolling_damping(RIG)
     assert np.array_equal(free.dof_damping, model.dof_damping)
     M.place_object(model, data, 0.03, -0.02, rule=RIG.fall)
     as_free = _same_start((model, data), free)
@@ -106,8 +108,7 @@ def test_rolling_damping_is_the_rate_times_the_inertia_about_the_contact():
     """For the sphere, I + m r^2 = 7/5 m r^2: damped at rate beta, a rolling sphere slows at beta."""
     o = RIG.object
     r = o.size_m[0]
-    assert J.rolling_damping(RIG) == pytest.approx(RIG.contact.rolling_damping_per_s * 1.4 * o.mass_kg * r ** 2,
-                                                   rel=1e-9)
+    assert J.rolling_damping(RIG) == pytest.approx(RIG.contact.rolling_damping_per_s * 1.4 * o.mass_kg * r**2, rel=1e-9)
 
 
 @pytest.fixture(scope="module")
@@ -118,7 +119,7 @@ def sphere_scene():
 @pytest.mark.parametrize("name", OBJECTS)
 def test_object_comes_to_rest_on_the_fabric(name, sphere_scene):
     model, data = sphere_scene if name == "sphere" else M.load(RIG.with_object(name))
-    assert M.fell_off(model, data, RIG.fall)           # parked on the floor in the rest keyframe
+    assert M.fell_off(model, data, RIG.fall)  # parked on the floor in the rest keyframe
     M.place_object(model, data, 0.0, 0.0, rule=RIG.fall)
     while data.time < STEP_S:
         mujoco.mj_step(model, data)
@@ -141,18 +142,18 @@ def test_lowering_a_corner_rolls_the_sphere_toward_it(corner, sphere_scene):
     commands[corner] = CORNER_DROP_M
     M.set_commands(model, data, commands)
     lift = model.jnt_qposadr[model.joint(f"lift{corner}").id]
-    half_way_s = 0.5 * CORNER_DROP_M / RIG.actuators.speed_m_per_s   # [s] at top speed, half the drop by now
+    half_way_s = 0.5 * CORNER_DROP_M / RIG.actuators.speed_m_per_s  # [s] at top speed, half the drop by now
     while data.time < start_s + half_way_s:
         mujoco.mj_step(model, data)
-    assert data.qpos[lift] <= 0.5 * CORNER_DROP_M * 1.05                 # speed-limited: no further than that
+    assert data.qpos[lift] <= 0.5 * CORNER_DROP_M * 1.05  # speed-limited: no further than that
     while data.time < start_s + ROLL_S:
         mujoco.mj_step(model, data)
     carriage = data.body(f"carriage{corner}").xpos
-    assert carriage[2] == pytest.approx(RIG.frame.z0_m - CORNER_DROP_M, abs=2e-3)   # + command lowers
+    assert carriage[2] == pytest.approx(RIG.frame.z0_m - CORNER_DROP_M, abs=2e-3)  # + command lowers
     vertex = data.flexvert_xpos[J.corner_vertex(RIG.fabric.resolution, corner)]
-    assert np.linalg.norm(vertex - carriage) < 2e-3                                  # corner stays welded
+    assert np.linalg.norm(vertex - carriage) < 2e-3  # corner stays welded
     toward = np.array(J.CORNERS[corner], dtype=float) / np.sqrt(2)
-    assert (M.object_xy(model, data) - start_xy) @ toward > 0.01   # sim/README.md: 0.235 m in 4 s
+    assert (M.object_xy(model, data) - start_xy) @ toward > 0.01  # sim/README.md: 0.235 m in 4 s
     assert _warnings(data) == {} and not M.fell_off(model, data, RIG.fall)
 
 

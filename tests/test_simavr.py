@@ -1,4 +1,5 @@
 """The Uno's ELF in the AVR simulator: conformance over a pty, the actuator loops on modelled motors, the closed loop."""
+
 from __future__ import annotations
 
 import json
@@ -18,21 +19,27 @@ from mantaray.host.transport import SerialTransport
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
 
-RX_BUFFER_CYCLES = 64 * 10 * 16_000_000 // 115_200   # [cycles] 64 bytes of 10 bits at 115200 baud: 5.6 ms
-LOOP_PERIOD_CYCLES = 4000 * 16                          # [cycles] the 250 Hz actuator loop period
+RX_BUFFER_CYCLES = 64 * 10 * 16_000_000 // 115_200  # [cycles] 64 bytes of 10 bits at 115200 baud: 5.6 ms
+LOOP_PERIOD_CYCLES = 4000 * 16  # [cycles] the 250 Hz actuator loop period
 
 
 @pytest.fixture(scope="module")
 def elf():
-    proc = subprocess.run([sys.executable, str(REPO / "scripts" / "avr_build.py")], capture_output=True, text=True,
-                          timeout=600)
+    proc = subprocess.run(
+        [sys.executable, str(REPO / "scripts" / "avr_build.py")], capture_output=True, text=True, timeout=600
+    )
     assert proc.returncode == 0, proc.stderr
     return DEFAULT_ELF
 
 
 def _conformance(port: str, *pytest_args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "mantaray.cli", "conformance", "--port", port, *pytest_args],
-                          cwd=REPO, capture_output=True, text=True, timeout=600)
+    return subprocess.run(
+        [sys.executable, "-m", "mantaray.cli", "conformance", "--port", port, *pytest_args],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
 
 
 @pytest.mark.parametrize("bench, clock", [(True, "simulated"), (False, "wall")], ids=["bench", "rig"])
@@ -43,7 +50,7 @@ def test_the_protocol_conformance_suite_passes_against_the_avr_binary(elf, bench
     with SimulatedUno(elf, bench=bench, realtime=not bench) as uno:
         proc = _conformance(uno.path, "--", "-rs", *([] if bench else ["-m", "not wall_timing"]))
     assert_suite_passed(proc, clock)
-    if not bench:                                     # exactly the three wall-timing tests were left out
+    if not bench:  # exactly the three wall-timing tests were left out
         assert re.search(r"\b3 deselected\b", proc.stdout.strip().splitlines()[-1]), proc.stdout[-300:]
 
 
@@ -55,8 +62,9 @@ class Probe:
 
     def __call__(self) -> m.Telemetry:
         self.frame += 1
-        return self.link.position(m.ObjectPosition(frame=self.frame, capture_time=self.frame * 1000,
-                                                   flags=m.PositionFlags.NOT_VISIBLE))
+        return self.link.position(
+            m.ObjectPosition(frame=self.frame, capture_time=self.frame * 1000, flags=m.PositionFlags.NOT_VISIBLE)
+        )
 
     def until(self, done, timeout_s: float = 5.0) -> m.Telemetry:
         """The first telemetry for which done() holds; fails the test if none does within timeout_s [s, wall]."""
@@ -77,7 +85,7 @@ def test_the_rig_build_drives_modelled_motors_to_their_setpoints_and_stops_them(
         probe = Probe(link)
         t = probe.until(lambda t: abs(t.measured[0] - 0.05) < 1e-3 and abs(t.measured[3] + 0.03) < 1e-3)
         assert t.faults == 0 and t.measured[0] == pytest.approx(0.05, abs=1e-3)
-        assert t.loop_overruns == 0                      # telemetry reports the loops' lateness: none here
+        assert t.loop_overruns == 0  # telemetry reports the loops' lateness: none here
         assert t.measured[3] == pytest.approx(-0.03, abs=1e-3)
         link.command(m.EmergencyStop())
         stopped = probe().measured[0]
@@ -87,16 +95,16 @@ def test_the_rig_build_drives_modelled_motors_to_their_setpoints_and_stops_them(
         link.command(m.Stop())
         link.command(m.Jog(actuator=1, position=0.02))
         t = probe.until(lambda t: abs(t.measured[1] - 0.02) < 1e-3)
-        assert m.State(t.state) == m.State.IDLE and t.faults == 0         # a jog, not a run: idle, no fault
+        assert m.State(t.state) == m.State.IDLE and t.faults == 0  # a jog, not a run: idle, no fault
         link.command(m.Zero(actuators=0b0010))
         t = probe()
         assert t.measured[1] == pytest.approx(0.0, abs=1e-4) and t.command[1] == 0.0
         link.close()
     stats = uno.stats
     assert stats["actuator_loops"]["count"] > 100
-    assert stats["actuator_loops"]["max_cycles"] < LOOP_PERIOD_CYCLES          # the loops fit their period
-    assert stats["main_loop_pass"]["max_cycles"] < RX_BUFFER_CYCLES            # no pass lets the RX buffer fill
-    assert 0 < stats["never_used_ram_bytes"] < 2048                            # the stack never met the data
+    assert stats["actuator_loops"]["max_cycles"] < LOOP_PERIOD_CYCLES  # the loops fit their period
+    assert stats["main_loop_pass"]["max_cycles"] < RX_BUFFER_CYCLES  # no pass lets the RX buffer fill
+    assert 0 < stats["never_used_ram_bytes"] < 2048  # the stack never met the data
 
 
 def next_boot(link: Link, timeout_s: float = 5.0) -> m.Boot:
@@ -118,14 +126,14 @@ def test_an_emergency_stop_stays_latched_across_a_reset_until_the_host_sends_sto
         link.command(m.EmergencyStop())
         probe = Probe(link)
         assert m.State(probe().state) == m.State.ESTOP
-        uno.process.send_signal(signal.SIGUSR1)                      # the reset pin
+        uno.process.send_signal(signal.SIGUSR1)  # the reset pin
         assert next_boot(link).reset_cause == m.ResetCause.EXTERNAL
-        assert link.identify().clock == m.Clock.WALL                 # the rig again, not the bench
+        assert link.identify().clock == m.Clock.WALL  # the rig again, not the bench
         t = probe()
         assert m.State(t.state) == m.State.ESTOP and t.faults == m.Faults.ESTOP
-        with pytest.raises(CommandRefused):                           # a jog is refused: nothing may move
+        with pytest.raises(CommandRefused):  # a jog is refused: nothing may move
             link.command(m.Jog(actuator=0, position=0.02))
-        link.command(m.Stop())                                        # the host's clear: the one way out
+        link.command(m.Stop())  # the host's clear: the one way out
         link.command(m.Jog(actuator=0, position=0.02))
         t = probe.until(lambda t: abs(t.measured[0] - 0.02) < 1e-3)
         assert m.State(t.state) == m.State.IDLE and t.faults == 0
@@ -133,26 +141,45 @@ def test_an_emergency_stop_stays_latched_across_a_reset_until_the_host_sends_sto
         assert next_boot(link).reset_cause == m.ResetCause.EXTERNAL
         link.identify()
         t = probe()
-        assert m.State(t.state) == m.State.IDLE and t.faults == 0     # cleared latches stay cleared
+        assert m.State(t.state) == m.State.IDLE and t.faults == 0  # cleared latches stay cleared
         link.close()
 
 
 def test_a_closed_loop_trial_runs_with_the_avr_binary_in_place_of_the_virtual_mcu(elf, tmp_path):
     with SimulatedUno(elf, bench=True) as uno:
-        proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "run", "--port", uno.path, "--duration",
-                               "4", "--json", "--out", str(tmp_path)], cwd=REPO, capture_output=True, text=True,
-                              timeout=300)
+        proc = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "mantaray.cli",
+                "sim",
+                "run",
+                "--port",
+                uno.path,
+                "--duration",
+                "4",
+                "--json",
+                "--out",
+                str(tmp_path),
+            ],
+            cwd=REPO,
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
     result = json.loads(proc.stdout)
-    assert proc.returncode == (0 if result["success"] else 1), proc.stderr   # the exit status says the outcome
+    assert proc.returncode == (0 if result["success"] else 1), proc.stderr  # the exit status says the outcome
     assert result["sim_time_s"] == pytest.approx(4.0, abs=0.01) and result["link_clean"]
     assert not result["fell_off"]
     start, target = result["start_m"], result["target_m"]
     initial = ((start[0] - target[0]) ** 2 + (start[1] - target[1]) ** 2) ** 0.5
-    assert result["final_error_m"] < 0.5 * initial                    # the AVR's controller steered it there
+    assert result["final_error_m"] < 0.5 * initial  # the AVR's controller steered it there
     assert uno.stats["byte_handling"]["count"] > 0
 
 
-ACTING_SCHEDULE = ControllerSettings.load(REPO / "docs" / "results" / "avr_timing" / "scheduled_acting.toml")  # all at work
+ACTING_SCHEDULE = ControllerSettings.load(
+    REPO / "docs" / "results" / "avr_timing" / "scheduled_acting.toml"
+)  # all at work
 
 
 @pytest.mark.parametrize("settings", [ACTING_SCHEDULE, ControllerSettings("cascade")], ids=["scheduled", "cascade"])
@@ -160,13 +187,32 @@ def test_the_controllers_beyond_the_paper_steer_a_closed_loop_trial_in_the_avr_b
     path = tmp_path / "settings.toml"
     path.write_text(settings.dumps())
     with SimulatedUno(elf, bench=True) as uno:
-        proc = subprocess.run([sys.executable, "-m", "mantaray.cli", "sim", "run", "--port", uno.path, "--duration",
-                               "4", "--settings", str(path), "--json", "--out", str(tmp_path)], cwd=REPO,
-                              capture_output=True, text=True, timeout=300)
+        proc = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "mantaray.cli",
+                "sim",
+                "run",
+                "--port",
+                uno.path,
+                "--duration",
+                "4",
+                "--settings",
+                str(path),
+                "--json",
+                "--out",
+                str(tmp_path),
+            ],
+            cwd=REPO,
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
     result = json.loads(proc.stdout)
     assert proc.returncode == (0 if result["success"] else 1), proc.stderr
     assert result["controller"] == settings.controller and result["link_clean"] and not result["fell_off"]
-    assert result["time_to_reach_s"] is not None and result["time_to_reach_s"] < 2.0    # [s] steered there
+    assert result["time_to_reach_s"] is not None and result["time_to_reach_s"] < 2.0  # [s] steered there
 
 
 def test_positions_as_fast_as_the_link_allows_lose_no_byte_while_the_loops_run(elf):
@@ -186,7 +232,7 @@ def test_positions_as_fast_as_the_link_allows_lose_no_byte_while_the_loops_run(e
         # on the firmware's own clock (the simulated AVR's time, which a busy host slows down with it)
         rate_hz = (frame - 1) / (((t.time - first.time) & 0xFFFFFFFF) / 1000)
         link.close()
-    assert answered == frame                                  # every position answered by its telemetry
-    assert t.crc_errors == 0 and t.frame_errors == 0          # nothing lost or overrun on the way in
+    assert answered == frame  # every position answered by its telemetry
+    assert t.crc_errors == 0 and t.frame_errors == 0  # nothing lost or overrun on the way in
     assert m.State(t.state) in (m.State.RUNNING, m.State.REACHED) and t.faults == 0
-    assert rate_hz > 60                                       # several times the camera's 12 Hz, in AVR time
+    assert rate_hz > 60  # several times the camera's 12 Hz, in AVR time

@@ -1,4 +1,5 @@
 """The ArUco tracker on synthetic perspective images with known ground truth: accuracy, parallax, lost markers."""
+
 from __future__ import annotations
 
 import cv2
@@ -28,7 +29,7 @@ def test_the_markers_height_is_corrected_for_parallax():
     image = render(truth, marker_height_m=height)
     naive = T.Tracker(LAYOUT, marker_height_m=0.0).observe(image, 0.0)
     corrected = T.Tracker(LAYOUT, marker_height_m=height, camera_height_m=1.0).observe(image, 0.0)
-    assert np.hypot(*(np.asarray(naive.xy_m) - truth)) > 0.01            # 1.5 cm off without the correction
+    assert np.hypot(*(np.asarray(naive.xy_m) - truth)) > 0.01  # 1.5 cm off without the correction
     assert np.hypot(*(np.asarray(corrected.xy_m) - truth)) < 0.002
 
 
@@ -51,7 +52,7 @@ def test_a_missing_object_or_fabric_frame_is_reported_never_guessed():
     first = tracker.observe(render(None, hide_corner=2), capture_time_s=0.0)
     assert first.status == T.NO_FRAME and first.xy_m is None and first.corners_seen == (0, 1, 3)
     assert tracker.observe(render(None), 0.1).status == T.NO_OBJECT
-    hidden = tracker.observe(render((0.1, 0.1), hide_corner=0), 0.2)          # a hand over corner 0
+    hidden = tracker.observe(render((0.1, 0.1), hide_corner=0), 0.2)  # a hand over corner 0
     assert hidden.status == T.OK and hidden.reused_frame_fit and hidden.corners_seen == (1, 2, 3)
     stale = tracker.observe(render((0.1, 0.1), hide_corner=0), 0.2 + tracker.max_frame_age_s + 1)
     assert stale.status == T.NO_FRAME
@@ -61,7 +62,7 @@ def test_colour_blob_tracking_for_a_marker_less_object():
     image = cv2.cvtColor(render(None), cv2.COLOR_GRAY2BGR)
     k, (rvec, tvec) = intrinsics(), camera(1.0)
     centre, _ = cv2.projectPoints(np.array([[0.12, 0.07, 0.0]]), rvec, tvec, k, None)
-    cv2.circle(image, tuple(int(round(v)) for v in centre.ravel()), 20, (40, 200, 240), -1)   # a yellow egg
+    cv2.circle(image, tuple(int(round(v)) for v in centre.ravel()), 20, (40, 200, 240), -1)  # a yellow egg
     tracker = T.Tracker(LAYOUT, blob=T.BlobColour((20, 120, 120), (35, 255, 255)))
     obs = tracker.observe(image, 0.0)
     assert obs.status == T.OK and np.hypot(obs.xy_m[0] - 0.12, obs.xy_m[1] - 0.07) < 0.002

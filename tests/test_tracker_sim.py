@@ -1,4 +1,5 @@
 """The tracker on frames the MuJoCo scene's overhead camera renders (ArUco textures), and vision in the loop."""
+
 from __future__ import annotations
 
 import mujoco
@@ -38,7 +39,7 @@ def test_rendered_frames_are_tracked_within_2_mm_rms_at_1280x720(cube_scene):
     errors = []
     for _ in range(12):
         M.drop_object(model, data, *rng.uniform(-0.2, 0.2, 2))
-        while data.time < 1.0:                      # let it come to rest where the fabric puts it (tilted a bit)
+        while data.time < 1.0:  # let it come to rest where the fabric puts it (tilted a bit)
             mujoco.mj_step(model, data)
         truth, height = marker_truth(model, data, rig)
         vision.tracker.marker_height_m = height
@@ -53,7 +54,7 @@ def test_rendered_frames_are_tracked_within_2_mm_rms_at_1280x720(cube_scene):
 def test_an_object_out_of_sight_is_reported_not_guessed(cube_scene):
     rig, model, data = cube_scene
     vision = CameraVision(model, data, rig, "aruco")
-    mujoco.mj_resetDataKeyframe(model, data, model.key(M.REST_KEY).id)   # the object parked beside the frame
+    mujoco.mj_resetDataKeyframe(model, data, model.key(M.REST_KEY).id)  # the object parked beside the frame
     mujoco.mj_forward(model, data)
     assert vision.measure(data, 0.0) is None
     vision.renderer.update_scene(data, camera=J.OVERHEAD)
@@ -63,14 +64,13 @@ def test_an_object_out_of_sight_is_reported_not_guessed(cube_scene):
 
 def test_vision_in_the_loop_steers_the_sphere_by_its_colour():
     """Positions from the tracker on rendered frames (the sphere rolls: a marker on it would roll away)."""
-    bridge = Bridge(Link(InProcessTransport(simulated_clock=True)), Rig().with_vision("blob"),
-                    Tracking(vision="blob"))
+    bridge = Bridge(Link(InProcessTransport(simulated_clock=True)), Rig().with_vision("blob"), Tracking(vision="blob"))
     spec = TrialSpec((0.05, -0.05), (-0.05, 0.05), duration_s=6.0)
     result = bridge.run(spec)
     seen = np.all(np.isfinite(result.measured_xy_m), axis=1)
     assert seen.mean() > 0.95 and result.watch.unseen_frames == (~seen).sum()
     error = np.hypot(*(result.measured_xy_m[seen] - result.true_xy_m[seen]).T)
-    assert float(np.sqrt(np.mean(error ** 2))) < 0.003           # what the firmware was told, against the truth
+    assert float(np.sqrt(np.mean(error**2))) < 0.003  # what the firmware was told, against the truth
     assert not result.fell_off and result.time_to_reach_s is not None
 
 
@@ -78,8 +78,7 @@ def test_vision_needs_the_scenes_markers():
     with pytest.raises(ValueError, match="corner_markers"):
         Bridge(Link(InProcessTransport(simulated_clock=True)), Rig(), Tracking(vision="blob"))
     with pytest.raises(ValueError, match="object_marker"):
-        Bridge(Link(InProcessTransport(simulated_clock=True)), Rig().with_vision("blob"),
-               Tracking(vision="aruco"))
+        Bridge(Link(InProcessTransport(simulated_clock=True)), Rig().with_vision("blob"), Tracking(vision="aruco"))
 
 
 @pytest.mark.parametrize("name", sorted(OBJECTS))
@@ -87,7 +86,7 @@ def test_every_object_is_found_by_its_colour_at_rest(name):
     """--vision blob works for each of Table I's objects: the tracker sees it where it lies."""
     rig = Rig().with_object(name).with_vision("blob")
     model, data = M.load(rig)
-    vision = CameraVision(model, data, rig, "blob")        # places the object at the centre
+    vision = CameraVision(model, data, rig, "blob")  # places the object at the centre
     measured = vision.measure(data, data.time)
     assert measured is not None, name
     # within half of epsilon: the silhouette's centre is the body's centre of mass only for symmetric shapes
@@ -97,4 +96,4 @@ def test_every_object_is_found_by_its_colour_at_rest(name):
 
 def test_a_colour_too_pale_to_track_as_a_blob_is_refused():
     with pytest.raises(ValueError, match="too pale or dark"):
-        blob_colour((0.95, 0.9, 0.8, 1.0))                 # a white egg on grey markers: nothing to tell apart
+        blob_colour((0.95, 0.9, 0.8, 1.0))  # a white egg on grey markers: nothing to tell apart

@@ -1,5 +1,6 @@
 """The virtual MCU and its launcher: a pty path appears (never in place of the user's file), the firmware process
 never outlives its host, and a stop is honoured even while nobody reads its output."""
+
 from __future__ import annotations
 
 import os
@@ -13,10 +14,12 @@ from mantaray.paths import native_artifact
 from mantaray.protocol import messages as m
 from mantaray.protocol.framing import encode_frame
 
-HOST = ("from mantaray.host.vmcu import VirtualMcu\n"
-        "v = VirtualMcu(clock='sim')\n"
-        "print(v.path, v.process.pid, flush=True)\n"
-        "import time; time.sleep(60)\n")
+HOST = (
+    "from mantaray.host.vmcu import VirtualMcu\n"
+    "v = VirtualMcu(clock='sim')\n"
+    "print(v.path, v.process.pid, flush=True)\n"
+    "import time; time.sleep(60)\n"
+)
 
 
 def _alive(pid: int) -> bool:
@@ -24,7 +27,7 @@ def _alive(pid: int) -> bool:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
-    with open(f"/proc/{pid}/stat") as f:          # a zombie waiting for its reaper counts as gone
+    with open(f"/proc/{pid}/stat") as f:  # a zombie waiting for its reaper counts as gone
         return f.read().split()[2] != "Z"
 
 
@@ -32,7 +35,7 @@ def test_the_virtual_mcu_dies_with_a_killed_host():
     host = subprocess.Popen([sys.executable, "-c", HOST], stdout=subprocess.PIPE, text=True)
     path, pid = host.stdout.readline().split()
     assert os.path.exists(path) and _alive(int(pid))
-    host.send_signal(signal.SIGKILL)                # no cleanup code runs in the host
+    host.send_signal(signal.SIGKILL)  # no cleanup code runs in the host
     host.wait()
     deadline = time.monotonic() + 5
     while _alive(int(pid)) and time.monotonic() < deadline:
@@ -41,12 +44,13 @@ def test_the_virtual_mcu_dies_with_a_killed_host():
 
 
 def test_mantaray_vmcu_stopped_by_sigterm_leaves_no_temporary_folder():
-    proc = subprocess.Popen([sys.executable, "-m", "mantaray.cli", "vmcu"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    first = proc.stdout.readline()                  # "virtual MCU on /tmp/mantaray-vmcu-XXXX/tty: ..."
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mantaray.cli", "vmcu"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    first = proc.stdout.readline()  # "virtual MCU on /tmp/mantaray-vmcu-XXXX/tty: ..."
     folder = os.path.dirname(first.split(" on ", 1)[1].split(":", 1)[0])
     assert os.path.isdir(folder) and "mantaray-vmcu-" in folder, first
-    proc.stdout.readline()                          # "running; ..."
+    proc.stdout.readline()  # "running; ..."
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=30)
     assert proc.returncode == 0 and "Traceback" not in err, err
@@ -55,8 +59,12 @@ def test_mantaray_vmcu_stopped_by_sigterm_leaves_no_temporary_folder():
 
 def _start(link: str, *args: str) -> subprocess.Popen:
     """mantaray-vmcu --pty LINK ARGS, once LINK leads to a live pty (or the process has exited)."""
-    proc = subprocess.Popen([str(native_artifact("mantaray-vmcu")), "--pty", link, *args],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [str(native_artifact("mantaray-vmcu")), "--pty", link, *args],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 5
     while proc.poll() is None and time.monotonic() < deadline:
         if os.path.realpath(link).startswith("/dev/pts/") and os.path.exists(link):
@@ -85,7 +93,7 @@ def test_pty_refuses_to_replace_a_file_or_a_link_that_is_not_to_a_pty(tmp_path):
     elsewhere.symlink_to(kept)
     for path in (kept, elsewhere):
         proc = _start(str(path))
-        if proc.poll() is None:                        # it took the path and runs
+        if proc.poll() is None:  # it took the path and runs
             _stop(proc, 10)
             raise AssertionError(f"mantaray-vmcu replaced {path}")
         err = proc.stderr.read()
@@ -96,24 +104,24 @@ def test_pty_refuses_to_replace_a_file_or_a_link_that_is_not_to_a_pty(tmp_path):
 
 def test_pty_replaces_the_stale_link_a_killed_run_left(tmp_path):
     link = tmp_path / "tty"
-    link.symlink_to("/dev/pts/999999")                 # a pty that is gone
+    link.symlink_to("/dev/pts/999999")  # a pty that is gone
     proc = _start(str(link))
     try:
-        assert proc.poll() is None and os.path.exists(link)   # now to the live pty
+        assert proc.poll() is None and os.path.exists(link)  # now to the live pty
     finally:
         _stop(proc, 10)
-    assert not os.path.lexists(link)                   # and removed on the way out
+    assert not os.path.lexists(link)  # and removed on the way out
 
 
 def test_sigterm_stops_a_virtual_mcu_whose_output_nobody_reads(tmp_path):
     """Identify frames go in, nobody reads the replies: once the pty's output is full the firmware waits to write,
     stops reading, and the input fills too. A SIGTERM then still ends it within seconds (10 s: a busy machine)."""
     link = str(tmp_path / "tty")
-    proc = _start(link, "--clock", "sim")              # no periodic telemetry: only the replies fill the pty
+    proc = _start(link, "--clock", "sim")  # no periodic telemetry: only the replies fill the pty
     try:
         fd = os.open(link, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
         tty.setraw(fd)
-        frames = encode_frame(m.Identify(), 1) * 64    # each answered by a 32-byte identify_reply
+        frames = encode_frame(m.Identify(), 1) * 64  # each answered by a 32-byte identify_reply
         refused_since = None
         deadline = time.monotonic() + 30
         while time.monotonic() < deadline:
@@ -122,7 +130,7 @@ def test_sigterm_stops_a_virtual_mcu_whose_output_nobody_reads(tmp_path):
                 refused_since = None
             except BlockingIOError:
                 refused_since = refused_since or time.monotonic()
-                if time.monotonic() - refused_since > 1.0:   # [s] no room for a second: the firmware reads no more
+                if time.monotonic() - refused_since > 1.0:  # [s] no room for a second: the firmware reads no more
                     break
                 time.sleep(0.01)
         assert refused_since is not None, "the pty never filled"

@@ -1,4 +1,5 @@
 """Test harness of the conformance suite: the firmware under test seen only through its serial link."""
+
 from __future__ import annotations
 
 import dataclasses
@@ -247,7 +248,7 @@ class Dut:
             self.link.send_raw(data)
             return
         for i in range(0, len(data), chunk):
-            self.link.send_raw(data[i:i + chunk])
+            self.link.send_raw(data[i : i + chunk])
 
     def reply_to(self, msg_id: int, seq: int, timeout_s: float | None = None) -> m.Ack | m.Nack:
         """The ack or nack whose ref_id and ref_seq are these."""
@@ -300,9 +301,18 @@ class Dut:
 # A configuration that differs from BASE_CONFIG in every field; config_fingerprint tells each apart. The base runs
 # the cascade, whose steps read the velocity filter (the paper's controllers do not).
 BASE_CONFIG = dataclasses.replace(DEFAULT_CONFIG, noise_amplitude=0.002, controller=m.Controller.CASCADE)
-ALT_CONFIG = m.Configure(controller=m.Controller.EUCLIDEAN, module_x=0.4, module_y=0.3, tilt_limit=10.0,
-                         tolerance=0.2, noise_amplitude=0.05, noise_seed=7, deadman=20, telemetry_period=20,
-                         velocity_filter=1.0)
+ALT_CONFIG = m.Configure(
+    controller=m.Controller.EUCLIDEAN,
+    module_x=0.4,
+    module_y=0.3,
+    tilt_limit=10.0,
+    tolerance=0.2,
+    noise_amplitude=0.05,
+    noise_seed=7,
+    deadman=20,
+    telemetry_period=20,
+    velocity_filter=1.0,
+)
 
 
 def config_fingerprint(dut: Dut) -> tuple:
@@ -333,8 +343,13 @@ def base_config_fingerprint(dut: Dut) -> tuple:
 
 # PID gains that differ from the boot gains in every field; pid_fingerprint tells each apart.
 ALT_GAINS = {"kp": 20.0, "ki": 100.0, "kd": 5.0, "integral_limit": 0.5}
-PID_TARGET = {m.Axis.X: (0.2, 0.0), m.Axis.Y: (0.0, 0.2), m.Axis.RADIAL: (0.2, 0.0), m.Axis.VX: (0.2, 0.0),
-              m.Axis.VY: (0.0, 0.2)}
+PID_TARGET = {
+    m.Axis.X: (0.2, 0.0),
+    m.Axis.Y: (0.0, 0.2),
+    m.Axis.RADIAL: (0.2, 0.0),
+    m.Axis.VX: (0.2, 0.0),
+    m.Axis.VY: (0.0, 0.2),
+}
 # (position along the axis [m], dt [s]) of the three steps; the cascade's slower ones wind its integral past 0.5 deg
 PID_STEPS = {axis: ((0.0, 0.1), (0.02, 0.1), (0.02, 0.1)) for axis in m.Axis}
 PID_STEPS.update({axis: ((0.0, 0.1), (0.02, 0.5), (0.02, 0.5)) for axis in (m.Axis.VX, m.Axis.VY)})
@@ -346,7 +361,7 @@ def pid_fingerprint(dut: Dut, axes: Iterable[m.Axis] = tuple(m.Axis)) -> dict:
     tilts of each step. Ends in idle with DEFAULT_CONFIG."""
     out = {}
     for axis in axes:
-        controller = next(c for c, axes_of in CONTROLLER_AXES.items() if axis in axes_of)   # the first that runs it
+        controller = next(c for c, axes_of in CONTROLLER_AXES.items() if axis in axes_of)  # the first that runs it
         dut.configure(controller=controller)
         tx, ty = PID_TARGET[axis]
         dut.set_target(tx, ty)
@@ -376,4 +391,3 @@ def wire_errors(t: m.Telemetry) -> tuple[int, int]:
 def error_delta(before: m.Telemetry, after: m.Telemetry) -> tuple[int, int]:
     """(crc_errors, frame_errors) counted between two telemetry frames (the counters wrap)."""
     return ((after.crc_errors - before.crc_errors) & 0xFFFF, (after.frame_errors - before.frame_errors) & 0xFFFF)
-

@@ -1,4 +1,5 @@
 """Pytest plugin of the conformance suite: --port/--vmcu-clock options, the session link and the per-test known state."""
+
 from __future__ import annotations
 
 import os
@@ -15,21 +16,33 @@ BOOT_WAIT_S = 2.0  # [s] longest wait for the boot message of a board that reset
 
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("mantaray", "MANTA-RAY protocol conformance")
-    group.addoption("--port", default=None, metavar="PATH",
-                    help="serial device path of the firmware under test (board, simulator or pty); "
-                         "without it a virtual MCU is started for the session")
-    group.addoption("--vmcu-clock", choices=("sim", "wall"), default="sim",
-                    help="clock of the self-started virtual MCU (no effect with --port): sim (default) or wall")
+    group.addoption(
+        "--port",
+        default=None,
+        metavar="PATH",
+        help="serial device path of the firmware under test (board, simulator or pty); "
+        "without it a virtual MCU is started for the session",
+    )
+    group.addoption(
+        "--vmcu-clock",
+        choices=("sim", "wall"),
+        default="sim",
+        help="clock of the self-started virtual MCU (no effect with --port): sim (default) or wall",
+    )
 
 
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line(
-        "markers", "clock(kind): run only against a firmware whose identify_reply.clock is kind "
-                   "('simulated' or 'wall'); skipped otherwise")
+        "markers",
+        "clock(kind): run only against a firmware whose identify_reply.clock is kind "
+        "('simulated' or 'wall'); skipped otherwise",
+    )
     config.addinivalue_line(
-        "markers", "wall_timing: times the firmware's clock against the host's wall clock, so it needs a firmware "
-                   "that keeps real time (a board, the virtual MCU; not an emulator on a busy machine): "
-                   "deselect with -m 'not wall_timing' where that does not hold")
+        "markers",
+        "wall_timing: times the firmware's clock against the host's wall clock, so it needs a firmware "
+        "that keeps real time (a board, the virtual MCU; not an emulator on a busy machine): "
+        "deselect with -m 'not wall_timing' where that does not hold",
+    )
 
 
 class ConnectError(Exception):
@@ -52,6 +65,7 @@ class Connection:
         try:
             if port is None:
                 from mantaray.host.vmcu import VirtualMcu
+
                 try:
                     self.vmcu = VirtualMcu(clock=config.getoption("vmcu_clock"))
                 except (NotBuilt, RuntimeError, OSError) as exc:
@@ -61,8 +75,9 @@ class Connection:
             else:
                 self.where = port
                 if not os.path.exists(port):
-                    raise ConnectError(f"--port {port}: no such device (is the board plugged in, or the "
-                                       f"simulator running?)")
+                    raise ConnectError(
+                        f"--port {port}: no such device (is the board plugged in, or the simulator running?)"
+                    )
             try:
                 self.link = Link(SerialTransport(port))
             except (OSError, serial.SerialException) as exc:
@@ -161,8 +176,7 @@ def dut(conformance_session: Dut, request: pytest.FixtureRequest):
     d = conformance_session
     marker = request.node.get_closest_marker("clock")
     if marker is not None and marker.args[0] != d.clock.name.lower():
-        pytest.skip(f"needs a firmware with the {marker.args[0]} clock; this one has the "
-                    f"{d.clock.name.lower()} clock")
+        pytest.skip(f"needs a firmware with the {marker.args[0]} clock; this one has the {d.clock.name.lower()} clock")
     d.send_raw(b"\x00")  # ends whatever partial frame a previous test may have left
     d.link.identify()
     d.stop()
@@ -199,4 +213,5 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config: pytest.Config)
     terminalreporter.write_line(
         f"conformance: {where}: protocol {identity.protocol_version}, firmware {identity.firmware_major}."
         f"{identity.firmware_minor}.{identity.firmware_patch}, schema 0x{identity.schema_hash:08X}, "
-        f"clock {m.Clock(identity.clock).name.lower()}")
+        f"clock {m.Clock(identity.clock).name.lower()}"
+    )

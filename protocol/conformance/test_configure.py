@@ -1,4 +1,5 @@
 """Conformance: configure — accepted bounds, each refusal's code and field, refusals change nothing, idle only."""
+
 from __future__ import annotations
 
 import dataclasses
@@ -92,12 +93,17 @@ def test_bad_configure_is_refused_and_changes_nothing(dut, changes, code, field)
     assert config_fingerprint(dut) == reference
 
 
-@pytest.mark.parametrize("changes,bad", [
-    ({"controller": 9, "deadman": 3}, {("controller", OUT), ("deadman", OUT)}),
-    ({"tolerance": NAN, "telemetry_period": 2}, {("tolerance", NOT_FINITE), ("telemetry_period", OUT)}),
-    ({"module_x": 20.0, "module_y": NAN, "noise_amplitude": 1.0},
-     {("module_x", OUT), ("module_y", NOT_FINITE), ("noise_amplitude", OUT)}),
-])
+@pytest.mark.parametrize(
+    "changes,bad",
+    [
+        ({"controller": 9, "deadman": 3}, {("controller", OUT), ("deadman", OUT)}),
+        ({"tolerance": NAN, "telemetry_period": 2}, {("tolerance", NOT_FINITE), ("telemetry_period", OUT)}),
+        (
+            {"module_x": 20.0, "module_y": NAN, "noise_amplitude": 1.0},
+            {("module_x", OUT), ("module_y", NOT_FINITE), ("noise_amplitude", OUT)},
+        ),
+    ],
+)
 def test_several_bad_fields_name_one_of_them(dut, changes, bad):
     reference = base_config_fingerprint(dut)
     dut.command(BASE_CONFIG)
@@ -201,8 +207,9 @@ def test_tolerance_decides_reached(dut, tolerance, state):
 
 
 def test_refused_tolerance_keeps_the_old_one(dut):
-    dut.refuse(dataclasses.replace(DEFAULT_CONFIG, tolerance=0.2, telemetry_period=3), OUT,
-               CONFIGURE_FIELD["telemetry_period"])
+    dut.refuse(
+        dataclasses.replace(DEFAULT_CONFIG, tolerance=0.2, telemetry_period=3), OUT, CONFIGURE_FIELD["telemetry_period"]
+    )
     dut.set_target(0.0, 0.0)
     dut.start()
     assert dut.position(0.1, 0.0).state == m.State.RUNNING
@@ -215,8 +222,11 @@ def test_refused_controller_keeps_manhattan(dut):
     limit = DEFAULT_CONFIG.tilt_limit
     for axis in m.Axis:
         dut.configure_pid(axis, kp=1000.0)
-    dut.refuse(dataclasses.replace(DEFAULT_CONFIG, controller=m.Controller.EUCLIDEAN, module_x=NAN),
-               NOT_FINITE, CONFIGURE_FIELD["module_x"])
+    dut.refuse(
+        dataclasses.replace(DEFAULT_CONFIG, controller=m.Controller.EUCLIDEAN, module_x=NAN),
+        NOT_FINITE,
+        CONFIGURE_FIELD["module_x"],
+    )
     dut.set_target(0.2, 0.2)
     dut.start()
     t = dut.position(-0.2, -0.2)
@@ -231,8 +241,11 @@ def test_refused_controller_keeps_manhattan(dut):
 
 
 def test_refused_module_size_keeps_the_target_bounds(dut):
-    dut.refuse(dataclasses.replace(DEFAULT_CONFIG, module_x=0.4, module_y=0.4, tolerance=0.0), OUT,
-               CONFIGURE_FIELD["tolerance"])
+    dut.refuse(
+        dataclasses.replace(DEFAULT_CONFIG, module_x=0.4, module_y=0.4, tolerance=0.0),
+        OUT,
+        CONFIGURE_FIELD["tolerance"],
+    )
     dut.set_target(0.25, -0.25)  # inside the 0.5 m module, outside a 0.4 m one
     dut.configure(module_x=0.4, module_y=0.4)
     dut.refuse(m.SetTarget(0.25, 0.0), OUT, 0)

@@ -1,5 +1,6 @@
 """Conformance: configure_schedule and configure_cascade — each field takes effect, each refusal's code and field,
 refusals change nothing, idle only; the default schedule steps as Manhattan."""
+
 from __future__ import annotations
 
 import dataclasses
@@ -14,17 +15,23 @@ NAN, INF = math.nan, math.inf
 OUT, NOT_FINITE = m.ErrorCode.OUT_OF_RANGE, m.ErrorCode.NOT_FINITE
 
 # Settings that differ in every field, neither of them neutral, so that each field's change shows in the run below.
-BASE = {m.ConfigureSchedule: m.ConfigureSchedule(edge_zone=0.1, edge_gain=0.5, edge_tilt=0.5, edge_brake=2.0,
-                                                 brake_speed=1.0),
-        m.ConfigureCascade: m.ConfigureCascade(position_gain=3.0, speed_limit=0.15)}
-ALT = {m.ConfigureSchedule: m.ConfigureSchedule(edge_zone=0.2, edge_gain=0.2, edge_tilt=0.1, edge_brake=6.0,
-                                                brake_speed=0.2),
-       m.ConfigureCascade: m.ConfigureCascade(position_gain=8.0, speed_limit=0.05)}
+BASE = {
+    m.ConfigureSchedule: m.ConfigureSchedule(
+        edge_zone=0.1, edge_gain=0.5, edge_tilt=0.5, edge_brake=2.0, brake_speed=1.0
+    ),
+    m.ConfigureCascade: m.ConfigureCascade(position_gain=3.0, speed_limit=0.15),
+}
+ALT = {
+    m.ConfigureSchedule: m.ConfigureSchedule(
+        edge_zone=0.2, edge_gain=0.2, edge_tilt=0.1, edge_brake=6.0, brake_speed=0.2
+    ),
+    m.ConfigureCascade: m.ConfigureCascade(position_gain=8.0, speed_limit=0.05),
+}
 CONTROLLER = {m.ConfigureSchedule: m.Controller.SCHEDULED, m.ConfigureCascade: m.Controller.CASCADE}
 KINDS = list(BASE)
 
 
-STIFF_KP = 1000.0   # [deg/m] x and y for the run: near an edge a small error then asks for more than its tilt limit
+STIFF_KP = 1000.0  # [deg/m] x and y for the run: near an edge a small error then asks for more than its tilt limit
 
 
 def motion_fingerprint(dut, controller: m.Controller) -> tuple:
@@ -39,7 +46,7 @@ def motion_fingerprint(dut, controller: m.Controller) -> tuple:
     for k in range(24):
         if k in (8, 16):
             dut.set_target(*((-0.1, 0.05) if k == 8 else (0.2, -0.2)))
-        x = 0.25 * math.sin(k / 6.0)            # out to the edge and back, faster in the middle
+        x = 0.25 * math.sin(k / 6.0)  # out to the edge and back, faster in the middle
         t = dut.position(x, 0.1 * math.cos(k / 4.0), dt=0.05)
         tilts.append((t.tilt_zx, t.tilt_zy))
     dut.stop()
@@ -57,16 +64,19 @@ def _bad_cases():
     out = []
     for kind in KINDS:
         for spec in kind.FIELDS:
-            out += [(kind, spec.name, NAN, NOT_FINITE), (kind, spec.name, INF, NOT_FINITE),
-                    (kind, spec.name, f32_below(spec.min), OUT), (kind, spec.name, f32_above(spec.max), OUT)]
+            out += [
+                (kind, spec.name, NAN, NOT_FINITE),
+                (kind, spec.name, INF, NOT_FINITE),
+                (kind, spec.name, f32_below(spec.min), OUT),
+                (kind, spec.name, f32_above(spec.max), OUT),
+            ]
     return out
 
 
 BAD = _bad_cases()
 
 
-@pytest.mark.parametrize("kind,name,value,code", BAD,
-                         ids=[f"{k.NAME}.{n}={v:.9g}" for k, n, v, _ in BAD])
+@pytest.mark.parametrize("kind,name,value,code", BAD, ids=[f"{k.NAME}.{n}={v:.9g}" for k, n, v, _ in BAD])
 def test_a_bad_field_is_refused_with_its_index_and_changes_nothing(dut, kind, name, value, code):
     reference = _fingerprint(dut, kind)
     dut.command(BASE[kind])

@@ -1,4 +1,5 @@
 """Conformance: configure_pid — gains take effect per axis, each refusal's code and field, refusals change nothing."""
+
 from __future__ import annotations
 
 import math
@@ -58,10 +59,14 @@ def test_gains_take_effect_on_their_axis_only(dut, axis):
     assert pid_fingerprint(dut) == reference
 
 
-@pytest.mark.parametrize("gains", [
-    {"kp": 0.0, "ki": 0.0, "kd": 0.0, "integral_limit": 0.0},
-    {"kp": 10000.0, "ki": 10000.0, "kd": 10000.0, "integral_limit": 90.0},
-], ids=["zero", "max"])
+@pytest.mark.parametrize(
+    "gains",
+    [
+        {"kp": 0.0, "ki": 0.0, "kd": 0.0, "integral_limit": 0.0},
+        {"kp": 10000.0, "ki": 10000.0, "kd": 10000.0, "integral_limit": 90.0},
+    ],
+    ids=["zero", "max"],
+)
 @pytest.mark.parametrize("axis", list(m.Axis), ids=lambda a: a.name.lower())
 def test_boundary_gains_are_accepted(dut, axis, gains):
     ack = dut.configure_pid(axis, **gains)

@@ -1,4 +1,5 @@
 """Conformance: the deadman — running without a valid position for `deadman` ms levels the surface and latches a fault."""
+
 from __future__ import annotations
 
 import pytest

@@ -1,4 +1,5 @@
 """Conformance: identify and its reply (versions, schema hash, frame size, clock), in every state."""
+
 from __future__ import annotations
 
 import pytest

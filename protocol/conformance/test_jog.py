@@ -1,4 +1,5 @@
 """Conformance: jog — one actuator's command in idle only, index and range checks, refusals change nothing."""
+
 from __future__ import annotations
 
 import math

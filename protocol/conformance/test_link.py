@@ -1,4 +1,5 @@
 """Conformance: the link layer — unknown ids, bad lengths, corrupt and oversize frames, garbage and resynchronisation."""
+
 from __future__ import annotations
 
 import random
@@ -36,8 +37,20 @@ def running(dut, x: float = 0.1, y: float = 0.0) -> m.Telemetry:
 
 # ------------------------------------------------------------------------------------------ unknown ids
 # The edges of the id space, the first id after the commands, and every firmware -> host id (no command either)
-UNKNOWN_IDS = sorted({0x00, 0x0F, 0x11, 0x7F, 0x80, 0xFE, 0xFF, max(i for i in KNOWN_IDS if i < 0x10) + 1,
-                      *(cls.ID for cls in m.MESSAGES.values() if cls.DIRECTION == "mcu_to_host")} - KNOWN_IDS)
+UNKNOWN_IDS = sorted(
+    {
+        0x00,
+        0x0F,
+        0x11,
+        0x7F,
+        0x80,
+        0xFE,
+        0xFF,
+        max(i for i in KNOWN_IDS if i < 0x10) + 1,
+        *(cls.ID for cls in m.MESSAGES.values() if cls.DIRECTION == "mcu_to_host"),
+    }
+    - KNOWN_IDS
+)
 
 
 @pytest.mark.parametrize("payload", [b"", b"\x01" * 8, bytes(range(40))], ids=["empty", "8-bytes", "40-bytes"])
@@ -96,8 +109,9 @@ def test_bad_length_configure_changes_nothing(dut, cut):
 
 def far_ahead(dut, x: float = 0.0, y: float = 0.0) -> m.ObjectPosition:
     """A frame whose counter and capture time are still new after a few more probes."""
-    return m.ObjectPosition((dut.frame + 100) & 0xFFFF, (dut.capture_us + 1_000_000) & 0xFFFFFFFF, x, y,
-                            m.PositionFlags(0))
+    return m.ObjectPosition(
+        (dut.frame + 100) & 0xFFFF, (dut.capture_us + 1_000_000) & 0xFFFFFFFF, x, y, m.PositionFlags(0)
+    )
 
 
 def test_bad_length_position_is_nacked_and_enters_no_history(dut):
@@ -137,7 +151,7 @@ def test_bit_flips_in_the_packet_are_dropped_as_crc_errors(dut, msg):
 def test_bit_flips_on_the_wire_are_dropped_and_counted(dut):
     """Any single-bit flip of the wire bytes (COBS codes included, never making a delimiter) drops the
     frame; it counts as the reference decoder counts it (crc_errors or frame_errors)."""
-    dut.configure(deadman=60000)   # dozens of exchanges without a position (see the test above)
+    dut.configure(deadman=60000)  # dozens of exchanges without a position (see the test above)
     dut.set_target(0.1, 0.0)
     before = running(dut)
     wire, _ = dut.frame_bytes(m.EmergencyStop())

@@ -1,4 +1,5 @@
 """Conformance: object_position and telemetry — answers, non-finite and stale frames, not_visible, steering, reached."""
+
 from __future__ import annotations
 
 import math
@@ -37,8 +38,14 @@ def test_a_position_is_answered_by_exactly_one_telemetry(dut):
 
 
 # ------------------------------------------------------------------------------------------ non-finite
-BAD_XY = [((NAN, 0.0), "x"), ((INF, 0.0), "x"), ((-INF, 0.0), "x"),
-          ((0.0, NAN), "y"), ((0.0, INF), "y"), ((0.0, -INF), "y")]
+BAD_XY = [
+    ((NAN, 0.0), "x"),
+    ((INF, 0.0), "x"),
+    ((-INF, 0.0), "x"),
+    ((0.0, NAN), "y"),
+    ((0.0, INF), "y"),
+    ((0.0, -INF), "y"),
+]
 
 
 @pytest.mark.parametrize("state", ["idle", "running"])
@@ -94,8 +101,7 @@ def test_repeated_frame_counter_is_stale_field_0(dut, state):
 @pytest.mark.parametrize("capture_delta", [0, -1, -1_000_000], ids=["equal", "1us-back", "1s-back"])
 def test_capture_time_that_does_not_advance_is_stale_field_1(dut, capture_delta):
     dut.position(0.0, 0.0)
-    msg = m.ObjectPosition((dut.frame + 1) & 0xFFFF, (dut.capture_us + capture_delta) & 0xFFFFFFFF,
-                           0.0, 0.0, VISIBLE)
+    msg = m.ObjectPosition((dut.frame + 1) & 0xFFFF, (dut.capture_us + capture_delta) & 0xFFFFFFFF, 0.0, 0.0, VISIBLE)
     dut.refuse_position(msg, STALE, POSITION_FIELD["capture_time"])
 
 
@@ -111,8 +117,9 @@ def test_stale_frame_changes_nothing(dut):
     last_frame, last_capture = dut.frame, dut.capture_us
     # a stale frame that would move the object to the far side of the target
     dut.refuse_position(same_frame(dut, x=0.25, capture_delta=20_000), STALE, POSITION_FIELD["frame"])
-    dut.refuse_position(m.ObjectPosition(last_frame + 1, last_capture, 0.25, 0.0, VISIBLE), STALE,
-                        POSITION_FIELD["capture_time"])
+    dut.refuse_position(
+        m.ObjectPosition(last_frame + 1, last_capture, 0.25, 0.0, VISIBLE), STALE, POSITION_FIELD["capture_time"]
+    )
     # history unchanged: the frame right after the last accepted one is still accepted
     after = dut.send_position(m.ObjectPosition(last_frame + 1, last_capture + 1, 0.0, 0.0, VISIBLE))
     assert after.position_frame == last_frame + 1
@@ -291,8 +298,10 @@ def test_commands_stay_within_the_actuator_range(dut):
 
 
 # ---------------------------------------------------------------------------------------- bounds and pauses
-@pytest.mark.parametrize("xy, field", [((0.51, 0.0), 2), ((-0.51, 0.0), 2), ((0.0, 0.51), 3), ((0.0, -0.51), 3),
-                                       ((1e38, 0.0), 2), ((0.0, -3e38), 3)])
+@pytest.mark.parametrize(
+    "xy, field",
+    [((0.51, 0.0), 2), ((-0.51, 0.0), 2), ((0.0, 0.51), 3), ((0.0, -0.51), 3), ((1e38, 0.0), 2), ((0.0, -3e38), 3)],
+)
 def test_a_position_beyond_the_module_by_more_than_half_of_it_is_out_of_range(dut, xy, field):
     """On the 0.5 m module a measurement is within +-0.5 m (the fabric and half a module beside it); farther is
     no measurement of the object (and near 1e38 m would overflow the Euclidean distance)."""
@@ -302,9 +311,9 @@ def test_a_position_beyond_the_module_by_more_than_half_of_it_is_out_of_range(du
     before = dut.position(0.0, 0.0)
     bad = dut.next_position(*xy)
     dut.refuse_position(bad, m.ErrorCode.OUT_OF_RANGE, field)
-    after = dut.send_position(m.ObjectPosition(bad.frame, bad.capture_time, 0.0, 0.0, VISIBLE))   # still new
-    assert after.state == before.state                  # refused whole: it entered no history
-    assert dut.position(0.5, -0.5).state == m.State.RUNNING   # the bound itself is a measurement
+    after = dut.send_position(m.ObjectPosition(bad.frame, bad.capture_time, 0.0, 0.0, VISIBLE))  # still new
+    assert after.state == before.state  # refused whole: it entered no history
+    assert dut.position(0.5, -0.5).state == m.State.RUNNING  # the bound itself is a measurement
 
 
 @pytest.mark.clock("simulated")
@@ -312,7 +321,7 @@ def test_frames_after_a_pause_longer_than_the_deadman_start_afresh_however_far_t
     """A camera paused for 36 min or more (a capture-time jump of 2^31 us or more) would read as going backwards."""
     dut.configure(deadman=500)
     dut.position(0.0, 0.0)
-    dut.set_sim_clock(dut.sim_now_us + 600_000)         # more than the deadman without a frame
-    dut.capture_us = (dut.capture_us + 0x80000000 - 20_000) & 0xFFFFFFFF   # position() adds its 20 ms
+    dut.set_sim_clock(dut.sim_now_us + 600_000)  # more than the deadman without a frame
+    dut.capture_us = (dut.capture_us + 0x80000000 - 20_000) & 0xFFFFFFFF  # position() adds its 20 ms
     assert dut.position(0.0, 0.0).position_frame == dut.frame
-    dut.refuse_position(same_frame(dut, capture_delta=1000), STALE, 0)   # within a stream, still stale
+    dut.refuse_position(same_frame(dut, capture_delta=1000), STALE, 0)  # within a stream, still stale

@@ -1,5 +1,6 @@
 """Conformance: sequence numbers, order and retransmission — replies name id and seq; a copy of the newest frame is
 answered again, not reapplied; a late copy of an older one is refused as stale."""
+
 from __future__ import annotations
 
 import struct
@@ -24,15 +25,16 @@ def send(dut, wire: bytes) -> list:
 def test_ack_and_nack_name_the_command_id_and_seq(dut, seq):
     dut.forget_sequence()
     assert send(dut, encode_frame(m.SetTarget(0.1, 0.1), seq)) == [m.Ack(m.SetTarget.ID, seq)]
-    after = dut.next_seq()                     # after the probe that synchronised the first answer
-    assert send(dut, encode_frame(m.SetTarget(1.0, 0.1), after)) == \
-        [m.Nack(m.SetTarget.ID, after, m.ErrorCode.OUT_OF_RANGE, 0)]
+    after = dut.next_seq()  # after the probe that synchronised the first answer
+    assert send(dut, encode_frame(m.SetTarget(1.0, 0.1), after)) == [
+        m.Nack(m.SetTarget.ID, after, m.ErrorCode.OUT_OF_RANGE, 0)
+    ]
 
 
 def test_sequence_numbers_may_jump_ahead_by_up_to_191(dut):
     """Frames lost on the way leave gaps: anything 1 to 191 ahead of the newest frame is new."""
     dut.forget_sequence()
-    for seq in (9, 200, 3, 3 + 128, 10):       # ahead by 191, 59, 128, 135
+    for seq in (9, 200, 3, 3 + 128, 10):  # ahead by 191, 59, 128, 135
         assert send(dut, encode_frame(m.Jog(0, seq / 10000), seq)) == [m.Ack(m.Jog.ID, seq)]
     assert dut.probe().command[0] == pytest.approx(0.0010, abs=1e-5)
 
@@ -42,11 +44,12 @@ def test_a_late_copy_of_an_older_command_is_refused_as_stale_and_changes_nothing
     """A delayed copy of an older set_target (or stop) never undoes a newer command (PROTOCOL.md section 3)."""
     dut.set_target(0.1, 0.0)
     for msg in (m.SetTarget(-0.1, 0.0), m.Stop()):
-        old_seq = (dut.link.seq - behind) & 0xFF   # behind the newest frame taken (each send ends with a probe)
-        assert send(dut, encode_frame(msg, old_seq)) == \
-            [m.Nack(msg.ID, old_seq, m.ErrorCode.STALE_SEQUENCE, m.NO_FIELD)]
+        old_seq = (dut.link.seq - behind) & 0xFF  # behind the newest frame taken (each send ends with a probe)
+        assert send(dut, encode_frame(msg, old_seq)) == [
+            m.Nack(msg.ID, old_seq, m.ErrorCode.STALE_SEQUENCE, m.NO_FIELD)
+        ]
     dut.start()
-    assert dut.position(0.0, 0.0).tilt_zx > 0      # still steering to the newest target, x = +0.1
+    assert dut.position(0.0, 0.0).tilt_zx > 0  # still steering to the newest target, x = +0.1
 
 
 def test_65_behind_is_a_new_frame(dut):
@@ -86,8 +89,9 @@ def test_a_new_command_in_between_makes_the_old_one_stale(dut):
 def test_same_seq_different_content_is_refused_as_stale(dut):
     seq = dut.next_seq()
     assert send(dut, encode_frame(m.SetTarget(0.1, 0.0), seq)) == [m.Ack(m.SetTarget.ID, seq)]
-    assert send(dut, encode_frame(m.SetTarget(-0.1, 0.0), seq)) == \
-        [m.Nack(m.SetTarget.ID, seq, m.ErrorCode.STALE_SEQUENCE, m.NO_FIELD)]
+    assert send(dut, encode_frame(m.SetTarget(-0.1, 0.0), seq)) == [
+        m.Nack(m.SetTarget.ID, seq, m.ErrorCode.STALE_SEQUENCE, m.NO_FIELD)
+    ]
     dut.start()
     assert dut.position(0.0, 0.0).tilt_zx > 0  # the first target stands
 
@@ -105,8 +109,7 @@ def test_same_content_new_seq_is_a_new_command(dut):
     first = dut.next_seq()
     assert send(dut, encode_frame(m.Start(), first)) == [m.Ack(m.Start.ID, first)]
     second = dut.next_seq()
-    assert send(dut, encode_frame(m.Start(), second)) == [m.Nack(m.Start.ID, second, m.ErrorCode.BAD_STATE,
-                                                                 m.NO_FIELD)]
+    assert send(dut, encode_frame(m.Start(), second)) == [m.Nack(m.Start.ID, second, m.ErrorCode.BAD_STATE, m.NO_FIELD)]
 
 
 def test_identify_ends_the_retransmission_window(dut):
@@ -134,7 +137,7 @@ def test_a_duplicated_position_is_answered_again_and_steps_the_controller_once(d
     assert not any(isinstance(x, m.Nack) for x in answers)
     first, again = [x for x in answers if isinstance(x, m.Telemetry) and x.position_frame == msg.frame][:2]
     assert (again.tilt_zx, again.tilt_zy, again.command) == (first.tilt_zx, first.tilt_zy, first.command)
-    assert dut.position(0.03, 0.0).position_frame == dut.frame       # the camera's count runs on
+    assert dut.position(0.03, 0.0).position_frame == dut.frame  # the camera's count runs on
 
 
 def _crc_twin(first: m.SetTarget, x: float, seq: int) -> bytes:

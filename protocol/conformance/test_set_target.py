@@ -1,4 +1,5 @@
 """Conformance: set_target — module bounds, non-finite values, every state but estop, refusals keep the old target."""
+
 from __future__ import annotations
 
 import math
@@ -43,12 +44,16 @@ def test_bad_target_is_refused_and_keeps_the_old_one(dut, target, code, field):
     assert zx < 0 < zy  # still towards (-0.1, 0.1)
 
 
-@pytest.mark.parametrize("target,bad", [
-    ((NAN, 5.0), {(0, NOT_FINITE), (1, OUT)}),
-    ((5.0, NAN), {(0, OUT), (1, NOT_FINITE)}),
-    ((NAN, INF), {(0, NOT_FINITE), (1, NOT_FINITE)}),
-    ((-1.0, 1.0), {(0, OUT), (1, OUT)}),
-], ids=["nan,5", "5,nan", "nan,inf", "-1,1"])
+@pytest.mark.parametrize(
+    "target,bad",
+    [
+        ((NAN, 5.0), {(0, NOT_FINITE), (1, OUT)}),
+        ((5.0, NAN), {(0, OUT), (1, NOT_FINITE)}),
+        ((NAN, INF), {(0, NOT_FINITE), (1, NOT_FINITE)}),
+        ((-1.0, 1.0), {(0, OUT), (1, OUT)}),
+    ],
+    ids=["nan,5", "5,nan", "nan,inf", "-1,1"],
+)
 def test_both_fields_bad_names_one_of_them(dut, target, bad):
     dut.set_target(-0.1, 0.1)
     with pytest.raises(CommandRefused) as refused:

@@ -1,4 +1,5 @@
 """Conformance: sim_clock — sets a simulated clock (never backwards), what is due runs first; wall clocks refuse it."""
+
 from __future__ import annotations
 
 import time
@@ -85,8 +86,8 @@ def test_wall_clock_runs_in_milliseconds(dut):
 def test_telemetry_time_counts_on_across_the_microsecond_wrap(dut):
     """telemetry.time [ms] wraps at 2^32 ms (49.7 days), not when the u32 microsecond clock does (71.6 min)."""
     before = dut.probe().time
-    for _ in range(3):                       # 3 x (2^31 - 1) us: past the microsecond clock's wrap
+    for _ in range(3):  # 3 x (2^31 - 1) us: past the microsecond clock's wrap
         dut.set_sim_clock(dut.sim_now_us + 0x7FFFFFFF)
     after = dut.probe().time
     assert after == dut.sim_now_ms
-    assert after - before in (6_442_450, 6_442_451)   # 6,442,450.941 ms, whatever the sub-millisecond rest was
+    assert after - before in (6_442_450, 6_442_451)  # 6,442,450.941 ms, whatever the sub-millisecond rest was

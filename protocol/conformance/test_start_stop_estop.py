@@ -1,4 +1,5 @@
 """Conformance: the state table — start (idle only, needs a target), stop (always, clears faults), emergency_stop."""
+
 from __future__ import annotations
 
 import pytest
@@ -36,8 +37,13 @@ def test_start_outside_idle_is_bad_state_and_changes_nothing(dut, state):
     before = dut.enter(state)
     dut.refuse(m.Start(), m.ErrorCode.BAD_STATE)
     after = dut.probe()
-    assert (after.state, after.faults, after.tilt_zx, after.tilt_zy, after.command) == \
-        (before.state, before.faults, before.tilt_zx, before.tilt_zy, before.command)
+    assert (after.state, after.faults, after.tilt_zx, after.tilt_zy, after.command) == (
+        before.state,
+        before.faults,
+        before.tilt_zx,
+        before.tilt_zy,
+        before.command,
+    )
 
 
 def test_start_resets_the_pids(dut):

@@ -1,4 +1,5 @@
 """Conformance: unsolicited telemetry every telemetry_period ms (0 = none), in every state."""
+
 from __future__ import annotations
 
 import itertools

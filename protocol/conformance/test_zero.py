@@ -1,4 +1,5 @@
 """Conformance: zero (homing) — the masked actuators stand at 0 m and hold there; idle only; the mask is checked."""
+
 from __future__ import annotations
 
 import pytest
@@ -24,7 +25,7 @@ def test_zero_makes_the_masked_actuators_hold_at_zero(dut, mask):
     assert tuple(t.command) == pytest.approx(expected, abs=COMMAND_TOL)
     for i in range(4):
         if mask & (1 << i):
-            assert t.measured[i] == pytest.approx(0.0, abs=2e-3)   # where they stand is now z0
+            assert t.measured[i] == pytest.approx(0.0, abs=2e-3)  # where they stand is now z0
 
 
 @pytest.mark.parametrize("mask", [0, 16, 255])
