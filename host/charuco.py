@@ -40,5 +40,5 @@ def calibrate_from_frames(board, frames, min_corners: int = 8) -> tuple[Calibrat
         images.append(img)
     if len(objects) < 5:
         raise ValueError(f"only {len(objects)} frames showed the board well enough (at least 5 needed)")
-    rms, k, dist, _, _ = cv2.calibrateCamera(objects, images, size, None, None)
+    rms, k, dist, _, _ = cv2.calibrateCamera(objects, images, size, None, None)  # type: ignore[call-overload,arg-type]
     return Calibration(k, dist.ravel()), float(rms), len(objects)

@@ -235,6 +235,7 @@ def _attach(args: argparse.Namespace, parser: argparse.ArgumentParser, reconnect
         report=lambda text: print(f"mantaray {args.command}: {text}", file=sys.stderr),
     ).attach()
     identity = session.identity
+    assert identity is not None  # attach() identified the board
     print(
         f"{args.port}: protocol {identity.protocol_version}, firmware {identity.firmware_major}."
         f"{identity.firmware_minor}.{identity.firmware_patch}, clock {m.Clock(identity.clock).name.lower()}"
@@ -499,7 +500,7 @@ def _read_frames(camera: str, most: int) -> list:
     from .tracker import FrameSource
 
     source = FrameSource(camera)
-    frames = []
+    frames: list = []
     while len(frames) < most and (grabbed := source.read()) is not None:
         frames.append(grabbed[0])
     source.close()

@@ -18,7 +18,7 @@ from .link import LinkError
 from .loop import STOPPED_REACHED, ClosedLoop, Frame, Tolerance
 from .runlog import RunLog
 from .session import BoardLost, RigSession, Setup
-from .tracker import FrameSource, Tracker
+from .tracker import FrameSource, Observation, Tracker
 
 STOP, EMERGENCY_STOP = "stopped", "emergency stop"  # the outcomes of the keys
 KEYS = {"s": STOP, "e": EMERGENCY_STOP, " ": EMERGENCY_STOP}  # key (either case) -> how it ends the run
@@ -81,7 +81,7 @@ class RigRun:
         self.outcome = "timeout"
         self._interrupted = False
         self._keys: Keys | None = None
-        self._seen = None  # the tracker's last observation, for the log
+        self._seen: Observation | None = None  # the tracker's last observation, for the log
 
     def report(self, text: str) -> None:
         self.log.write("event", {"text": text})
@@ -167,6 +167,7 @@ class RigRun:
 
     def _stopped_by_key(self) -> bool:
         """A key pressed since the last frame, or an emergency stop the board reported: True when the run ends."""
+        assert self._keys is not None  # run() opens them first
         for key in self._keys.read():
             outcome = KEYS.get(key.lower())
             if outcome == EMERGENCY_STOP:
@@ -187,6 +188,7 @@ class RigRun:
 
     def _record(self, frame: Frame, telemetry: m.Telemetry | None) -> None:
         obs = self._seen
+        assert obs is not None  # a frame is recorded after it was observed
         self.log.write(
             "position",
             {

@@ -34,6 +34,7 @@ class RunLog:
                 return cls(folder / f"{prefix}-{stamp}{f'-{n}' if n > 1 else ''}.jsonl", header, exclusive=True)
             except FileExistsError:
                 continue
+        raise AssertionError("itertools.count() never ends")
 
     def write(self, kind: str, record: dict) -> None:
         self._file.write(json.dumps({"kind": kind, "t": round(time.monotonic(), 6), **record}) + "\n")
@@ -89,7 +90,9 @@ def read_run_log(path: str | Path) -> LoggedRun:
     if not records or records[0][1].get("kind") != "config":
         raise RunLogError(f"{path} does not start with a config line: not a rig log (mantaray rig writes them)")
     rows: dict[int, int] = {}
-    t, xy, cmd = [], [], []
+    t: list[float] = []
+    xy: list = []
+    cmd: list = []
     for n, r in records[1:]:
         try:
             if r.get("kind") == "position":

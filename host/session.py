@@ -185,6 +185,13 @@ class RigSession:
         self._connect(self.reconnect_timeout_s)
         return self
 
+    @property
+    def _live(self) -> Link:
+        """The link of a connected session (a bug to ask before open() or after close())."""
+        if self.link is None:
+            raise RuntimeError("the session has no link: open() it first")
+        return self.link
+
     def _connect(self, timeout_s: float) -> None:
         """Open and identify; a board that does not come back in timeout_s raises BoardLost (IncompatibleFirmware
         as it is)."""
@@ -201,21 +208,21 @@ class RigSession:
             raise
         except (LinkError, OSError) as exc:
             raise BoardLost(str(exc)) from None  # it names the port
-        self._resets_seen = self.link.resets
+        self._resets_seen = self._live.resets
         if first:
-            for text in self.link.rig_differences:
+            for text in self._live.rig_differences:
                 self.report(f"warning: {text}")
 
     def _apply(self) -> None:
         if self.estopped:  # latched across resets and replugs: nothing is powered until stop() clears it
-            self.link.command(m.EmergencyStop())
+            self._live.command(m.EmergencyStop())
             self._setup_pending = True
             return
-        self.link.command(m.Stop())
+        self._live.command(m.Stop())
         for command in self.setup.commands():
-            self.link.command(command)
+            self._live.command(command)
         if self.running:
-            self.link.command(m.Start())
+            self._live.command(m.Start())
 
     def _set_up(self, why: str) -> None:
         """Apply the setup, reconnecting and trying again (SETUP_ATTEMPTS in all) when a command of it is lost.
@@ -225,7 +232,7 @@ class RigSession:
 
         def apply() -> None:
             self._apply()
-            self._resets_seen = self.link.resets
+            self._resets_seen = self._live.resets
 
         def reconnect(exc: Exception) -> None:
             self.report(f"{why}: the setup did not get through ({exc}); reconnecting to {self.port}")
@@ -277,7 +284,7 @@ class RigSession:
         """A command through the session: on a failed link it reconnects, restores and sends it again, SETUP_ATTEMPTS
         times in all; then BoardLost. A nack (CommandRefused) is raised as it is."""
         return self._retried(
-            lambda: self.link.command(msg), msg.NAME, lambda exc: self._recover(f"link failed ({exc})")
+            lambda: self._live.command(msg), msg.NAME, lambda exc: self._recover(f"link failed ({exc})")
         )
 
     def set_target(self, x_m: float, y_m: float) -> None:
@@ -310,7 +317,7 @@ class RigSession:
         """The board's next message within timeout_s [s], None when none came; a port that fails (unplugged) is
         reconnected as a command's would be, within reconnect_timeout_s, else BoardLost."""
         try:
-            return self.link.receive(timeout_s)
+            return self._live.receive(timeout_s)
         except OSError as exc:
             self._recover(f"the port failed ({exc})")
             return None
@@ -324,7 +331,7 @@ class RigSession:
             capture_time=(last.capture_time + PROBE_STEP_US) & 0xFFFFFFFF,
             flags=m.PositionFlags.NOT_VISIBLE,
         )
-        return self.link.position(self._last_position)
+        return self._live.position(self._last_position)
 
     def position(self, msg: m.ObjectPosition) -> m.Telemetry | None:
         """One camera frame; None when it got no answer. A lost answer is skipped (the next frame carries fresh
@@ -334,7 +341,7 @@ class RigSession:
         latched here too: no restore or end of run undoes it, only stop()."""
         self._last_position = msg
         try:
-            telemetry = self.link.position(msg)
+            telemetry = self._live.position(msg)
         except CommandRefused:
             raise
         except OSError as exc:
@@ -348,7 +355,7 @@ class RigSession:
                 self._recover(f"{MISSES_BEFORE_RECONNECT} camera frames in a row got no telemetry ({exc})")
             return None
         self._missed_in_a_row = 0
-        if self.link.resets != self._resets_seen and self.sets_up:  # the board restarted (its boot came in)
+        if self._live.resets != self._resets_seen and self.sets_up:  # the board restarted (its boot came in)
             self.report("the firmware reset")
             self._restore("after the reset")  # BoardLost when the board cannot be set up again
         elif m.State(telemetry.state) == m.State.ESTOP and not self.estopped:

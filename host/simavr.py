@@ -77,6 +77,7 @@ class SimulatedUno:
 
     def _read_pty(self, timeout_s: float) -> str:
         """The path from the harness's "pty PATH" line (read unbuffered: the line may share a read with others)."""
+        assert self.process.stdout is not None and self.process.stderr is not None  # Popen(stdout=PIPE, stderr=PIPE)
         fd, seen = self.process.stdout.fileno(), b""
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:

@@ -83,7 +83,7 @@ class Tracker:
         params = cv2.aruco.DetectorParameters()
         params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
         self._detector = cv2.aruco.ArucoDetector(dictionary(self.layout), params)
-        self._fit = None  # (image -> plane homography, or (rvec, tvec)), fit time [s]
+        self._fit: tuple | None = None  # (image -> plane homography, or (rvec, tvec)), fit time [s]
 
     # ------------------------------------------------------------------------------------------- frames
     def observe(self, image: np.ndarray, capture_time_s: float | None = None) -> Observation:
@@ -130,6 +130,7 @@ class Tracker:
     def _to_fabric(self, pixel: np.ndarray) -> tuple[float, float]:
         import cv2
 
+        assert self._fit is not None  # observe() calls this only after a fit
         fit = self._fit[0]
         h = self.marker_height_m
         if self.calibration is None:
@@ -150,6 +151,7 @@ class Tracker:
     def _blob_centre(self, image: np.ndarray) -> np.ndarray | None:
         import cv2
 
+        assert self.blob is not None  # observe() calls this only in the blob mode
         if image.ndim == 2:
             raise ValueError("colour-blob tracking needs colour (BGR) images")
         hsv = cv2.cvtColor(image, cv2.COLOR_BGR2HSV)

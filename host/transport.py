@@ -84,7 +84,7 @@ def _capi() -> ctypes.CDLL:
     lib = ctypes.CDLL(str(native_artifact("libmantaray_capi.so")))
     lib.mr_vmcu_new.argtypes, lib.mr_vmcu_new.restype = [ctypes.c_int], ctypes.c_void_p
     lib.mr_vmcu_free.argtypes, lib.mr_vmcu_free.restype = [ctypes.c_void_p], None
-    handle_bytes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_size_t]
+    handle_bytes: list = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_size_t]
     lib.mr_vmcu_write.argtypes, lib.mr_vmcu_write.restype = handle_bytes, None
     lib.mr_vmcu_read.argtypes, lib.mr_vmcu_read.restype = handle_bytes, ctypes.c_size_t
     return lib

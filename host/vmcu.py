@@ -38,6 +38,7 @@ class VirtualMcu:
         deadline = time.monotonic() + start_timeout_s
         while not Path(self.path).exists():
             if self.process.poll() is not None:
+                assert self.process.stderr is not None  # Popen(stderr=PIPE)
                 raise RuntimeError(f"virtual MCU exited: {self.process.stderr.read().decode().strip()}")
             if time.monotonic() > deadline:
                 self.close()

@@ -164,7 +164,7 @@ class Message:
     def as_dict(self) -> dict[str, Any]:
         """Field values as plain JSON-friendly Python values (enum members by name, flag sets as ints)."""
         out = {}
-        for f in dc_fields(self):
+        for f in dc_fields(self):  # type: ignore[arg-type]  # every Message subclass is a dataclass
             value = getattr(self, f.name)
             if isinstance(value, enum.IntFlag):
                 value = int(value)

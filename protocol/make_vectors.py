@@ -137,7 +137,7 @@ def _flip(wire: bytes, index: int, bit: int) -> bytes:
 
 ERROR, BAD = {"yield": "frame_error"}, {"yield": "crc_error"}
 # (name, wire bytes, what they yield): damaged and odd input; a frame of an unknown id or length yields its raw parts
-RAW = [
+RAW: list[tuple[str, bytes, list]] = [
     ("set_target with one flipped bit -> crc_error", _flip(SET_TARGET_6, 5, 0), [BAD]),
     ("set_target truncated before its CRC -> crc_error or frame_error", SET_TARGET_6[:8] + b"\x00", [BAD]),
     ("too short: 3 bytes -> frame_error", cobs_encode(bytes([1, 2, 3])) + b"\x00", [ERROR]),

@@ -308,7 +308,7 @@ def plan_build(project: Project, out: Path) -> Plan:
             unit.command = compile_command(unit, flags, core_defines, [include, include / "utility"])
         libs[library.name] = units
         lib_includes.append(include)
-    for root, include in zip(lib_roots, lib_includes, strict=True):
+    for root, include in zip(lib_roots, lib_includes, strict=False):  # the first: the framework libraries follow
         units = [Unit(s, out / "lib" / root.name / f"{s.relative_to(include)}.o", True) for s in sources(include)]
         for unit in units:
             unit.command = compile_command(unit, flags, [], lib_includes)
