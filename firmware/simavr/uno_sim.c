@@ -37,12 +37,12 @@
 
 #include "rig_gen.h"  // MUX_ADDRESS, kPwmPin, kDirPin, kBenchPin, ... (protocol/rig.toml)
 
-#define PAINT 0xC5            // stack paint byte
-#define RAMEND_328P 0x08FF    // last RAM address of the ATmega328P
+#define PAINT 0xC5          // stack paint byte
+#define RAMEND_328P 0x08FF  // last RAM address of the ATmega328P
 
 typedef struct {
   const char* name;
-  avr_cycle_count_t since;    // cycle of the last rising edge (or toggle)
+  avr_cycle_count_t since;  // cycle of the last rising edge (or toggle)
   int high;
   unsigned long count;
   avr_cycle_count_t min, max, sum;
@@ -50,15 +50,15 @@ typedef struct {
 
 // ---------------------------------------------------------------- the rig's hardware, modelled
 // Its addresses, pins and motor speed are the board's: rig_gen.h is written from protocol/rig.toml.
-#define MOTOR_STEP_US 500     // [us] motor model update period
+#define MOTOR_STEP_US 500  // [us] motor model update period
 
 typedef struct {
-  avr_irq_t* irq;          // [0] from the master (TWI_IRQ_OUTPUT), [1] to it (TWI_IRQ_INPUT)
-  int selected;            // 0 none, 1 the multiplexer, 2 an encoder
-  uint8_t mux_mask;        // channels the multiplexer connects
-  uint8_t pointer[4];      // each AS5600's register pointer
-  int read_index;          // byte of the current read
-  double angle_rev[4];     // shaft angles [rev]
+  avr_irq_t* irq;       // [0] from the master (TWI_IRQ_OUTPUT), [1] to it (TWI_IRQ_INPUT)
+  int selected;         // 0 none, 1 the multiplexer, 2 an encoder
+  uint8_t mux_mask;     // channels the multiplexer connects
+  uint8_t pointer[4];   // each AS5600's register pointer
+  int read_index;       // byte of the current read
+  double angle_rev[4];  // shaft angles [rev]
 } rig_t;
 
 static rig_t g_rig;
@@ -234,8 +234,9 @@ int main(int argc, char** argv) {
     } else if (argv[i][0] != '-' && !elf) {
       elf = argv[i];
     } else {
-      fprintf(stderr, "usage: %s FIRMWARE.elf [--bench] [--realtime] [--paint-from ADDR] [--stats FILE] "
-                      "[--run-for S]\n",
+      fprintf(stderr,
+              "usage: %s FIRMWARE.elf [--bench] [--realtime] [--paint-from ADDR] [--stats FILE] "
+              "[--run-for S]\n",
               argv[0]);
       return 2;
     }
@@ -316,8 +317,8 @@ int main(int argc, char** argv) {
     if (paint_from >= 0) {
       for (long a = paint_from; a <= RAMEND_328P && g_avr->data[a] == PAINT; ++a) untouched++;
     }
-    fprintf(f, "{\n  \"cycles\": %llu,\n  \"frequency_hz\": %u,\n  \"state\": %d,\n",
-            (unsigned long long)g_avr->cycle, g_avr->frequency, state);
+    fprintf(f, "{\n  \"cycles\": %llu,\n  \"frequency_hz\": %u,\n  \"state\": %d,\n", (unsigned long long)g_avr->cycle,
+            g_avr->frequency, state);
     fprintf(f, "  \"never_used_ram_bytes\": %ld,\n", paint_from >= 0 ? untouched : -1L);
     write_probe(f, &g_frame, ",");
     write_probe(f, &g_actuators, ",");

@@ -11,7 +11,8 @@ namespace mr {
 namespace board {
 
 // Pins, signs and bus addresses are in board_gen.h, written from protocol/rig.toml (edit that, then run
-// python3 protocol/generate.py). Actuator i sits at corner i of PROTOCOL.md §5: 0 (-x,-y), 1 (+x,-y), 2 (-x,+y), 3 (+x,+y).
+// python3 protocol/generate.py). Actuator i sits at corner i of PROTOCOL.md §5: 0 (-x,-y), 1 (+x,-y), 2 (-x,+y), 3
+// (+x,+y).
 
 // ---------------------------------------------------------------- encoders (AS5600, 12 bit)
 enum class EncoderSource : uint8_t { kI2cMux, kAnalog };

@@ -1,12 +1,12 @@
 // The Uno's HAL: micros() clock, the serial TX buffer, and the four actuator loops (or, in bench mode, none).
 #include <Arduino.h>  // micros(), Serial, pinMode, digitalRead
 
-#include "actuators.h"     // ActuatorBank
-#include "board.h"         // this board's entry points (setup and loop)
-#include "board_config.h"  // kActuator, kBenchPin (board_gen.h), kActuatorPeriodUs (rig_gen.h)
-#include "hal.h"           // the interface implemented here
+#include "actuators.h"        // ActuatorBank
+#include "board.h"            // this board's entry points (setup and loop)
+#include "board_config.h"     // kActuator, kBenchPin (board_gen.h), kActuatorPeriodUs (rig_gen.h)
+#include "hal.h"              // the interface implemented here
 #include "ideal_actuators.h"  // IdealActuators, SimulatedClock: bench mode
-#include "uno_io.h"        // UnoActuatorIo
+#include "uno_io.h"           // UnoActuatorIo
 
 namespace mr {
 namespace board {
@@ -14,7 +14,7 @@ namespace board {
 namespace {
 
 board::UnoActuatorIo g_io;
-board::Probe g_probe_actuators;   // high while the four loops run
+board::Probe g_probe_actuators;  // high while the four loops run
 ActuatorBank g_bank(g_io, board::kActuator, kActuatorPeriodUs);
 bool g_bench = false;        // bench mode: external actuators (setpoints reported back), simulated clock
 IdealActuators g_external;   // bench mode's actuators

@@ -78,10 +78,10 @@ void on_watchdog_timeout(ResetMark& survives) {
 proto::ResetCause reset_cause(uint8_t mcusr, ResetMark& survives) {
   const bool marked = survives.holds(kWatchdogMark);
   survives.clear();
-  if (mcusr & (1u << 0)) return proto::ResetCause::kPowerOn;   // PORF
-  if (marked || (mcusr & (1u << 3))) return proto::ResetCause::kWatchdog;   // WDRF
-  if (mcusr & (1u << 2)) return proto::ResetCause::kBrownOut;  // BORF
-  if (mcusr & (1u << 1)) return proto::ResetCause::kExternal;  // EXTRF
+  if (mcusr & (1u << 0)) return proto::ResetCause::kPowerOn;               // PORF
+  if (marked || (mcusr & (1u << 3))) return proto::ResetCause::kWatchdog;  // WDRF
+  if (mcusr & (1u << 2)) return proto::ResetCause::kBrownOut;              // BORF
+  if (mcusr & (1u << 1)) return proto::ResetCause::kExternal;              // EXTRF
   return proto::ResetCause::kUnknown;
 }
 

@@ -3,7 +3,7 @@
 
 #include <stdint.h>  // uint8_t, uint16_t
 
-#include "actuators.h"  // ActuatorIo
+#include "actuators.h"     // ActuatorIo
 #include "protocol_gen.h"  // proto::ResetCause
 
 namespace mr {

@@ -54,8 +54,8 @@ float ActuatorLoop::step(const ActuatorConfig& c, float setpoint_m, uint16_t raw
     const float d = -c.kd * speed;
     const float next = clamp_symmetric(integral_ + c.ki * error * dt_s, c.max_duty);
     const float unsaturated = p + next + d;
-    const bool winding_up = (unsaturated > c.max_duty && next > integral_) ||
-                            (unsaturated < -c.max_duty && next < integral_);
+    const bool winding_up =
+        (unsaturated > c.max_duty && next > integral_) || (unsaturated < -c.max_duty && next < integral_);
     if (!winding_up) integral_ = next;
     duty = clamp_symmetric(p + integral_ + d, c.max_duty);
   }

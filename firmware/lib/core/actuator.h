@@ -15,8 +15,8 @@ namespace mr {
 // at 2 rev/s).
 class EncoderUnwrap {
  public:
-  void reset(uint16_t raw);         // this reading becomes count 0
-  int32_t update(uint16_t raw);     // counts since reset, + when the raw angle increases
+  void reset(uint16_t raw);      // this reading becomes count 0
+  int32_t update(uint16_t raw);  // counts since reset, + when the raw angle increases
   int32_t count() const { return count_; }
 
  private:
@@ -25,17 +25,17 @@ class EncoderUnwrap {
 };
 
 struct ActuatorConfig {
-  float metres_per_count;     // [m/count] pulley circumference / kEncoderCounts; negative if the encoder counts
-                              // down as the corner lowers
-  float kp;                   // [1/m] duty per metre of error
-  float ki;                   // [1/(m s)]
-  float kd;                   // [s/m] duty per metre per second of motion (on the measurement)
-  float max_duty;             // [-] output limit, 0..1
-  float deadband_m;           // [m] within this error the motor is not driven
-  float soft_limit_m;         // [m] setpoints are clamped to +-this; no drive further out beyond it
-  float stall_duty;           // [-] at or above this |duty| the carriage must move ...
-  float stall_travel_m;       // [m] ... at least this far ...
-  float stall_time_s;         // [s] ... within this time, or the loop reports a stall
+  float metres_per_count;  // [m/count] pulley circumference / kEncoderCounts; negative if the encoder counts
+                           // down as the corner lowers
+  float kp;                // [1/m] duty per metre of error
+  float ki;                // [1/(m s)]
+  float kd;                // [s/m] duty per metre per second of motion (on the measurement)
+  float max_duty;          // [-] output limit, 0..1
+  float deadband_m;        // [m] within this error the motor is not driven
+  float soft_limit_m;      // [m] setpoints are clamped to +-this; no drive further out beyond it
+  float stall_duty;        // [-] at or above this |duty| the carriage must move ...
+  float stall_travel_m;    // [m] ... at least this far ...
+  float stall_time_s;      // [s] ... within this time, or the loop reports a stall
 };
 
 class ActuatorLoop {
@@ -54,9 +54,9 @@ class ActuatorLoop {
  private:
   EncoderUnwrap encoder_;
   float position_m_ = 0.0f;
-  float integral_ = 0.0f;        // [-] the integral term's duty
-  float window_s_ = 0.0f;        // [s] time driven hard without travelling stall_travel_m
-  float window_from_m_ = 0.0f;   // [m] where that window started
+  float integral_ = 0.0f;       // [-] the integral term's duty
+  float window_s_ = 0.0f;       // [s] time driven hard without travelling stall_travel_m
+  float window_from_m_ = 0.0f;  // [m] where that window started
   bool stalled_ = false;
 };
 

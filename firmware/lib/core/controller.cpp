@@ -25,8 +25,8 @@ float filtered_velocity(float v, float raw, float blend) {
 // limits the tilt toward the other edge by its own distance, so the limits do not jump at the centre. With
 // brake_speed > 0 the tilt along the motion fades to 0 as the speed reaches brake_speed (a tilt against it, which
 // brakes, stays free).
-float scheduled_axis(Pid& pid, const PidGains& gains, const ScheduleConfig& s, float tilt_limit, float half,
-                     float p, float error, float error_rate, float v, float dt) {
+float scheduled_axis(Pid& pid, const PidGains& gains, const ScheduleConfig& s, float tilt_limit, float half, float p,
+                     float error, float error_rate, float v, float dt) {
   const float near_edge = clamp01(1.0f - (half - fabsf(p)) / s.edge_zone);  // 0 inside, 1 at or past the edge
   const float far_edge = clamp01(1.0f - (half + fabsf(p)) / s.edge_zone);   // the other: 0 unless zone > half
   const float ease = 1.0f - near_edge * (1.0f - s.edge_gain);
@@ -61,8 +61,8 @@ void TiltController::reset(uint32_t noise_seed) {
   vx_ = vy_ = 0.0f;
 }
 
-float TiltController::step(const ControllerConfig& config, float target_x, float target_y, float x, float y,
-                           float dt, ControllerOutput& out) {
+float TiltController::step(const ControllerConfig& config, float target_x, float target_y, float x, float y, float dt,
+                           ControllerOutput& out) {
   const bool rate_known = has_prev_ && dt > 0.0f;
   if (!rate_known) dt = 0.0f;
   const float ex = target_x - x;
@@ -100,10 +100,10 @@ float TiltController::step(const ControllerConfig& config, float target_x, float
       break;
     }
     case proto::Controller::kScheduled:
-      out.tilt_zx = scheduled_axis(pid_[kX], config.pid[kX], config.schedule, config.tilt_limit,
-                                   0.5f * config.module_x, x, ex, rate_x, vx_, dt);
-      out.tilt_zy = scheduled_axis(pid_[kY], config.pid[kY], config.schedule, config.tilt_limit,
-                                   0.5f * config.module_y, y, ey, rate_y, vy_, dt);
+      out.tilt_zx = scheduled_axis(pid_[kX], config.pid[kX], config.schedule, config.tilt_limit, 0.5f * config.module_x,
+                                   x, ex, rate_x, vx_, dt);
+      out.tilt_zy = scheduled_axis(pid_[kY], config.pid[kY], config.schedule, config.tilt_limit, 0.5f * config.module_y,
+                                   y, ey, rate_y, vy_, dt);
       normal = manhattan_normal(out.tilt_zx, out.tilt_zy);
       break;
     case proto::Controller::kCascade:

@@ -21,11 +21,11 @@ constexpr uint8_t kVy = static_cast<uint8_t>(proto::Axis::kVy);
 constexpr uint8_t kPidCount = proto::kAxisCount;
 
 struct ScheduleConfig {  // configure_schedule
-  float edge_zone;    // [m] width of the band along each edge where the schedule acts
-  float edge_gain;    // [-] kp and ki at the edge, relative to the axis's own
-  float edge_tilt;    // [-] the tilt toward the nearest edge at the edge, relative to the limit
-  float edge_brake;   // [-] extra kd at the edge, relative to the axis's own
-  float brake_speed;  // [m/s] speed at which the tilt along the motion reaches 0; 0: off
+  float edge_zone;       // [m] width of the band along each edge where the schedule acts
+  float edge_gain;       // [-] kp and ki at the edge, relative to the axis's own
+  float edge_tilt;       // [-] the tilt toward the nearest edge at the edge, relative to the limit
+  float edge_brake;      // [-] extra kd at the edge, relative to the axis's own
+  float brake_speed;     // [m/s] speed at which the tilt along the motion reaches 0; 0: off
 };
 
 struct CascadeConfig {  // configure_cascade
@@ -46,9 +46,9 @@ struct ControllerConfig {
 };
 
 struct ControllerOutput {
-  float tilt_zx;                   // [deg] Euclidean: theta resolved along x
-  float tilt_zy;                   // [deg] Euclidean: theta resolved along y
-  float command[kActuatorCount];   // [m] a_i, + lowers the corner, within +-kActuatorRangeM
+  float tilt_zx;                  // [deg] Euclidean: theta resolved along x
+  float tilt_zy;                  // [deg] Euclidean: theta resolved along y
+  float command[kActuatorCount];  // [m] a_i, + lowers the corner, within +-kActuatorRangeM
 };
 
 class TiltController {

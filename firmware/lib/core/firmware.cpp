@@ -83,8 +83,8 @@ void Firmware::dispatch() {
   Answered& last = position ? last_position_ : last_command_;
   // A copy of the last command (camera frames may have come since), or of the newest frame when it was a
   // position (after a newer command its telemetry would answer for another state): the same answer, applied once.
-  const bool copy = last.valid && seq == last.seq && decoder_.crc() == last.crc && id == last.id &&
-                    (!position || seq == newest_seq_);
+  const bool copy =
+      last.valid && seq == last.seq && decoder_.crc() == last.crc && id == last.id && (!position || seq == newest_seq_);
   if (copy) return answer_again(last, id, seq);
   const bool any_taken = last_command_.valid || last_position_.valid;
   if (any_taken && static_cast<uint8_t>(newest_seq_ - seq) <= kStaleWindow) {  // wraps: 0 the newest, 1.. older
@@ -167,11 +167,18 @@ void Firmware::send_reply(uint8_t ref_id, uint8_t ref_seq, ErrorCode code, uint8
 
 void Firmware::send_identify_reply() {
   // The rig constants it was built with (protocol/rig.toml), for the host to compare with its own.
-  const proto::IdentifyReply reply{proto::kProtocolVersion, kFirmwareMajor,         kFirmwareMinor,
-                                   kFirmwarePatch,          proto::kSchemaHash,     proto::kMaxWire,
+  const proto::IdentifyReply reply{proto::kProtocolVersion,
+                                   kFirmwareMajor,
+                                   kFirmwareMinor,
+                                   kFirmwarePatch,
+                                   proto::kSchemaHash,
+                                   proto::kMaxWire,
                                    static_cast<uint8_t>(hal_.clock_kind()),
-                                   kActuatorCount,          kActuatorRangeM,        kEncoderCounts,
-                                   kPulleyCircumferenceM,   kActuatorPeriodUs};
+                                   kActuatorCount,
+                                   kActuatorRangeM,
+                                   kEncoderCounts,
+                                   kPulleyCircumferenceM,
+                                   kActuatorPeriodUs};
   uint8_t payload[proto::IdentifyReply::kSize];
   proto::encode(reply, payload);
   send(proto::IdentifyReply::kId, payload, sizeof payload);

@@ -44,9 +44,9 @@ class Firmware {
   Supervisor supervisor_;
   uint8_t tx_seq_ = 0;
   uint32_t last_telemetry_us_ = 0;
-  uint32_t clock_us_ = 0;      // [us] firmware clock at the last millis()
-  uint32_t clock_ms_ = 0;      // [ms] accumulated
-  uint16_t clock_rest_us_ = 0; // [us] below a millisecond, carried
+  uint32_t clock_us_ = 0;       // [us] firmware clock at the last millis()
+  uint32_t clock_ms_ = 0;       // [ms] accumulated
+  uint16_t clock_rest_us_ = 0;  // [us] below a millisecond, carried
   // What a frame was answered with, to answer a copy of it again without applying it twice.
   struct Answered {
     bool valid;

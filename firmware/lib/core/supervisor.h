@@ -68,14 +68,14 @@ class Supervisor {
   float target_x_ = 0.0f;  // [m]
   float target_y_ = 0.0f;  // [m]
   bool has_target_ = false;
-  bool has_frame_ = false;        // a frame was accepted since boot, identify or start
-  uint16_t last_frame_ = 0;       // its counter
-  uint32_t last_capture_us_ = 0;  // its capture time [us], host clock
-  uint32_t last_frame_at_us_ = 0; // when it arrived [us], firmware clock
-  bool has_valid_ = false;        // a visible position was accepted since boot
-  uint32_t last_valid_us_ = 0;    // when it arrived [us], firmware clock
-  uint32_t deadman_from_us_ = 0;  // last valid position or start, whichever is later [us], firmware clock
-  bool has_step_ = false;         // the controller stepped since start
+  bool has_frame_ = false;             // a frame was accepted since boot, identify or start
+  uint16_t last_frame_ = 0;            // its counter
+  uint32_t last_capture_us_ = 0;       // its capture time [us], host clock
+  uint32_t last_frame_at_us_ = 0;      // when it arrived [us], firmware clock
+  bool has_valid_ = false;             // a visible position was accepted since boot
+  uint32_t last_valid_us_ = 0;         // when it arrived [us], firmware clock
+  uint32_t deadman_from_us_ = 0;       // last valid position or start, whichever is later [us], firmware clock
+  bool has_step_ = false;              // the controller stepped since start
   uint32_t last_step_capture_us_ = 0;  // capture time of that step [us], host clock
 };
 

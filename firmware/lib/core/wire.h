@@ -26,12 +26,8 @@ inline void put_f32(uint8_t* p, float v) {
 }
 
 inline uint8_t get_u8(const uint8_t* p) { return p[0]; }
-inline uint16_t get_u16(const uint8_t* p) {
-  return static_cast<uint16_t>(p[0] | (static_cast<uint16_t>(p[1]) << 8));
-}
-inline uint32_t get_u32(const uint8_t* p) {
-  return get_u16(p) | (static_cast<uint32_t>(get_u16(p + 2)) << 16);
-}
+inline uint16_t get_u16(const uint8_t* p) { return static_cast<uint16_t>(p[0] | (static_cast<uint16_t>(p[1]) << 8)); }
+inline uint32_t get_u32(const uint8_t* p) { return get_u16(p) | (static_cast<uint32_t>(get_u16(p + 2)) << 16); }
 inline int16_t get_i16(const uint8_t* p) { return static_cast<int16_t>(get_u16(p)); }
 inline float get_f32(const uint8_t* p) {
   const uint32_t bits = get_u32(p);

@@ -15,10 +15,10 @@ constexpr int kPins = 20;  // D0..D13, A0..A5
 
 struct Pins {
   int mode[kPins];
-  int digital[kPins];   // digitalWrite level
-  int pwm[kPins];       // analogWrite value 0..255 (0 after a digitalWrite)
+  int digital[kPins];    // digitalWrite level
+  int pwm[kPins];        // analogWrite value 0..255 (0 after a digitalWrite)
   int analog_in[kPins];  // what analogRead returns
-  uint8_t port[kPins];  // per-pin output register that portOutputRegister hands out
+  uint8_t port[kPins];   // per-pin output register that portOutputRegister hands out
 };
 
 extern Pins pins;

@@ -10,10 +10,10 @@ namespace fake {
 struct I2cBus {
   uint8_t mux_address = 0x70;
   uint8_t encoder_address = 0x36;
-  uint8_t selected = 0;          // channel mask last written to the multiplexer
-  uint16_t angle[8] = {};        // each channel's AS5600 ANGLE register, 12 bits
-  bool silent[8] = {};           // an encoder that does not answer (NACK)
-  uint8_t pointer[8] = {};       // each AS5600's register pointer
+  uint8_t selected = 0;     // channel mask last written to the multiplexer
+  uint16_t angle[8] = {};   // each channel's AS5600 ANGLE register, 12 bits
+  bool silent[8] = {};      // an encoder that does not answer (NACK)
+  uint8_t pointer[8] = {};  // each AS5600's register pointer
   unsigned long transactions = 0;
 };
 

@@ -109,8 +109,8 @@ class Harness {
   HARNESS void check_standalone_frame() {
     FUZZ_CHECK(standalone_.payload_len() <= proto::kMaxPacket - mr::kMinPacket);
     uint8_t wire[proto::kMaxWire];
-    const uint8_t n = mr::frame_encode(standalone_.id(), standalone_.seq(), standalone_.payload(),
-                                       standalone_.payload_len(), wire);
+    const uint8_t n =
+        mr::frame_encode(standalone_.id(), standalone_.seq(), standalone_.payload(), standalone_.payload_len(), wire);
     FUZZ_CHECK(n >= 6 && n <= proto::kMaxWire);
     FrameDecoder again;
     for (uint8_t i = 0; i + 1 < n; ++i) FUZZ_CHECK(again.push(wire[i]) == FrameDecoder::Result::kNone);
@@ -237,7 +237,7 @@ class Harness {
     FUZZ_CHECK(t.frame_errors == standalone_.frame_errors());
   }
 
-  mr::NativeHal hal_;       // the board (declared first: the firmware is built on it)
+  mr::NativeHal hal_;  // the board (declared first: the firmware is built on it)
   mr::Firmware fw_;
   FrameDecoder standalone_;  // fed every byte the firmware gets
   FrameDecoder out_;         // decodes what the firmware sends
@@ -274,9 +274,16 @@ class Messages {
     switch (id) {
       case proto::Configure::kId: {
         const uint8_t c = u8();
-        proto::Configure m{static_cast<uint8_t>(c < 0xF0 ? c % proto::kControllerCount : c), f32(0.1f, 10.0f),
-                           f32(0.1f, 10.0f), f32(0.1f, 30.0f), f32(0.001f, 0.5f), f32(0.0f, 0.25f), u32(), u16(),
-                           u16(), f32(0.0f, 10.0f)};
+        proto::Configure m{static_cast<uint8_t>(c < 0xF0 ? c % proto::kControllerCount : c),
+                           f32(0.1f, 10.0f),
+                           f32(0.1f, 10.0f),
+                           f32(0.1f, 30.0f),
+                           f32(0.001f, 0.5f),
+                           f32(0.0f, 0.25f),
+                           u32(),
+                           u16(),
+                           u16(),
+                           f32(0.0f, 10.0f)};
         return proto::encode(m, payload);
       }
       case proto::ConfigurePid::kId: {
@@ -311,7 +318,7 @@ class Messages {
       }
       case proto::ObjectPosition::kId: {
         const uint8_t f = u8();
-        frame_ = static_cast<uint16_t>(frame_ + (f < 0xF0 ? f % 3 : f));             // 0: repeated -> stale
+        frame_ = static_cast<uint16_t>(frame_ + (f < 0xF0 ? f % 3 : f));  // 0: repeated -> stale
         capture_ += static_cast<uint32_t>(static_cast<int32_t>(static_cast<int8_t>(u8())) * 1000);  // ms steps
         const float x = f32(-1.0f, 1.0f);
         const float y = f32(-1.0f, 1.0f);
@@ -343,12 +350,38 @@ class Messages {
     const uint8_t b = u8();
     if (b < 0xC0) return lo + (hi - lo) * static_cast<float>(b) / 191.0f;
     const uint8_t s = u8();
-    static const float kSpecial[32] = {
-        std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
-        -std::numeric_limits<float>::infinity(), 0.0f, -0.0f, std::numeric_limits<float>::max(),
-        -std::numeric_limits<float>::max(), std::numeric_limits<float>::denorm_min(), 0.001f, 0.02f, 0.1f,
-        0.0999f, 0.25f, -0.25f, 0.2501f, -0.2501f, 0.5f, 0.75f, 10.0f, 10.01f, 26.565051f, 26.5651f, 14.036243f,
-        89.0f, 89.01f, 90.0f, 90.01f, 10000.0f, 10000.1f, -1.0f, 1e30f, 0.24f};
+    static const float kSpecial[32] = {std::numeric_limits<float>::quiet_NaN(),
+                                       std::numeric_limits<float>::infinity(),
+                                       -std::numeric_limits<float>::infinity(),
+                                       0.0f,
+                                       -0.0f,
+                                       std::numeric_limits<float>::max(),
+                                       -std::numeric_limits<float>::max(),
+                                       std::numeric_limits<float>::denorm_min(),
+                                       0.001f,
+                                       0.02f,
+                                       0.1f,
+                                       0.0999f,
+                                       0.25f,
+                                       -0.25f,
+                                       0.2501f,
+                                       -0.2501f,
+                                       0.5f,
+                                       0.75f,
+                                       10.0f,
+                                       10.01f,
+                                       26.565051f,
+                                       26.5651f,
+                                       14.036243f,
+                                       89.0f,
+                                       89.01f,
+                                       90.0f,
+                                       90.01f,
+                                       10000.0f,
+                                       10000.1f,
+                                       -1.0f,
+                                       1e30f,
+                                       0.24f};
     if (s < 32) return kSpecial[s];
     const float mag = powf(10.0f, static_cast<float>(s & 0x3F) / 63.0f * 5.0f - 3.0f);  // 1e-3 .. 1e2
     return (s & 0x40) ? -mag : mag;

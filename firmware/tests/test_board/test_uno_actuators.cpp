@@ -19,10 +19,10 @@ using mr::board::kActuator;
 struct Rig {
   static constexpr float kTopSpeedRevPerS = 2.0f;  // [rev/s] 120 rev/min at full drive
   static constexpr float kTimeConstantS = 0.03f;   // [s]
-  float angle_rev[4] = {};                          // shaft angle [rev] since the start
+  float angle_rev[4] = {};                         // shaft angle [rev] since the start
   float speed_rev_per_s[4] = {};
   bool blocked[4] = {};
-  uint16_t offset_counts[4] = {};                   // encoder reading at angle 0
+  uint16_t offset_counts[4] = {};  // encoder reading at angle 0
 
   explicit Rig(uint16_t offset = 1000) {
     fake::reset();
@@ -65,8 +65,8 @@ struct Rig {
 };
 
 // How far the measured position may trail the shaft: two counts, or one ADC step (4 counts) read in analog mode.
-const float kReadingTolM = (mr::board::kEncoderSource == mr::board::EncoderSource::kAnalog ? 5 : 2) *
-                           kActuator.metres_per_count + 1e-6f;
+const float kReadingTolM =
+    (mr::board::kEncoderSource == mr::board::EncoderSource::kAnalog ? 5 : 2) * kActuator.metres_per_count + 1e-6f;
 
 struct Stack {
   Rig rig;
@@ -127,7 +127,7 @@ TEST_CASE("a positive duty lowers the corner: DIR high, encoder counting up, mea
 }
 
 TEST_CASE("unwrapping stays right over many turns, across the wrap point, both ways") {
-  Stack s(4090);  // the encoder starts six counts below its wrap
+  Stack s(4090);                                        // the encoder starts six counts below its wrap
   const float far[4] = {0.24f, -0.24f, 0.24f, -0.24f};  // 6 turns of the 0.04 m pulley each way
   s.bank.set_setpoints(far);
   s.run(8.0f);
@@ -219,8 +219,8 @@ TEST_CASE("the reset cause: power-on first, then the watchdog, brown-out and ext
   CHECK(mr::board::reset_cause(0x04, none) == ResetCause::kBrownOut);
   CHECK(mr::board::reset_cause(0x02, none) == ResetCause::kExternal);
   mr::board::ResetMark marked{mr::board::kWatchdogMark, static_cast<uint16_t>(~mr::board::kWatchdogMark)};
-  CHECK(mr::board::reset_cause(0x01, marked) == ResetCause::kPowerOn);   // RAM is random at power-on
-  mr::board::ResetMark half{mr::board::kWatchdogMark, 0};                // the mark without its complement
+  CHECK(mr::board::reset_cause(0x01, marked) == ResetCause::kPowerOn);  // RAM is random at power-on
+  mr::board::ResetMark half{mr::board::kWatchdogMark, 0};               // the mark without its complement
   CHECK(mr::board::reset_cause(0x02, half) == ResetCause::kExternal);
 }
 
@@ -228,10 +228,10 @@ TEST_CASE("the emergency stop's mark survives every reset but a power-on, and on
   mr::board::ResetMark survives{0x1234, 0x0000};  // whatever RAM held
   CHECK_FALSE(mr::board::estop_survived(0, survives));
   mr::board::keep_estop(survives, true);
-  CHECK(mr::board::estop_survived(0x02, survives));  // reset pin, or the host opening the port
-  CHECK(mr::board::estop_survived(0x08, survives));  // watchdog
-  CHECK(mr::board::estop_survived(0x04, survives));  // brown-out
-  CHECK(mr::board::estop_survived(0, survives));     // behind the stock bootloader, which clears MCUSR
+  CHECK(mr::board::estop_survived(0x02, survives));        // reset pin, or the host opening the port
+  CHECK(mr::board::estop_survived(0x08, survives));        // watchdog
+  CHECK(mr::board::estop_survived(0x04, survives));        // brown-out
+  CHECK(mr::board::estop_survived(0, survives));           // behind the stock bootloader, which clears MCUSR
   CHECK_FALSE(mr::board::estop_survived(0x01, survives));  // power-on: RAM is random
   mr::board::keep_estop(survives, false);                  // the host's stop cleared it
   CHECK_FALSE(mr::board::estop_survived(0x02, survives));

@@ -2,7 +2,7 @@
 #include <doctest/doctest.h>
 
 #include <initializer_list>  // range-for over braced lists
-#include <math.h>  // fabsf, sqrtf
+#include <math.h>            // fabsf, sqrtf
 
 #include <limits>  // quiet_NaN, infinity, max
 
@@ -23,8 +23,15 @@ mr::ControllerConfig paper(Controller kind, float noise = 0.0f) {
   const mr::PidGains xy{30.9f, 26.78f, 15.45f, 26.565051f};
   const mr::PidGains radial{86.72f, 27.91f, 10.19f, 26.565051f};
   const mr::PidGains velocity{100.0f, 30.0f, 0.0f, 26.565051f};
-  return mr::ControllerConfig{kind, 0.5f, 0.5f, 26.565051f, noise, 0.05f, {xy, xy, radial, velocity, velocity},
-                              mr::ScheduleConfig{0.05f, 1.0f, 1.0f, 0.0f, 0.0f}, mr::CascadeConfig{3.0f, 0.15f}};
+  return mr::ControllerConfig{kind,
+                              0.5f,
+                              0.5f,
+                              26.565051f,
+                              noise,
+                              0.05f,
+                              {xy, xy, radial, velocity, velocity},
+                              mr::ScheduleConfig{0.05f, 1.0f, 1.0f, 0.0f, 0.0f},
+                              mr::CascadeConfig{3.0f, 0.15f}};
 }
 
 bool commands_ok(const mr::ControllerOutput& out) {
@@ -201,12 +208,13 @@ TEST_CASE("controller: every command within +-kActuatorRangeM for NaN, inf and h
   const float values[] = {0.0f, 0.1f, -0.25f, 1e3f, -1e30f, kMax, -kMax, kInf, -kInf, kNaN};
   const float dts[] = {0.0f, 1e-3f, 0.1f, 1e30f, kInf, kNaN, -1.0f};
   int steps = 0;
-  for (Controller kind : {Controller::kManhattan, Controller::kEuclidean, Controller::kScheduled,
-                          Controller::kCascade}) {
+  for (Controller kind :
+       {Controller::kManhattan, Controller::kEuclidean, Controller::kScheduled, Controller::kCascade}) {
     for (float noise : {0.0f, 0.25f}) {
       mr::ControllerConfig cfg = paper(kind, noise);
       cfg.tilt_limit = 89.0f;  // even a limit the supervisor would refuse cannot push a command out of range
-      cfg.schedule = mr::ScheduleConfig{0.3f, 0.3f, 0.5f, 2.0f, 0.1f};  // every part at work, both edges near the centre
+      cfg.schedule =
+          mr::ScheduleConfig{0.3f, 0.3f, 0.5f, 2.0f, 0.1f};  // every part at work, both edges near the centre
       mr::TiltController c;
       c.reset(3);
       for (float tx : values) {

@@ -127,7 +127,7 @@ TEST_CASE("cobs: random round trips up to 253 bytes never put a 0x00 on the wire
   mr::Xorshift32 rng;
   rng.seed(12345);
   for (int trial = 0; trial < 2000; ++trial) {
-    const size_t len = rng.next() % 254;  // 0..253: the encoder's uint8_t result holds their length
+    const size_t len = rng.next() % 254;        // 0..253: the encoder's uint8_t result holds their length
     const uint32_t zero_odds = rng.next() % 4;  // 0: no zeros .. 3: many zeros
     Bytes in(len);
     for (uint8_t& b : in) {

@@ -65,8 +65,8 @@ class Host {
         const mr::FrameDecoder::Result r = rx_.push(buf[i]);
         if (buf[i] != 0) continue;
         REQUIRE(r == mr::FrameDecoder::Result::kFrame);
-        frames.push_back(Frame{rx_.id(), rx_.seq(), std::vector<uint8_t>(rx_.payload(), rx_.payload() + rx_.payload_len()),
-                               pending_len_});
+        frames.push_back(Frame{rx_.id(), rx_.seq(),
+                               std::vector<uint8_t>(rx_.payload(), rx_.payload() + rx_.payload_len()), pending_len_});
         CHECK(pending_len_ <= proto::kMaxWire);
         pending_len_ = 0;
       }
@@ -530,9 +530,9 @@ TEST_CASE("firmware: corrupted frames get no reply and are counted in telemetry"
   std::vector<uint8_t> bad = h.wire(proto::Start::kId, 1, nullptr, 0);
   bad[2] = static_cast<uint8_t>(bad[2] ^ 0x10);
   h.send_raw(bad);
-  h.send_raw({0x13, 0x37, 0x00});                      // garbage: a frame error
-  h.send_raw(std::vector<uint8_t>(100, 0x42));          // oversize run...
-  h.send_raw({0x00});                                   // ...ended: one frame error
+  h.send_raw({0x13, 0x37, 0x00});               // garbage: a frame error
+  h.send_raw(std::vector<uint8_t>(100, 0x42));  // oversize run...
+  h.send_raw({0x00});                           // ...ended: one frame error
   CHECK(h.take().empty());
   CHECK(h.fw.supervisor().state() == State::kIdle);
   h.send_msg(pos(1, 1, 0.0f, 0.0f), 2);
@@ -587,8 +587,8 @@ TEST_CASE("firmware: an actuator fault from the board goes through the one shutd
     proto::Telemetry t = h.expect_telemetry();
     CHECK(t.state == static_cast<uint8_t>(State::kFault));
     CHECK(t.faults == fault);
-    CHECK(t.command[1] == 0);                      // levelled ...
-    CHECK(t.measured[1] == driving.measured[1]);   // ... but with power cut nothing moves
+    CHECK(t.command[1] == 0);                     // levelled ...
+    CHECK(t.measured[1] == driving.measured[1]);  // ... but with power cut nothing moves
     h.send_msg(proto::Start{}, 5);
     h.expect_nack(proto::Start::kId, 5, ErrorCode::kBadState, proto::kNoField);
     h.send_msg(proto::Stop{}, 6);

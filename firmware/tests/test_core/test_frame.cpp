@@ -2,8 +2,8 @@
 #include <doctest/doctest.h>
 
 #include <initializer_list>  // range-for over braced lists
-#include <stdint.h>  // uint8_t, uint16_t
-#include <string.h>  // memset
+#include <stdint.h>          // uint8_t, uint16_t
+#include <string.h>          // memset
 
 #include <vector>  // byte streams
 
@@ -48,7 +48,8 @@ TEST_CASE("frame: round trip for every payload length, with and without zeros") 
   for (uint8_t len = 0; len <= kMaxPayload; ++len) {
     for (int zeros = 0; zeros < 2; ++zeros) {
       Bytes payload(len);
-      for (uint8_t& b : payload) b = zeros ? static_cast<uint8_t>(rng.next() % 3) : static_cast<uint8_t>(1 + rng.next() % 255);
+      for (uint8_t& b : payload)
+        b = zeros ? static_cast<uint8_t>(rng.next() % 3) : static_cast<uint8_t>(1 + rng.next() % 255);
       const uint8_t id = static_cast<uint8_t>(rng.next());
       const uint8_t seq = static_cast<uint8_t>(rng.next());
       const Bytes wire = wire_of(id, seq, payload);
@@ -176,7 +177,8 @@ TEST_CASE("frame: the error counters wrap at 2^16") {
 }
 
 TEST_CASE("frame: no single-bit error in a frame is delivered as a frame") {
-  const Bytes payloads[] = {{}, {0x00, 0x00, 0x80, 0x3E, 0x00, 0x00, 0x80, 0xBD}, Bytes(15, 0x00), Bytes(kMaxPayload, 0xC3)};
+  const Bytes payloads[] = {
+      {}, {0x00, 0x00, 0x80, 0x3E, 0x00, 0x00, 0x80, 0xBD}, Bytes(15, 0x00), Bytes(kMaxPayload, 0xC3)};
   for (const Bytes& payload : payloads) {
     const Bytes frame = wire_of(0x10, 0x42, payload);
     for (size_t i = 0; i + 1 < frame.size(); ++i) {

@@ -16,8 +16,15 @@ const float kNaN = std::numeric_limits<float>::quiet_NaN();
 const float kInf = std::numeric_limits<float>::infinity();
 
 mr::ControllerConfig manhattan(PidGains g, float tilt_limit = 26.565051f) {
-  return mr::ControllerConfig{mr::proto::Controller::kManhattan, 0.5f, 0.5f, tilt_limit, 0.0f, 0.05f, {g, g, g, g, g},
-                              mr::ScheduleConfig{0.05f, 1.0f, 1.0f, 0.0f, 0.0f}, mr::CascadeConfig{3.0f, 0.15f}};
+  return mr::ControllerConfig{mr::proto::Controller::kManhattan,
+                              0.5f,
+                              0.5f,
+                              tilt_limit,
+                              0.0f,
+                              0.05f,
+                              {g, g, g, g, g},
+                              mr::ScheduleConfig{0.05f, 1.0f, 1.0f, 0.0f, 0.0f},
+                              mr::CascadeConfig{3.0f, 0.15f}};
 }
 
 }  // namespace

@@ -2,7 +2,7 @@
 #include <doctest/doctest.h>
 
 #include <initializer_list>  // range-for over braced lists
-#include <math.h>  // tanf, sinf, cosf, atanf, fabsf, sqrtf
+#include <math.h>            // tanf, sinf, cosf, atanf, fabsf, sqrtf
 
 #include "plane.h"       // manhattan_normal, euclidean_normal, plane_commands, max_tilt_deg
 #include "rig_config.h"  // kActuatorRangeM, kActuatorCount

@@ -101,7 +101,7 @@ TEST_CASE("supervisor: running -> reached within tolerance -> running when it le
   run(s, 0.1f, 0.0f);
   CHECK(position(s, pos(1, 1000, 0.0f, 0.0f), 1000) == ErrorCode::kOk);
   CHECK(s.state() == State::kRunning);
-  CHECK(s.output().tilt_zx > 0.0f);  // target at +x: tilt +x down
+  CHECK(s.output().tilt_zx > 0.0f);                                               // target at +x: tilt +x down
   CHECK(position(s, pos(2, 2000, 0.1f - 0.019f, 0.0f), 2000) == ErrorCode::kOk);  // tolerance 0.02
   CHECK(s.state() == State::kReached);
   CHECK(position(s, pos(3, 3000, 0.1f, 0.0f), 3000) == ErrorCode::kOk);
@@ -183,7 +183,8 @@ TEST_CASE("supervisor: configure refuses each bad field with its index and chang
       {"tilt_limit 0.05", [](proto::Configure& c) { c.tilt_limit = 0.05f; }, ErrorCode::kOutOfRange, 3},
       {"tilt_limit 89.5", [](proto::Configure& c) { c.tilt_limit = 89.5f; }, ErrorCode::kOutOfRange, 3},
       {"tilt_limit 30 > geometric 26.57", [](proto::Configure& c) { c.tilt_limit = 30.0f; }, ErrorCode::kOutOfRange, 3},
-      {"tilt_limit 26.6 > geometric 26.565", [](proto::Configure& c) { c.tilt_limit = 26.6f; }, ErrorCode::kOutOfRange, 3},
+      {"tilt_limit 26.6 > geometric 26.565", [](proto::Configure& c) { c.tilt_limit = 26.6f; }, ErrorCode::kOutOfRange,
+       3},
       {"tolerance inf", [](proto::Configure& c) { c.tolerance = kInf; }, ErrorCode::kNotFinite, 4},
       {"tolerance 0", [](proto::Configure& c) { c.tolerance = 0.0f; }, ErrorCode::kOutOfRange, 4},
       {"tolerance 0.6", [](proto::Configure& c) { c.tolerance = 0.6f; }, ErrorCode::kOutOfRange, 4},
@@ -281,11 +282,11 @@ TEST_CASE("supervisor: set_target refuses NaN, inf and outside the module; keeps
     uint8_t field;
   };
   const Case cases[] = {
-      {kNaN, 0.0f, ErrorCode::kNotFinite, 0}, {0.0f, kNaN, ErrorCode::kNotFinite, 1},
-      {kInf, 0.0f, ErrorCode::kNotFinite, 0}, {0.0f, -kInf, ErrorCode::kNotFinite, 1},
+      {kNaN, 0.0f, ErrorCode::kNotFinite, 0},   {0.0f, kNaN, ErrorCode::kNotFinite, 1},
+      {kInf, 0.0f, ErrorCode::kNotFinite, 0},   {0.0f, -kInf, ErrorCode::kNotFinite, 1},
       {0.26f, 0.0f, ErrorCode::kOutOfRange, 0}, {-0.2501f, 0.0f, ErrorCode::kOutOfRange, 0},
       {0.0f, 0.26f, ErrorCode::kOutOfRange, 1}, {0.0f, -0.3f, ErrorCode::kOutOfRange, 1},
-      {kNaN, 0.3f, ErrorCode::kNotFinite, 0},  {0.3f, 0.3f, ErrorCode::kOutOfRange, 0},
+      {kNaN, 0.3f, ErrorCode::kNotFinite, 0},   {0.3f, 0.3f, ErrorCode::kOutOfRange, 0},
   };
   for (const Case& c : cases) {
     CAPTURE(c.x);
@@ -389,8 +390,8 @@ TEST_CASE("supervisor: jog moves one actuator in idle only; start and stop end i
     uint8_t field;
   };
   const Case cases[] = {
-      {{4, 0.0f}, ErrorCode::kOutOfRange, 0},   {{255, 0.0f}, ErrorCode::kOutOfRange, 0},
-      {{0, kNaN}, ErrorCode::kNotFinite, 1},    {{0, -kInf}, ErrorCode::kNotFinite, 1},
+      {{4, 0.0f}, ErrorCode::kOutOfRange, 0},    {{255, 0.0f}, ErrorCode::kOutOfRange, 0},
+      {{0, kNaN}, ErrorCode::kNotFinite, 1},     {{0, -kInf}, ErrorCode::kNotFinite, 1},
       {{0, 0.2501f}, ErrorCode::kOutOfRange, 1}, {{1, -0.3f}, ErrorCode::kOutOfRange, 1},
   };
   for (const Case& c : cases) {
