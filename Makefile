@@ -1,5 +1,8 @@
-# The project's two commands: `make run` (set up, then the main job) and `make test` (set up, then every test).
-.PHONY: setup run test
+# The project's two commands: `make run` (set up, then the main job) and `make test` (set up, then every test);
+# `make lint` (the style gates, first in CI) and `make test-fast` (the tests not marked slow, for development).
+.PHONY: setup run test test-fast lint
+
+FIRMWARE_SOURCES = $(shell git ls-files 'firmware/*.c' 'firmware/*.cpp' 'firmware/*.h' | grep -v '_gen\.h$$')
 
 setup:
 	bash scripts/setup.sh
@@ -9,3 +12,12 @@ run: setup
 
 test: setup
 	python3 -m pytest
+
+test-fast: setup
+	python3 -m pytest -m "not slow"
+
+lint: setup
+	python3 -m ruff check .
+	python3 -m ruff format --check .
+	python3 -m mypy
+	clang-format --dry-run --Werror $(FIRMWARE_SOURCES)

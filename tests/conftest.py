@@ -22,6 +22,33 @@ def pytest_configure(config):
         )
 
 
+# Test files whose tests run simulations, the AVR simulator, installs or long link-fault sequences (over about 20 s
+# each on 2 cores): marked slow, so that `make test-fast` (pytest -m "not slow") leaves them out.
+SLOW_FILES = {
+    "test_beyond_paper.py",
+    "test_calibrate.py",
+    "test_conformance_vmcu.py",
+    "test_fig3.py",
+    "test_fuzz.py",
+    "test_heatmap.py",
+    "test_install.py",
+    "test_link_faults.py",
+    "test_ray_executor.py",
+    "test_rig_cli.py",
+    "test_sim_bridge.py",
+    "test_sim_model.py",
+    "test_simavr.py",
+    "test_tracker_sim.py",
+    "test_video.py",
+}
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if item.path.name in SLOW_FILES:
+            item.add_marker(pytest.mark.slow)
+
+
 @pytest.fixture(scope="session")
 def capi():
     """libmantaray_capi: the firmware core's plane transform and tilt limit, callable with float32 arguments."""
