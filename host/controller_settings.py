@@ -8,10 +8,12 @@ key is a field of protocol/schema.toml, so the file says nothing the firmware do
     plant = "paper"         # optional: the simulated plant the values are for (sim commands refuse another)
     [configure]             # only the controller's own fields: tilt_limit, velocity_filter
     tilt_limit = 22.0
-    [configure_schedule]    # any field of configure_schedule or configure_cascade
+    [configure_schedule]    # any field of the controller's own settings messages
     edge_zone = 0.08
-    [pid.x]                 # the PIDs the controller runs (host/session.py, controller_axes)
+    [pid.x]                 # the PIDs the controller runs
     kp = 40.0
+
+What each controller reads (its configure fields, its settings messages, its PIDs) is schema.toml's [controllers].
 """
 
 from __future__ import annotations
@@ -29,12 +31,9 @@ from mantaray.protocol.codec import FieldRefused
 
 from .session import controller_axes
 
-CONFIGURE_KEYS = ("tilt_limit", "velocity_filter")  # what a controller's settings may change of configure
-SETTINGS_MESSAGES = {cls.NAME: cls for cls in (m.ConfigureSchedule, m.ConfigureCascade)}
-OWN = {
-    m.Controller.SCHEDULED: ("configure_schedule", "velocity_filter"),  # what only some controllers read
-    m.Controller.CASCADE: ("configure_cascade", "velocity_filter"),
-}
+# what any controller's settings may change of configure, and the messages of every controller's own settings
+CONFIGURE_KEYS = tuple(dict.fromkeys(key for keys in m.CONTROLLER_CONFIGURE.values() for key in keys))
+SETTINGS_MESSAGES = {cls.NAME: cls for cls in m.SETTINGS_MESSAGES}
 PID_KEYS = tuple(spec.name for spec in m.ConfigurePid.FIELDS if spec.name != "axis")
 
 
@@ -74,9 +73,8 @@ class ControllerSettings:
         if len(set(keys)) != len(keys):
             raise SettingsError(f"a key is given twice: {sorted(k for k in keys if keys.count(k) > 1)[0]}")
         axes = {a.name.lower() for a in controller_axes(self.controller)}
-        own = OWN.get(m.Controller[self.controller.upper()], ())
-        configure_keys = [k for k in CONFIGURE_KEYS if k not in ("velocity_filter",) or k in own]
-        sections = [name for name in SETTINGS_MESSAGES if name in own]
+        configure_keys = m.CONTROLLER_CONFIGURE[m.Controller[self.controller.upper()]]
+        sections = [cls.NAME for cls in m.CONTROLLER_SETTINGS[m.Controller[self.controller.upper()]]]
         for key in keys:
             section, _, name = key.rpartition(".")
             allowed = (

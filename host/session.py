@@ -43,18 +43,12 @@ def is_pty(port: str) -> bool:
 
 
 def controller_axes(controller: str) -> tuple[m.Axis, ...]:
-    """The PIDs a controller runs: Manhattan's and the scheduled one's x and y, Euclidean's radial one, the
-    cascade's vx and vy (schema.toml, enums.controller and enums.axis)."""
+    """The PIDs the controller named so runs (schema.toml, [controllers] axes)."""
     return CONTROLLER_AXES[m.Controller[controller.upper()]]
 
 
-CONTROLLER_AXES = {
-    m.Controller.MANHATTAN: (m.Axis.X, m.Axis.Y),
-    m.Controller.EUCLIDEAN: (m.Axis.RADIAL,),
-    m.Controller.SCHEDULED: (m.Axis.X, m.Axis.Y),
-    m.Controller.CASCADE: (m.Axis.VX, m.Axis.VY),
-}
-PAPER_AXES = (m.Axis.X, m.Axis.Y, m.Axis.RADIAL)  # the PIDs whose gains the paper gives (a plant may read them per rad)
+CONTROLLER_AXES = m.CONTROLLER_AXES  # controller -> the PIDs it runs (schema.toml, [controllers])
+PAPER_AXES = m.PAPER_AXES  # the PIDs whose gains the paper gives (a plant may read them per rad)
 
 
 def connect(

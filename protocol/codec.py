@@ -123,6 +123,7 @@ class Message:
     REPLY: ClassVar[str | None]
     SIZE: ClassVar[int]
     FIELDS: ClassVar[tuple[FieldSpec, ...]]
+    STATES: ClassVar[frozenset[int]]  # supervisor states (State values) the firmware takes it in; empty: MCU -> host
 
     @classmethod
     def struct_format(cls) -> str:

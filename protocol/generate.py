@@ -38,20 +38,60 @@ HEADER = "Generated from protocol/schema.toml by protocol/generate.py; do not ed
 
 def load_schema(path: Path = SCHEMA) -> dict:
     with open(path, "rb") as f:
-        return tomllib.load(f)
+        schema = tomllib.load(f)
+    check_behaviour(schema)
+    return schema
+
+
+class SchemaError(Exception):
+    """schema.toml names a state, axis, message or field that it does not define."""
+
+
+def check_behaviour(schema: dict) -> None:
+    """The message states and the controller tables name only what the schema defines, and cover all of it."""
+    states = schema["enums"]["state"]["values"]
+    if schema["protocol"]["state_error"] not in {e["name"] for e in schema["errors"]}:
+        raise SchemaError(f"[protocol] state_error {schema['protocol']['state_error']!r} is no error")
+    for msg in schema["messages"]:
+        taken = msg.get("states")
+        if msg["direction"] == "host_to_mcu" and not taken:
+            raise SchemaError(f"message {msg['name']} lacks states (the supervisor states it is taken in)")
+        if msg["direction"] != "host_to_mcu" and taken is not None:
+            raise SchemaError(f"message {msg['name']} travels to the host: the firmware takes it in no state")
+        if unknown := set(taken or ()) - set(states):
+            raise SchemaError(f"message {msg['name']}: states {sorted(unknown)} are no enums.state values")
+    controllers = schema["controllers"]
+    if set(controllers) != set(schema["enums"]["controller"]["values"]):
+        raise SchemaError("[controllers] must have one table per enums.controller value")
+    host_messages = {msg["name"] for msg in schema["messages"] if msg["direction"] == "host_to_mcu"}
+    configure = next(msg for msg in schema["messages"] if msg["name"] == "configure")
+    known = {
+        "axes": set(schema["enums"]["axis"]["values"]),
+        "settings": host_messages,
+        "configure": {f["name"] for f in configure["fields"]},
+    }
+    for name, table in controllers.items():
+        if set(table) != {*known, "paper"} or not isinstance(table["paper"], bool):
+            raise SchemaError(f"controllers.{name} must have axes, settings, configure and paper (true or false)")
+        for key, allowed in known.items():
+            if unknown := set(table[key]) - allowed:
+                raise SchemaError(f"controllers.{name}.{key}: {sorted(unknown)} not in the schema")
 
 
 def canonical(schema: dict) -> bytes:
-    """The schema without its prose: what two ends must agree on byte for byte."""
+    """The schema without its prose and its behaviour (message states, controller tables): what two ends must agree
+    on byte for byte."""
 
     def strip(obj):
         if isinstance(obj, dict):
-            return {k: strip(v) for k, v in obj.items() if k not in ("doc", "unit", "reply", "default")}
+            return {k: strip(v) for k, v in obj.items() if k not in ("doc", "unit", "reply", "default", "states")}
         if isinstance(obj, list):
             return [strip(v) for v in obj]
         return obj
 
-    return json.dumps(strip(schema), sort_keys=True, separators=(",", ":")).encode()
+    layout = {k: v for k, v in schema.items() if k != "controllers"}
+    layout["protocol"] = {k: v for k, v in schema["protocol"].items() if k != "state_error"}
+    return json.dumps(strip(layout), sort_keys=True, separators=(",", ":")).encode()
 
 
 def schema_hash(schema: dict) -> int:
@@ -68,6 +108,12 @@ def enum_default(schema: dict, field: dict) -> int:
     if isinstance(value, str):
         return schema["enums"][field["enum"]]["values"][value]
     return value
+
+
+def state_mask(schema: dict, msg: dict) -> int:
+    """Bit i set: the firmware takes the message in the supervisor state whose value is i."""
+    values = schema["enums"]["state"]["values"]
+    return sum(1 << values[state] for state in msg.get("states", ()))
 
 
 def field_comment(field: dict) -> str:
@@ -265,6 +311,33 @@ def render_cpp(schema: dict) -> str:
         out.append("")
     out += cpp_size_switch(schema, "host_to_mcu", "host -> MCU, or -1 if the MCU handles no such id")
     out += cpp_size_switch(schema, "mcu_to_host", "MCU -> host, or -1 if the MCU sends no such id")
+    groups: dict[int, list[dict]] = {}  # kStates -> the messages with it
+    for msg in schema["messages"]:
+        if msg["direction"] == "host_to_mcu":
+            if msg["id"] >= 32:
+                raise SchemaError(f"message {msg['name']}: a host -> MCU id must be below 32 (a bit of a uint32_t)")
+            groups.setdefault(state_mask(schema, msg), []).append(msg)
+    out += [
+        "// Supervisor states a host -> MCU message is taken in (bit i: State i); 0 for an id the MCU handles not.",
+        "// Bit tests on the id, not a switch: avr-gcc would make that a lookup table in the Uno's RAM.",
+        "inline uint8_t host_to_mcu_states(uint8_t id) {",
+        "  if (id >= 32) return 0;",
+        "  const uint32_t bit = static_cast<uint32_t>(1) << id;",
+    ]
+    for mask, msgs in groups.items():
+        ids = sum(1 << msg["id"] for msg in msgs)
+        names = ", ".join(msg["name"] for msg in msgs)
+        out.append(f"  if (bit & 0x{ids:08X}u) return 0x{mask:02X};  // {names}")
+    out += ["  return 0;", "}", ""]
+    out += [
+        "// nack.code of a command sent in a state its message is not taken in, before any field is looked at.",
+        f"constexpr ErrorCode kStateError = ErrorCode::k{camel(proto['state_error'])};",
+        "// Whether the firmware takes message id in state (schema.toml, the message's states).",
+        "inline bool taken_in(uint8_t id, State state) {",
+        "  return (host_to_mcu_states(id) >> static_cast<uint8_t>(state)) & 1u;",
+        "}",
+        "",
+    ]
     host_ids = ", ".join(
         f"{camel(msg['name'])}::kId" for msg in schema["messages"] if msg["direction"] == "host_to_mcu"
     )
@@ -372,6 +445,12 @@ def render_py(schema: dict) -> str:
             f"    DIRECTION: ClassVar[str] = {msg['direction']!r}",
             f"    REPLY: ClassVar[str | None] = {msg.get('reply')!r}",
             f"    SIZE: ClassVar[int] = {payload_size(msg)}  # [bytes] payload",
+            "    STATES: ClassVar[frozenset[int]] = "
+            + (
+                "frozenset({" + ", ".join(f"State.{s.upper()}" for s in msg["states"]) + "})"
+                if "states" in msg
+                else "frozenset()"
+            ),
             "    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (",
         ]
         for field in msg["fields"]:
@@ -388,8 +467,53 @@ def render_py(schema: dict) -> str:
             out.append(
                 f"    {field['name']}: {py_annotation(field)} = {py_default(schema, field)}  # {field_comment(field)}"
             )
-    out += ["", "", "MESSAGES: dict[int, type[Message]] = {m.ID: m for m in (" + ", ".join(names) + ")}", ""]
+    out += ["", "", "MESSAGES: dict[int, type[Message]] = {m.ID: m for m in (" + ", ".join(names) + ")}"]
+    out += py_controllers(schema)
     return "\n".join(out)
+
+
+def py_controllers(schema: dict) -> list[str]:
+    """The [controllers] tables, and the nack.code of a command outside its message's STATES."""
+    controllers = schema["controllers"]
+    settings = [
+        msg["name"] for msg in schema["messages"] if any(msg["name"] in c["settings"] for c in controllers.values())
+    ]
+    paper = [
+        a for a in schema["enums"]["axis"]["values"] if any(a in c["axes"] for c in controllers.values() if c["paper"])
+    ]
+
+    def py_tuple(items: list[str]) -> str:
+        return f"({items[0]},)" if len(items) == 1 else "(" + ", ".join(items) + ")"
+
+    def axes(names) -> str:
+        return py_tuple([f"Axis.{a.upper()}" for a in names])
+
+    def classes(names) -> str:
+        return py_tuple([camel(n) for n in names])
+
+    def strings(names) -> str:
+        return py_tuple([repr(n) for n in names])
+
+    out = [
+        "",
+        f"STATE_ERROR = ErrorCode.{schema['protocol']['state_error'].upper()}  # nack.code outside a message's STATES",
+        "",
+        "# What each controller reads (schema.toml, [controllers]): the PIDs it runs, the messages with its own settings,",
+        "# the configure fields that are its settings.",
+        "CONTROLLER_AXES: dict[Controller, tuple[Axis, ...]] = {",
+    ]
+    out += [f"    Controller.{name.upper()}: {axes(c['axes'])}," for name, c in controllers.items()]
+    out += ["}", "CONTROLLER_SETTINGS: dict[Controller, tuple[type[Message], ...]] = {"]
+    out += [f"    Controller.{name.upper()}: {classes(c['settings'])}," for name, c in controllers.items()]
+    out += ["}", "CONTROLLER_CONFIGURE: dict[Controller, tuple[str, ...]] = {"]
+    out += [f"    Controller.{name.upper()}: {strings(c['configure'])}," for name, c in controllers.items()]
+    out += [
+        "}",
+        f"SETTINGS_MESSAGES: tuple[type[Message], ...] = {classes(settings)}  # every controller's, in schema order",
+        f"PAPER_AXES: tuple[Axis, ...] = {axes(paper)}  # the PIDs of the paper's controllers, whose gains it gives",
+        "",
+    ]
+    return out
 
 
 # ------------------------------------------------------------------------------- PROTOCOL.md reference
@@ -435,11 +559,19 @@ def render_md(schema: dict) -> str:
     for msg in schema["messages"]:
         arrow = "host → firmware" if msg["direction"] == "host_to_mcu" else "firmware → host"
         reply = f"; answered by `{msg['reply']}`" if "reply" in msg else ""
+        taken = ""
+        if len(msg.get("states", ())) == len(schema["enums"]["state"]["values"]):
+            taken = " Taken in every state."
+        elif "states" in msg:
+            taken = (
+                f" Taken in {', '.join(f'`{s}`' for s in msg['states'])}; in any other state refused with "
+                f"`{schema['protocol']['state_error']}`."
+            )
         size = payload_size(msg)
         out += [
             f"#### `{msg['name']}` — id 0x{msg['id']:02X}, {arrow}{reply}",
             "",
-            f"{msg['doc']} Payload {size} bytes; frame on the wire {cobs_wire_size(size)} bytes.",
+            f"{msg['doc']}{taken} Payload {size} bytes; frame on the wire {cobs_wire_size(size)} bytes.",
             "",
         ]
         if not msg["fields"]:

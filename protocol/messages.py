@@ -123,19 +123,21 @@ class Identify(Message):
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'identify_reply'
     SIZE: ClassVar[int] = 0  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE, State.RUNNING, State.REACHED, State.FAULT, State.ESTOP})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
     )
 
 
 @dataclass(frozen=True)
 class Configure(Message):
-    """Controller-wide settings. Only in idle. Validated whole: any bad field refuses the lot and changes nothing."""
+    """Controller-wide settings. Validated whole: any bad field refuses the lot and changes nothing."""
 
     ID: ClassVar[int] = 0x02
     NAME: ClassVar[str] = 'configure'
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'ack'
     SIZE: ClassVar[int] = 33  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('controller', 'B', 1, None, Controller, None, None, ''),
         FieldSpec('module_x', 'f', 1, None, None, 0.1, 10.0, 'm'),
@@ -149,7 +151,7 @@ class Configure(Message):
         FieldSpec('velocity_filter', 'f', 1, None, None, 0.0, 10.0, 's'),
     )
 
-    controller: Controller = Controller.MANHATTAN  # Manhattan or Euclidean. (enum controller)
+    controller: Controller = Controller.MANHATTAN  # The tilt controller: manhattan, euclidean, scheduled or cascade. (enum controller)
     module_x: float = 0.5  # [m] Module size m along x (actuators at x = +-m/2).
     module_y: float = 0.5  # [m] Module size n along y (actuators at y = +-n/2).
     tilt_limit: float = 26.565051  # [deg] Saturation of each tilt angle; at most atan(range / ((m + n) / 2)), which keeps every corner in range.
@@ -163,13 +165,14 @@ class Configure(Message):
 
 @dataclass(frozen=True)
 class ConfigurePid(Message):
-    """Gains of one PID. Only in idle. Output unit is degrees of tilt (see PROTOCOL.md, units)."""
+    """Gains of one PID. Output unit is degrees of tilt (see PROTOCOL.md, units)."""
 
     ID: ClassVar[int] = 0x03
     NAME: ClassVar[str] = 'configure_pid'
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'ack'
     SIZE: ClassVar[int] = 17  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('axis', 'B', 1, None, Axis, None, None, ''),
         FieldSpec('kp', 'f', 1, None, None, 0.0, 10000.0, 'deg/m'),
@@ -178,7 +181,7 @@ class ConfigurePid(Message):
         FieldSpec('integral_limit', 'f', 1, None, None, 0.0, 90.0, 'deg'),
     )
 
-    axis: Axis = Axis.X  # x, y (Manhattan) or radial (Euclidean). (enum axis)
+    axis: Axis = Axis.X  # Which PID: x, y (manhattan, scheduled), radial (euclidean), vx, vy (cascade). (enum axis)
     kp: float = 0.0  # [deg/m] Proportional gain.
     ki: float = 0.0  # [deg/(m s)] Integral gain.
     kd: float = 0.0  # [deg s/m] Derivative gain (on measurement: no kick when the target changes).
@@ -187,13 +190,14 @@ class ConfigurePid(Message):
 
 @dataclass(frozen=True)
 class SetTarget(Message):
-    """Target position p_d in the fabric frame. Any state but estop; must lie inside the module (|x| <= m/2, |y| <= n/2)."""
+    """Target position p_d in the fabric frame. Must lie inside the module (|x| <= m/2, |y| <= n/2)."""
 
     ID: ClassVar[int] = 0x04
     NAME: ClassVar[str] = 'set_target'
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'ack'
     SIZE: ClassVar[int] = 8  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE, State.RUNNING, State.REACHED, State.FAULT})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('x', 'f', 1, None, None, None, None, 'm'),
         FieldSpec('y', 'f', 1, None, None, None, None, 'm'),
@@ -212,6 +216,7 @@ class Start(Message):
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'ack'
     SIZE: ClassVar[int] = 0  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
     )
 
@@ -225,6 +230,7 @@ class Stop(Message):
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'ack'
     SIZE: ClassVar[int] = 0  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE, State.RUNNING, State.REACHED, State.FAULT, State.ESTOP})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
     )
 
@@ -238,19 +244,21 @@ class EmergencyStop(Message):
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'ack'
     SIZE: ClassVar[int] = 0  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE, State.RUNNING, State.REACHED, State.FAULT, State.ESTOP})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
     )
 
 
 @dataclass(frozen=True)
 class Jog(Message):
-    """Move one actuator to a position, for calibration. Only in idle; stop or start ends the jog."""
+    """Move one actuator to a position, for calibration; stop or start ends the jog."""
 
     ID: ClassVar[int] = 0x08
     NAME: ClassVar[str] = 'jog'
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'ack'
     SIZE: ClassVar[int] = 5  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('actuator', 'B', 1, None, None, 0, 3, ''),
         FieldSpec('position', 'f', 1, None, None, None, None, 'm'),
@@ -269,6 +277,7 @@ class SimClock(Message):
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'ack'
     SIZE: ClassVar[int] = 4  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE, State.RUNNING, State.REACHED, State.FAULT, State.ESTOP})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('now', 'I', 1, None, None, None, None, 'us'),
     )
@@ -278,13 +287,14 @@ class SimClock(Message):
 
 @dataclass(frozen=True)
 class Zero(Message):
-    """Homing: take the present position of each actuator in the mask as 0 m, the reference height z0. Only in idle."""
+    """Homing: take the present position of each actuator in the mask as 0 m, the reference height z0."""
 
     ID: ClassVar[int] = 0x0A
     NAME: ClassVar[str] = 'zero'
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'ack'
     SIZE: ClassVar[int] = 1  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('actuators', 'B', 1, None, None, 1, 15, ''),
     )
@@ -294,13 +304,14 @@ class Zero(Message):
 
 @dataclass(frozen=True)
 class ConfigureSchedule(Message):
-    """The position-scheduled Manhattan controller's schedule (PROTOCOL.md, controllers). Only in idle. Its defaults schedule nothing: it then steps as Manhattan."""
+    """The position-scheduled Manhattan controller's schedule (PROTOCOL.md, controllers). Its defaults schedule nothing: it then steps as Manhattan."""
 
     ID: ClassVar[int] = 0x0B
     NAME: ClassVar[str] = 'configure_schedule'
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'ack'
     SIZE: ClassVar[int] = 20  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('edge_zone', 'f', 1, None, None, 0.001, 5.0, 'm'),
         FieldSpec('edge_gain', 'f', 1, None, None, 0.0, 1.0, ''),
@@ -318,13 +329,14 @@ class ConfigureSchedule(Message):
 
 @dataclass(frozen=True)
 class ConfigureCascade(Message):
-    """The cascaded controller's outer loop (PROTOCOL.md, controllers); its inner PIDs are configure_pid's vx and vy. Only in idle."""
+    """The cascaded controller's outer loop (PROTOCOL.md, controllers); its inner PIDs are configure_pid's vx and vy."""
 
     ID: ClassVar[int] = 0x0C
     NAME: ClassVar[str] = 'configure_cascade'
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'ack'
     SIZE: ClassVar[int] = 8  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('position_gain', 'f', 1, None, None, 0.0, 100.0, '1/s'),
         FieldSpec('speed_limit', 'f', 1, None, None, 0.001, 5.0, 'm/s'),
@@ -343,6 +355,7 @@ class ObjectPosition(Message):
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'telemetry'
     SIZE: ClassVar[int] = 15  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE, State.RUNNING, State.REACHED, State.FAULT, State.ESTOP})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('frame', 'H', 1, None, None, None, None, ''),
         FieldSpec('capture_time', 'I', 1, None, None, None, None, 'us'),
@@ -367,6 +380,7 @@ class IdentifyReply(Message):
     DIRECTION: ClassVar[str] = 'mcu_to_host'
     REPLY: ClassVar[str | None] = None
     SIZE: ClassVar[int] = 26  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset()
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('protocol_version', 'H', 1, None, None, None, None, ''),
         FieldSpec('firmware_major', 'B', 1, None, None, None, None, ''),
@@ -405,6 +419,7 @@ class Ack(Message):
     DIRECTION: ClassVar[str] = 'mcu_to_host'
     REPLY: ClassVar[str | None] = None
     SIZE: ClassVar[int] = 2  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset()
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('ref_id', 'B', 1, None, None, None, None, ''),
         FieldSpec('ref_seq', 'B', 1, None, None, None, None, ''),
@@ -423,6 +438,7 @@ class Nack(Message):
     DIRECTION: ClassVar[str] = 'mcu_to_host'
     REPLY: ClassVar[str | None] = None
     SIZE: ClassVar[int] = 4  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset()
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('ref_id', 'B', 1, None, None, None, None, ''),
         FieldSpec('ref_seq', 'B', 1, None, None, None, None, ''),
@@ -445,6 +461,7 @@ class Telemetry(Message):
     DIRECTION: ClassVar[str] = 'mcu_to_host'
     REPLY: ClassVar[str | None] = None
     SIZE: ClassVar[int] = 37  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset()
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('time', 'I', 1, None, None, None, None, 'ms'),
         FieldSpec('state', 'B', 1, None, State, None, None, ''),
@@ -483,6 +500,7 @@ class Boot(Message):
     DIRECTION: ClassVar[str] = 'mcu_to_host'
     REPLY: ClassVar[str | None] = None
     SIZE: ClassVar[int] = 1  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset()
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('reset_cause', 'B', 1, None, ResetCause, None, None, ''),
     )
@@ -491,3 +509,28 @@ class Boot(Message):
 
 
 MESSAGES: dict[int, type[Message]] = {m.ID: m for m in (Identify, Configure, ConfigurePid, SetTarget, Start, Stop, EmergencyStop, Jog, SimClock, Zero, ConfigureSchedule, ConfigureCascade, ObjectPosition, IdentifyReply, Ack, Nack, Telemetry, Boot)}
+
+STATE_ERROR = ErrorCode.BAD_STATE  # nack.code outside a message's STATES
+
+# What each controller reads (schema.toml, [controllers]): the PIDs it runs, the messages with its own settings,
+# the configure fields that are its settings.
+CONTROLLER_AXES: dict[Controller, tuple[Axis, ...]] = {
+    Controller.MANHATTAN: (Axis.X, Axis.Y),
+    Controller.EUCLIDEAN: (Axis.RADIAL,),
+    Controller.SCHEDULED: (Axis.X, Axis.Y),
+    Controller.CASCADE: (Axis.VX, Axis.VY),
+}
+CONTROLLER_SETTINGS: dict[Controller, tuple[type[Message], ...]] = {
+    Controller.MANHATTAN: (),
+    Controller.EUCLIDEAN: (),
+    Controller.SCHEDULED: (ConfigureSchedule,),
+    Controller.CASCADE: (ConfigureCascade,),
+}
+CONTROLLER_CONFIGURE: dict[Controller, tuple[str, ...]] = {
+    Controller.MANHATTAN: ('tilt_limit',),
+    Controller.EUCLIDEAN: ('tilt_limit',),
+    Controller.SCHEDULED: ('tilt_limit', 'velocity_filter'),
+    Controller.CASCADE: ('tilt_limit', 'velocity_filter'),
+}
+SETTINGS_MESSAGES: tuple[type[Message], ...] = (ConfigureSchedule, ConfigureCascade)  # every controller's, in schema order
+PAPER_AXES: tuple[Axis, ...] = (Axis.X, Axis.Y, Axis.RADIAL)  # the PIDs of the paper's controllers, whose gains it gives

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from mantaray.host.controller_settings import OWN, SETTINGS_MESSAGES, ControllerSettings, SettingsError
+from mantaray.host.controller_settings import ControllerSettings, SettingsError
 from mantaray.host.session import Setup, controller_axes
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
@@ -18,18 +18,14 @@ from mantaray.protocol import messages as m
 
 def _keys(controller: str) -> list[tuple[str, float, float]]:
     """(key, low, high) of every setting the controller takes, from the schema's bounds."""
-    own = OWN.get(m.Controller[controller.upper()], ())
+    kind = m.Controller[controller.upper()]
     out = [
-        (f"configure.{name}", spec.min, spec.max)
+        (f"configure.{spec.name}", spec.min, spec.max)
         for spec in m.Configure.FIELDS
-        for name in ("tilt_limit", "velocity_filter")
-        if spec.name == name and (name == "tilt_limit" or name in own)
+        if spec.name in m.CONTROLLER_CONFIGURE[kind]
     ]
     out += [
-        (f"{msg}.{spec.name}", spec.min, spec.max)
-        for msg, cls in SETTINGS_MESSAGES.items()
-        if msg in own
-        for spec in cls.FIELDS
+        (f"{cls.NAME}.{spec.name}", spec.min, spec.max) for cls in m.CONTROLLER_SETTINGS[kind] for spec in cls.FIELDS
     ]
     out += [
         (f"pid.{axis.name.lower()}.{spec.name}", spec.min, spec.max)

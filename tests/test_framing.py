@@ -250,6 +250,60 @@ def test_generator_check_passes():
     assert result.returncode == 0, result.stderr
 
 
+def test_generated_tables_equal_the_schema():
+    """What each message is taken in and what each controller reads: messages.py's tables are schema.toml's, and the
+    host reads them (no second copy)."""
+    import tomllib
+
+    from mantaray.host import controller_settings, session
+
+    schema = tomllib.loads((PROTOCOL / "schema.toml").read_text())
+    assert m.STATE_ERROR == m.ErrorCode[schema["protocol"]["state_error"].upper()]
+    for msg in schema["messages"]:
+        cls = m.MESSAGES[msg["id"]]
+        assert cls.STATES == {m.State[s.upper()] for s in msg.get("states", ())}, msg["name"]
+    controllers = schema["controllers"]
+    assert set(m.CONTROLLER_AXES) == set(m.CONTROLLER_SETTINGS) == set(m.CONTROLLER_CONFIGURE) == set(m.Controller)
+    for kind in m.Controller:
+        table = controllers[kind.name.lower()]
+        assert m.CONTROLLER_AXES[kind] == tuple(m.Axis[a.upper()] for a in table["axes"])
+        assert [cls.NAME for cls in m.CONTROLLER_SETTINGS[kind]] == table["settings"]
+        assert list(m.CONTROLLER_CONFIGURE[kind]) == table["configure"]
+    assert {cls.NAME for cls in m.SETTINGS_MESSAGES} == {n for c in controllers.values() for n in c["settings"]}
+    assert set(m.PAPER_AXES) == {m.Axis[a.upper()] for c in controllers.values() if c["paper"] for a in c["axes"]}
+    assert session.CONTROLLER_AXES is m.CONTROLLER_AXES and session.PAPER_AXES is m.PAPER_AXES
+    assert list(controller_settings.SETTINGS_MESSAGES.values()) == list(m.SETTINGS_MESSAGES)
+
+
+@pytest.mark.parametrize(
+    "edit, needle",
+    [
+        (lambda s: s["messages"][1].update(states=["idle", "asleep"]), "asleep"),
+        (lambda s: s["messages"][1].pop("states"), "lacks states"),
+        (lambda s: s["controllers"]["cascade"].update(axes=["vx", "vz"]), "vz"),
+        (lambda s: s["controllers"]["scheduled"].update(settings=["telemetry"]), "telemetry"),
+        (lambda s: s["controllers"].pop("euclidean"), "one table per"),
+        (lambda s: s["protocol"].update(state_error="sleepy"), "sleepy"),
+    ],
+)
+def test_the_generator_refuses_a_state_or_controller_table_naming_the_unknown(edit, needle):
+    gen = _load_generate(PROTOCOL / "generate.py")
+    schema = gen.load_schema()
+    edit(schema)
+    with pytest.raises(gen.SchemaError, match=needle):
+        gen.check_behaviour(schema)
+
+
+def test_the_behaviour_tables_are_not_in_the_schema_hash():
+    """states and [controllers] say nothing of the wire layout: changing them leaves the identify handshake alone."""
+    gen = _load_generate(PROTOCOL / "generate.py")
+    schema = gen.load_schema()
+    before = gen.schema_hash(schema)
+    schema["messages"][1]["states"] = ["idle", "running"]
+    schema["controllers"]["manhattan"]["axes"] = ["radial"]
+    assert gen.schema_hash(schema) == before
+
+
 def test_vectors_are_what_their_generator_writes():
     """vectors.json is written by protocol/make_vectors.py from cases stated once; a hand edit is caught."""
     result = subprocess.run(

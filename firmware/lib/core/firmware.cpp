@@ -92,8 +92,11 @@ void Firmware::dispatch() {
   }
   const uint32_t now = hal_.now_us();
   uint8_t field = proto::kNoField;
-  const ErrorCode code = position ? supervisor_.position(decoded<proto::ObjectPosition>(decoder_.payload()), now, field)
-                                  : handle_command(field);
+  ErrorCode code = proto::kStateError;  // a state the message is not taken in (schema.toml, its states): nothing runs
+  if (proto::taken_in(id, supervisor_.state())) {
+    code = position ? supervisor_.position(decoded<proto::ObjectPosition>(decoder_.payload()), now, field)
+                    : handle_command(field);
+  }
   apply_outputs();
   newest_seq_ = seq;
   last = Answered{true, id, seq, decoder_.crc(), code, field};

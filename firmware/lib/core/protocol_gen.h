@@ -110,11 +110,11 @@ inline ErrorCode validate(const Identify& /*m*/, uint8_t& /*field*/) {
   return ErrorCode::kOk;
 }
 
-// Controller-wide settings. Only in idle. Validated whole: any bad field refuses the lot and changes nothing.
+// Controller-wide settings. Validated whole: any bad field refuses the lot and changes nothing.
 struct Configure {
   static constexpr uint8_t kId = 0x02;
   static constexpr uint8_t kSize = 33;  // [bytes] payload
-  uint8_t controller;  // Manhattan or Euclidean. (enum controller)
+  uint8_t controller;  // The tilt controller: manhattan, euclidean, scheduled or cascade. (enum controller)
   float module_x;  // [m] Module size m along x (actuators at x = +-m/2).
   float module_y;  // [m] Module size n along y (actuators at y = +-n/2).
   float tilt_limit;  // [deg] Saturation of each tilt angle; at most atan(range / ((m + n) / 2)), which keeps every corner in range.
@@ -192,11 +192,11 @@ inline void set_defaults(Configure& m) {
   m.velocity_filter = 0.05f;
 }
 
-// Gains of one PID. Only in idle. Output unit is degrees of tilt (see PROTOCOL.md, units).
+// Gains of one PID. Output unit is degrees of tilt (see PROTOCOL.md, units).
 struct ConfigurePid {
   static constexpr uint8_t kId = 0x03;
   static constexpr uint8_t kSize = 17;  // [bytes] payload
-  uint8_t axis;  // x, y (Manhattan) or radial (Euclidean). (enum axis)
+  uint8_t axis;  // Which PID: x, y (manhattan, scheduled), radial (euclidean), vx, vy (cascade). (enum axis)
   float kp;  // [deg/m] Proportional gain.
   float ki;  // [deg/(m s)] Integral gain.
   float kd;  // [deg s/m] Derivative gain (on measurement: no kick when the target changes).
@@ -235,7 +235,7 @@ inline ErrorCode validate(const ConfigurePid& m, uint8_t& field) {
   return ErrorCode::kOk;
 }
 
-// Target position p_d in the fabric frame. Any state but estop; must lie inside the module (|x| <= m/2, |y| <= n/2).
+// Target position p_d in the fabric frame. Must lie inside the module (|x| <= m/2, |y| <= n/2).
 struct SetTarget {
   static constexpr uint8_t kId = 0x04;
   static constexpr uint8_t kSize = 8;  // [bytes] payload
@@ -295,7 +295,7 @@ inline ErrorCode validate(const EmergencyStop& /*m*/, uint8_t& /*field*/) {
   return ErrorCode::kOk;
 }
 
-// Move one actuator to a position, for calibration. Only in idle; stop or start ends the jog.
+// Move one actuator to a position, for calibration; stop or start ends the jog.
 struct Jog {
   static constexpr uint8_t kId = 0x08;
   static constexpr uint8_t kSize = 5;  // [bytes] payload
@@ -337,7 +337,7 @@ inline ErrorCode validate(const SimClock& /*m*/, uint8_t& /*field*/) {
   return ErrorCode::kOk;
 }
 
-// Homing: take the present position of each actuator in the mask as 0 m, the reference height z0. Only in idle.
+// Homing: take the present position of each actuator in the mask as 0 m, the reference height z0.
 struct Zero {
   static constexpr uint8_t kId = 0x0A;
   static constexpr uint8_t kSize = 1;  // [bytes] payload
@@ -356,7 +356,7 @@ inline ErrorCode validate(const Zero& m, uint8_t& field) {
   return ErrorCode::kOk;
 }
 
-// The position-scheduled Manhattan controller's schedule (PROTOCOL.md, controllers). Only in idle. Its defaults schedule nothing: it then steps as Manhattan.
+// The position-scheduled Manhattan controller's schedule (PROTOCOL.md, controllers). Its defaults schedule nothing: it then steps as Manhattan.
 struct ConfigureSchedule {
   static constexpr uint8_t kId = 0x0B;
   static constexpr uint8_t kSize = 20;  // [bytes] payload
@@ -408,7 +408,7 @@ inline void set_defaults(ConfigureSchedule& m) {
   m.brake_speed = 0.0f;
 }
 
-// The cascaded controller's outer loop (PROTOCOL.md, controllers); its inner PIDs are configure_pid's vx and vy. Only in idle.
+// The cascaded controller's outer loop (PROTOCOL.md, controllers); its inner PIDs are configure_pid's vx and vy.
 struct ConfigureCascade {
   static constexpr uint8_t kId = 0x0C;
   static constexpr uint8_t kSize = 8;  // [bytes] payload
@@ -695,6 +695,24 @@ inline int8_t mcu_to_host_size(uint8_t id) {
     case Boot::kId: return Boot::kSize;
     default: return -1;
   }
+}
+
+// Supervisor states a host -> MCU message is taken in (bit i: State i); 0 for an id the MCU handles not.
+// Bit tests on the id, not a switch: avr-gcc would make that a lookup table in the Uno's RAM.
+inline uint8_t host_to_mcu_states(uint8_t id) {
+  if (id >= 32) return 0;
+  const uint32_t bit = static_cast<uint32_t>(1) << id;
+  if (bit & 0x000102C2u) return 0x1F;  // identify, stop, emergency_stop, sim_clock, object_position
+  if (bit & 0x00001D2Cu) return 0x01;  // configure, configure_pid, start, jog, zero, configure_schedule, configure_cascade
+  if (bit & 0x00000010u) return 0x0F;  // set_target
+  return 0;
+}
+
+// nack.code of a command sent in a state its message is not taken in, before any field is looked at.
+constexpr ErrorCode kStateError = ErrorCode::kBadState;
+// Whether the firmware takes message id in state (schema.toml, the message's states).
+inline bool taken_in(uint8_t id, State state) {
+  return (host_to_mcu_states(id) >> static_cast<uint8_t>(state)) & 1u;
 }
 
 // Every message id travelling host -> MCU, in schema order (for the fuzzer and the tests: no hand-kept list).

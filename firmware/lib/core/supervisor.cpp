@@ -63,7 +63,6 @@ void Supervisor::take(const proto::ConfigureCascade& msg) {
 
 ErrorCode Supervisor::configure(const proto::Configure& msg, uint8_t& field) {
   field = proto::kNoField;
-  if (state_ != State::kIdle) return ErrorCode::kBadState;
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
   if (msg.tilt_limit > max_tilt_deg(msg.module_x, msg.module_y, kActuatorRangeM) + kTiltLimitSlackDeg) {
@@ -82,7 +81,6 @@ ErrorCode Supervisor::configure(const proto::Configure& msg, uint8_t& field) {
 
 ErrorCode Supervisor::configure_pid(const proto::ConfigurePid& msg, uint8_t& field) {
   field = proto::kNoField;
-  if (state_ != State::kIdle) return ErrorCode::kBadState;
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
   control_.pid[msg.axis] = PidGains{msg.kp, msg.ki, msg.kd, msg.integral_limit};
@@ -90,9 +88,8 @@ ErrorCode Supervisor::configure_pid(const proto::ConfigurePid& msg, uint8_t& fie
 }
 
 template <class Message>
-ErrorCode Supervisor::take_in_idle(const Message& msg, uint8_t& field) {
+ErrorCode Supervisor::take_valid(const Message& msg, uint8_t& field) {
   field = proto::kNoField;
-  if (state_ != State::kIdle) return ErrorCode::kBadState;
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
   take(msg);
@@ -100,16 +97,15 @@ ErrorCode Supervisor::take_in_idle(const Message& msg, uint8_t& field) {
 }
 
 ErrorCode Supervisor::configure_schedule(const proto::ConfigureSchedule& msg, uint8_t& field) {
-  return take_in_idle(msg, field);
+  return take_valid(msg, field);
 }
 
 ErrorCode Supervisor::configure_cascade(const proto::ConfigureCascade& msg, uint8_t& field) {
-  return take_in_idle(msg, field);
+  return take_valid(msg, field);
 }
 
 ErrorCode Supervisor::set_target(const proto::SetTarget& msg, uint8_t& field) {
   field = proto::kNoField;
-  if (state_ == State::kEstop) return ErrorCode::kBadState;
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
   if (!inside_module(msg.x, 0.0f, config_)) {
@@ -127,7 +123,6 @@ ErrorCode Supervisor::set_target(const proto::SetTarget& msg, uint8_t& field) {
 }
 
 ErrorCode Supervisor::start(uint32_t now_us) {
-  if (state_ != State::kIdle) return ErrorCode::kBadState;
   if (!has_target_) return ErrorCode::kNoTarget;
   controller_.reset(config_.noise_seed);
   level();
@@ -159,7 +154,6 @@ bool Supervisor::actuator_power() const {
 
 ErrorCode Supervisor::jog(const proto::Jog& msg, uint8_t& field) {
   field = proto::kNoField;
-  if (state_ != State::kIdle) return ErrorCode::kBadState;
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
   if (msg.position > kActuatorRangeM || msg.position < -kActuatorRangeM) {
@@ -172,7 +166,6 @@ ErrorCode Supervisor::jog(const proto::Jog& msg, uint8_t& field) {
 
 ErrorCode Supervisor::zero(const proto::Zero& msg, uint8_t& field) {
   field = proto::kNoField;
-  if (state_ != State::kIdle) return ErrorCode::kBadState;
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
   for (uint8_t i = 0; i < kActuatorCount; ++i) {

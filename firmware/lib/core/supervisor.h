@@ -19,7 +19,10 @@ class Supervisor {
  public:
   Supervisor();
 
-  // Each returns kOk or the error to nack with; field is set to the offending field's index (or kNoField).
+  // Each returns kOk or the error to nack with; field is set to the offending field's index (or kNoField). None
+  // looks at the state: the dispatcher runs a command only in the states its message's schema entry names
+  // (proto::taken_in), so configure, configure_pid, configure_schedule, configure_cascade, start, jog and zero run in
+  // idle and set_target in any state but estop.
   proto::ErrorCode configure(const proto::Configure& msg, uint8_t& field);
   proto::ErrorCode configure_pid(const proto::ConfigurePid& msg, uint8_t& field);
   proto::ErrorCode configure_schedule(const proto::ConfigureSchedule& msg, uint8_t& field);
@@ -55,9 +58,9 @@ class Supervisor {
   void take_configure();  // the controller's share of config_ into control_
   void take(const proto::ConfigureSchedule& msg);
   void take(const proto::ConfigureCascade& msg);
-  // A controller's own settings: taken whole in idle when the schema's checks pass, else refused and nothing changes.
+  // A controller's own settings: taken whole when the schema's checks pass, else refused and nothing changes.
   template <class Message>
-  proto::ErrorCode take_in_idle(const Message& msg, uint8_t& field);
+  proto::ErrorCode take_valid(const Message& msg, uint8_t& field);
 
   proto::Configure config_;
   ControllerConfig control_;  // what every controller step reads: kept, not rebuilt on the Uno's small stack

@@ -92,7 +92,7 @@ TEST_CASE("supervisor: start needs a target, and only from idle") {
   CHECK(set_target(s, 0.1f, 0.0f) == ErrorCode::kOk);
   CHECK(s.start(0) == ErrorCode::kOk);
   CHECK(s.state() == State::kRunning);
-  CHECK(s.start(0) == ErrorCode::kBadState);
+  CHECK_FALSE(proto::taken_in(proto::Start::kId, s.state()));  // the dispatcher refuses it (schema states)
   CHECK(s.state() == State::kRunning);
 }
 
@@ -111,7 +111,7 @@ TEST_CASE("supervisor: running -> reached within tolerance -> running when it le
   // Reached is a running state: start is refused, stop levels and idles.
   CHECK(position(s, pos(5, 5000, 0.1f, 0.01f), 5000) == ErrorCode::kOk);
   CHECK(s.state() == State::kReached);
-  CHECK(s.start(5000) == ErrorCode::kBadState);
+  CHECK_FALSE(proto::taken_in(proto::Start::kId, s.state()));
   s.stop();
   CHECK(s.state() == State::kIdle);
   CHECK(level(s));
@@ -141,15 +141,13 @@ TEST_CASE("supervisor: emergency stop latches until stop; stop clears it") {
   CHECK((s.faults() & proto::faults::kEstop) != 0);
   CHECK_FALSE(s.actuator_power());
   CHECK(level(s));
-  uint8_t field = 0;
-  proto::Configure c = defaults();
-  CHECK(s.configure(c, field) == ErrorCode::kBadState);
-  CHECK(field == kNoField);
-  CHECK(set_target(s, 0.0f, 0.0f, field) == ErrorCode::kBadState);
-  CHECK(field == kNoField);
-  CHECK(s.start(0) == ErrorCode::kBadState);
-  CHECK(s.jog(proto::Jog{0, 0.1f}, field) == ErrorCode::kBadState);
-  CHECK(s.configure_pid(proto::ConfigurePid{0, 1.0f, 1.0f, 1.0f, 1.0f}, field) == ErrorCode::kBadState);
+  // In estop the dispatcher takes no command but stop, emergency_stop, identify, sim_clock (and positions).
+  for (const uint8_t id : {proto::Configure::kId, proto::SetTarget::kId, proto::Start::kId, proto::Jog::kId,
+                           proto::ConfigurePid::kId, proto::Zero::kId}) {
+    CHECK_FALSE(proto::taken_in(id, s.state()));
+  }
+  CHECK(proto::taken_in(proto::Stop::kId, s.state()));
+  CHECK(proto::taken_in(proto::ObjectPosition::kId, s.state()));
   // Positions in estop change nothing on the surface.
   CHECK(position(s, pos(2, 2000, -0.2f, 0.0f), 2000) == ErrorCode::kOk);
   CHECK(level(s));
@@ -251,13 +249,9 @@ TEST_CASE("supervisor: configure accepts the bounds and applies the whole messag
 
 TEST_CASE("supervisor: configure only in idle") {
   Supervisor s;
+  CHECK(proto::taken_in(proto::Configure::kId, s.state()));
   run(s, 0.0f, 0.0f);
-  proto::Configure c = defaults();
-  c.deadman = 1000;
-  uint8_t field = 0;
-  CHECK(s.configure(c, field) == ErrorCode::kBadState);
-  CHECK(field == kNoField);
-  CHECK(s.config().deadman == 500);
+  CHECK_FALSE(proto::taken_in(proto::Configure::kId, s.state()));  // the dispatcher refuses it (schema states)
 }
 
 TEST_CASE("supervisor: shrinking the module forgets a target that no longer fits") {
@@ -358,10 +352,9 @@ TEST_CASE("supervisor: configure_pid sets the gains of the named axis only, and 
   CHECK(field == kNoField);
   run(s, 0.1f, 0.1f);
   REQUIRE(position(s, pos(1, 1000, 0.0f, 0.0f), 1000) == ErrorCode::kOk);
-  CHECK(s.output().tilt_zx == Approx(1.0f));   // new x gain
-  CHECK(s.output().tilt_zy == Approx(3.09f));  // y untouched
-  CHECK(s.configure_pid(proto::ConfigurePid{1, 10.0f, 0.0f, 0.0f, 5.0f}, field) == ErrorCode::kBadState);
-  CHECK(field == kNoField);
+  CHECK(s.output().tilt_zx == Approx(1.0f));                          // new x gain
+  CHECK(s.output().tilt_zy == Approx(3.09f));                         // y untouched
+  CHECK_FALSE(proto::taken_in(proto::ConfigurePid::kId, s.state()));  // the dispatcher refuses it (schema states)
   // Radial gains drive the Euclidean controller.
   s.stop();
   REQUIRE(s.configure_pid(proto::ConfigurePid{2, 20.0f, 0.0f, 0.0f, 5.0f}, field) == ErrorCode::kOk);
@@ -409,7 +402,7 @@ TEST_CASE("supervisor: jog moves one actuator in idle only; start and stop end i
   CHECK(s.jog(proto::Jog{1, 0.05f}, field) == ErrorCode::kOk);
   run(s, 0.0f, 0.0f);
   CHECK(level(s));
-  CHECK(s.jog(proto::Jog{1, 0.05f}, field) == ErrorCode::kBadState);
+  CHECK_FALSE(proto::taken_in(proto::Jog::kId, s.state()));  // the dispatcher refuses it (schema states)
   CHECK(level(s));
 }
 
@@ -512,7 +505,7 @@ TEST_CASE("supervisor: the deadman trips after deadman ms without a valid positi
   CHECK(position(s, pos(100, 1000000, -0.2f, 0.0f), t0 + 120000) == ErrorCode::kOk);
   CHECK(level(s));
   CHECK(s.state() == State::kFault);
-  CHECK(s.start(t0 + 130000) == ErrorCode::kBadState);
+  CHECK_FALSE(proto::taken_in(proto::Start::kId, s.state()));
   s.stop();
   CHECK(s.state() == State::kIdle);
   CHECK(s.faults() == 0);
