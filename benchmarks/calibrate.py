@@ -24,9 +24,10 @@ import numpy as np
 from mantaray.host.link import Link
 from mantaray.host.transport import SerialTransport
 from mantaray.host.vmcu import VirtualMcu
-from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
+from mantaray.sim.bridge import Bridge, TrialSpec
 from mantaray.sim.model import SimulationUnstable
 from mantaray.sim.plant import Plant
+from mantaray.sim.tracking import Tracking
 
 RADIUS_M = 0.10  # [m] starts and targets within this distance of the centre (the central region)
 

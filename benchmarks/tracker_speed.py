@@ -113,8 +113,9 @@ def main() -> int:
 
     from mantaray.sim import mjcf as J
     from mantaray.sim import model as M
-    from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
+    from mantaray.sim.bridge import Bridge, TrialSpec
     from mantaray.sim.rig import Rig
+    from mantaray.sim.tracking import Tracking
     from mantaray.sim.vision import CameraVision
 
     rig = Rig().with_object("cube").with_vision("aruco")

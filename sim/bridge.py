@@ -27,9 +27,10 @@ from mantaray.protocol import rig as rig_description
 from mantaray.protocol.codec import FieldRefused, choices
 
 from . import model as M
+from .gains import Gains
 from .model import SimulationUnstable
-from .parameters import default
-from .rig import VISION_MODES, Rig
+from .rig import Rig
+from .tracking import DEFAULT_TRACKING, Tracking
 
 SPEC_NAMES = {
     "noise_amplitude": "noise amplitude alpha",
@@ -45,48 +46,12 @@ LOCKSTEP_ACK_TIMEOUT_S = 1.0
 
 
 @dataclass(frozen=True)
-class Tracking:
-    """The camera as the controller sees it: rate, latency, noise and lost frames (the paper: 12 Hz)."""
-
-    rate_hz: float = default("tracking.rate_hz")  # [Hz] frames per second
-    latency_s: float = default("tracking.latency_s")  # [s] capture -> delivery to the firmware; below one frame period
-    noise_m: float = 0.0  # [m] standard deviation of Gaussian noise on x and on y
-    drop_rate: float = 0.0  # [-] probability that a frame never reaches the firmware
-    vision: str | None = None  # None: the true position; "aruco" or "blob": the tracker on rendered frames
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.rate_hz) and 0.5 <= self.rate_hz <= 1000):
-            raise ValueError(f"camera rate must be 0.5..1000 Hz, got {self.rate_hz}")
-        if not (0 <= self.latency_s < 1 / self.rate_hz):
-            raise ValueError(
-                f"camera latency must be at least 0 and below one frame period "
-                f"({1 / self.rate_hz:.3f} s), got {self.latency_s}"
-            )
-        if not (0 <= self.noise_m <= 0.1):
-            raise ValueError(f"camera noise must be 0..0.1 m, got {self.noise_m}")
-        if not (0 <= self.drop_rate < 1):
-            raise ValueError(f"drop rate must be in [0, 1), got {self.drop_rate}")
-        if self.vision not in (None, *VISION_MODES):
-            raise ValueError(f"vision must be one of {', '.join(VISION_MODES)}, got {self.vision!r}")
-
-
-@dataclass(frozen=True)
-class Gains:
-    """One PID's gains, as configure_pid carries them (output in degrees of tilt)."""
-
-    kp: float  # [deg/m]
-    ki: float  # [deg/(m s)]
-    kd: float  # [deg s/m]
-    integral_limit: float  # [deg]
-
-
-@dataclass(frozen=True)
 class TrialSpec:
     """One target-reaching trial as the paper runs them (Results): success is judged at the end of duration_s."""
 
     start_m: tuple[float, float]
     target_m: tuple[float, float]
-    controller: str = "manhattan"  # manhattan | euclidean
+    controller: str = "manhattan"  # manhattan | euclidean | scheduled | cascade
     duration_s: float = 10.0  # [s] T
     alpha_m: float = 0.0  # [m] noise amplitude
     tolerance_m: float = 0.02  # [m] epsilon
@@ -224,7 +189,7 @@ class Bridge:
     real time against a wall-clock firmware (a board, or `mantaray-vmcu --clock wall`).
     """
 
-    def __init__(self, link: Link, rig: Rig, tracking: Tracking = Tracking(), lockstep: bool = True) -> None:
+    def __init__(self, link: Link, rig: Rig, tracking: Tracking = DEFAULT_TRACKING, lockstep: bool = True) -> None:
         self.link, self.rig, self.tracking, self.lockstep = link, rig, tracking, lockstep
         if lockstep:
             link.ack_timeout_s = max(link.ack_timeout_s, LOCKSTEP_ACK_TIMEOUT_S)

@@ -19,7 +19,8 @@ import numpy as np
 from mantaray.host.session import PAPER_AXES, controller_axes
 from mantaray.protocol import messages as m
 
-from .bridge import Gains, TrialSpec
+from .bridge import TrialSpec
+from .gains import Gains
 from .objects import OBJECTS
 from .plant import DEFAULT_PLANT, Plant
 from .rig import DEFAULT_FIDELITY, Fabric, Rig

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 from . import parameters as P
 from .rig import Rig
+from .tracking import Tracking
 
 DEFAULT_PLANT = "polyester"  # the physically calibrated rig of sim/README.md
 
@@ -63,11 +64,9 @@ class Plant:
             rig = dataclasses.replace(rig, solver=dataclasses.replace(rig.solver, timestep_s=timestep_s))
         return rig
 
-    def tracking(self, **kwargs):
-        """The camera model (sim/bridge.py Tracking) of this plant; kwargs set the rest (noise, drops, vision) or
-        override its rate and latency (a None keeps the plant's)."""
-        from .bridge import Tracking
-
+    def tracking(self, **kwargs) -> Tracking:
+        """The camera model (sim/tracking.py) of this plant; kwargs set the rest (noise, drops, vision) or override
+        its rate and latency (a None keeps the plant's)."""
         given = {k: v for k, v in kwargs.items() if v is not None}
         return Tracking(
             **{"rate_hz": self.values["tracking.rate_hz"], "latency_s": self.values["tracking.latency_s"], **given}

@@ -21,9 +21,10 @@ from mantaray.sim import experiment as E
 from mantaray.sim import findings as F
 from mantaray.sim import mjcf as J
 from mantaray.sim import model as M
-from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
+from mantaray.sim.bridge import Bridge, TrialSpec
 from mantaray.sim.model import SimulationUnstable
 from mantaray.sim.rig import Rig
+from mantaray.sim.tracking import Tracking
 
 CENTRAL_SEED = 1  # the draw of the central trials below
 

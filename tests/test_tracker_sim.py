@@ -11,9 +11,10 @@ from mantaray.host.link import Link
 from mantaray.host.transport import InProcessTransport
 from mantaray.sim import mjcf as J
 from mantaray.sim import model as M
-from mantaray.sim.bridge import Bridge, Tracking, TrialSpec
+from mantaray.sim.bridge import Bridge, TrialSpec
 from mantaray.sim.objects import OBJECTS
 from mantaray.sim.rig import Rig
+from mantaray.sim.tracking import Tracking
 from mantaray.sim.vision import FRAME_PX, CameraVision, blob_colour
 
 
