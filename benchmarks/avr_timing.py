@@ -21,7 +21,7 @@ import sys
 import time
 from pathlib import Path
 
-from mantaray.host.cli import add_controller_arguments, controller_settings
+from mantaray.arguments import add_controller_arguments, controller_settings
 from mantaray.host.link import Link, LinkError
 from mantaray.host.simavr import DEFAULT_ELF, SimulatedUno
 from mantaray.host.transport import SerialTransport

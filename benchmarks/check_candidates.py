@@ -22,6 +22,7 @@ from pathlib import Path
 import optuna
 
 from mantaray.sim import calibrate as C
+from mantaray.sim import study as S
 from mantaray.sim.executors import LocalPool
 from mantaray.sim.parameters import plant_names
 
@@ -40,7 +41,7 @@ def main() -> int:
     if not Path(args.study).exists():
         parser.error(f"no study at {args.study}: run mantaray sim calibrate first")
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    study = optuna.load_study(study_name=C.STUDY_NAME, storage=f"sqlite:///{args.study}")
+    study = optuna.load_study(study_name=S.STUDY_NAME, storage=f"sqlite:///{args.study}")
     config = study.user_attrs["config"]["evidence"]
     if config.get("kind") != "findings":
         parser.error(f"{args.study} is not a findings study")
@@ -49,7 +50,7 @@ def main() -> int:
         searched, cells_per_stratum=args.cells_per_stratum, trials_per_cell=args.trials_per_cell, seed=args.seed
     )
     ranked = sorted(
-        (t for t in C.completed(study) if t.user_attrs["details"]["passed"] >= 0),
+        (t for t in S.completed(study) if t.user_attrs["details"]["passed"] >= 0),
         key=lambda t: (-t.user_attrs["details"]["passed"], sum(t.values)),
     )[: args.top]
     rows = []

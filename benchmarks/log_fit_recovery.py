@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from mantaray.sim import calibrate as C
+from mantaray.sim import study as S
 from mantaray.sim.executors import LocalPool
 from mantaray.sim.logfit import LogEvidence, write_log
 from mantaray.sim.parameters import default
@@ -81,16 +82,16 @@ def main() -> int:
             evidence = LogEvidence(
                 logs=tuple(str(p.resolve()) for p in logs[:n]), seed=args.seed, horizon_s=args.horizon or None
             )
-            study = C.open_study(out / f"fit_{n}_runs_horizon{args.horizon:g}" / "study.db", evidence, keys, {})
-            C.run_study(study, evidence, keys, {}, args.candidates, pool)
-            best = C.best_trial(study)
+            study = S.open_study(out / f"fit_{n}_runs_horizon{args.horizon:g}" / "study.db", evidence, keys, {})
+            S.run_study(study, evidence, keys, {}, args.candidates, pool)
+            best = S.best_trial(study)
             found = best.user_attrs["values"]
             errors = {k: found[k] / v - 1 for k, v in HIDDEN.items()}
             rows.append(
                 {
                     "runs": n,
                     "horizon_s": args.horizon,
-                    "candidates": len(C.completed(study)),
+                    "candidates": len(S.completed(study)),
                     "found": found,
                     "relative_error": errors,
                     "trajectory_error_m": best.values[0],

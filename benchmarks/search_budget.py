@@ -31,8 +31,8 @@ from pathlib import Path
 import numpy as np
 import optuna
 
-from mantaray.sim import calibrate as C
 from mantaray.sim import findings as F
+from mantaray.sim import study as S
 from mantaray.sim import tune as T
 from mantaray.sim.executors import LocalPool
 from mantaray.sim.fidelity import parse_fidelity
@@ -135,7 +135,7 @@ def main() -> int:
     out = Path(args.out)
     try:
         study = T.open_tuning(out / "study.db", evidence)
-    except C.StudyMismatch as exc:
+    except S.StudyMismatch as exc:
         parser.error(str(exc))
     study.sampler = optuna.samplers.RandomSampler(seed=evidence.seed * 100_003 + len(study.trials))
     with LocalPool(args.jobs) as pool:
@@ -143,8 +143,8 @@ def main() -> int:
         def progress(n: int, total: int, info: dict) -> None:
             print(f"search: candidate {n} of {total}: misses {info['objectives'][0]:.3f}", file=sys.stderr, flush=True)
 
-        C.run_study(study, evidence, T.knobs(args.controller), {}, args.candidates, pool, progress)
-        done = sorted(C.completed(study), key=lambda t: t.number)
+        S.run_study(study, evidence, T.knobs(args.controller), {}, args.candidates, pool, progress)
+        done = sorted(S.completed(study), key=lambda t: t.number)
         unpruned = [
             {"number": t.number, "trials": t.user_attrs["details"]["trials"], "misses": t.values[0]} for t in done
         ]

@@ -1,5 +1,5 @@
 """Tunes a controller's settings for a plant (mantaray sim tune): an Optuna search on a stratified sample of heatmap
-cells, resumable in SQLite (the study machinery of sim/calibrate.py), then the full protocol on another seed.
+cells, resumable in SQLite (a study of sim/study.py), then the full protocol on another seed.
 
 The search scores a candidate by the targets it misses under both success rules (within epsilon at T, and within
 epsilon at any frame), summed over the sample's trials, which are drawn from the search's own seed: the final check,
@@ -21,11 +21,11 @@ from mantaray.host.controller_settings import ControllerSettings, SettingsError
 from mantaray.host.session import controller_axes
 from mantaray.protocol import messages as m
 
-from . import calibrate as C
 from . import findings as F
 from .experiment import Experiment, trials
 from .plant import Plant
 from .rig import DEFAULT_FIDELITY, Fidelity
+from .study import best_trial, completed, finished, open_study
 
 EVERY_PID = "pid.*."  # a knob on every PID the controller runs (x and y alike: the rig is symmetric)
 PID_MAX = {spec.name: spec.max for spec in m.ConfigurePid.FIELDS if spec.name != "axis"}
@@ -44,7 +44,7 @@ class Knob:
     high: float
     scale: str = "linear"  # linear | log
     paper_gain: bool = False
-    choices = None  # (calibrate.suggest's interface: a knob is never categorical)
+    choices = None  # (study.Dimension's: a knob is never categorical)
 
     def search_bounds(self) -> tuple[float, float]:
         return self.low, self.high
@@ -203,7 +203,7 @@ class TuningEvidence:
             resolution=self.resolution,
             timestep_s=self.timestep_s,
             plant=self.plant,
-            only_cells=F.stratified_sample(C.CELLS, self.cells_per_stratum, self.seed),
+            only_cells=F.stratified_sample(Experiment.cells, self.cells_per_stratum, self.seed),
             settings=settings.values,
         )
         return Experiment(**{**design, **changes})
@@ -235,7 +235,7 @@ class TuningEvidence:
         experiment = self.experiment(settings_of(self.controller, values, self.gain_scale))
         records, done = [], set()
         for k in self.rungs():
-            cells = F.stratified_sample(C.CELLS, self.cells_per_stratum, self.seed, first=k)
+            cells = F.stratified_sample(Experiment.cells, self.cells_per_stratum, self.seed, first=k)
             todo = [t for t in trials(experiment) if t.cell in cells and t.cell not in done]
             records += pool.map([(experiment, t) for t in todo])
             done |= set(cells)
@@ -258,7 +258,7 @@ class TuningEvidence:
         return self.score(self.experiment(ControllerSettings("manhattan"), controller="manhattan"), pool)[1]
 
     def final_experiment(
-        self, settings: ControllerSettings, trials_per_cell: int, seed: int, cells: int = C.CELLS
+        self, settings: ControllerSettings, trials_per_cell: int, seed: int, cells: int = Experiment.cells
     ) -> Experiment:
         """The paper's whole protocol (every cell of its 20 x 20) with these settings, on a seed the search did not
         use."""
@@ -272,7 +272,7 @@ def final_check(
     seed: int,
     pool,
     path: Path,
-    cells: int = C.CELLS,
+    cells: int = Experiment.cells,
 ) -> dict:
     """Run (or continue: path is a resumable results file) the full protocol with the settings; its summary."""
     from .executors import run
@@ -303,7 +303,7 @@ def final_check(
 def open_tuning(path: Path, evidence: TuningEvidence, per_axis: bool = False, start: dict[str, float] | None = None):
     """The study (new, or the one in path if it holds the same search: the same knobs too); a new one starts from
     the boot values, then from start (knob values) when given. StartMismatch if the study began without them."""
-    study = C.open_study(path, evidence, knobs(evidence.controller, per_axis), {})
+    study = open_study(path, evidence, knobs(evidence.controller, per_axis), {})
     if evidence.prune:
         study.pruner = evidence.pruner()
     if not study.trials:
@@ -354,7 +354,7 @@ def replay_pruned(evidence: TuningEvidence, candidates: list) -> list[dict]:
         misses = n = 0
         seen: set[int] = set()
         for k in evidence.rungs():
-            for cell in F.stratified_sample(C.CELLS, evidence.cells_per_stratum, evidence.seed, first=k):
+            for cell in F.stratified_sample(Experiment.cells, evidence.cells_per_stratum, evidence.seed, first=k):
                 if cell not in seen and str(cell) in cells:
                     seen.add(cell)
                     misses, n = misses + cells[str(cell)][0], n + cells[str(cell)][1]
@@ -376,7 +376,7 @@ class StartMismatch(ValueError):
 def best_settings(study, evidence: TuningEvidence) -> ControllerSettings | None:
     """The best candidate's settings (the best confirmed one, where the search's best were confirmed at a finer
     fidelity), naming the plant they were tuned for (their gains are its reading)."""
-    best = confirmed_best(study) or C.best_trial(study)
+    best = confirmed_best(study) or best_trial(study)
     if best is None:
         return None
     settings = settings_of(evidence.controller, best.user_attrs["values"], evidence.gain_scale)
@@ -396,9 +396,9 @@ def confirm(study, evidence: TuningEvidence, at: Fidelity, k: int, pool, progres
     if (at.resolution, at.timestep_s) == (evidence.resolution, evidence.timestep_s):
         raise ValueError(f"the search already ran at {at.label}: confirm at a finer fidelity than it screened at")
     finer = dataclasses.replace(evidence, resolution=at.resolution, timestep_s=at.timestep_s, prune=False)
-    ranked = sorted(
-        (t for t in C.completed(study) if t.user_attrs["details"]["passed"] >= 0), key=lambda t: t.values[0]
-    )[:k]
+    ranked = sorted((t for t in completed(study) if t.user_attrs["details"]["passed"] >= 0), key=lambda t: t.values[0])[
+        :k
+    ]
     kept = study.user_attrs.get(CONFIRMED, {})
     if kept and at.spec not in kept:
         raise ValueError(
@@ -446,12 +446,12 @@ def confirmed_best(study):
     (scores,) = kept.values()  # confirm() keeps one fidelity's
     now = [str(n) for n in study.user_attrs.get(CONFIRMED_NOW, [])]
     number = min(now, key=lambda n: scores[n]["misses"])
-    return next(t for t in C.completed(study) if t.number == int(number))
+    return next(t for t in completed(study) if t.number == int(number))
 
 
 def history_figure(study, evidence: TuningEvidence, baseline: dict | None, path: Path) -> Path | None:
     """Each candidate's misses and the best so far, against the paper's Manhattan on the same sample."""
-    done = C.completed(study)
+    done = completed(study)
     if not done:
         return None
     import matplotlib
@@ -492,7 +492,7 @@ def write_report(
     confirmation: dict | None = None,
 ) -> dict:
     """OUT/settings.toml (the best settings), report.json and history.png."""
-    best = confirmed_best(study) or C.best_trial(study)
+    best = confirmed_best(study) or best_trial(study)
     settings = best_settings(study, evidence)
 
     def here(path) -> str:  # a path of the report's, from its own folder (which may be copied elsewhere)
@@ -500,9 +500,9 @@ def write_report(
 
     report = {
         "evidence": dataclasses.asdict(evidence),
-        "candidates": len(C.completed(study)),
-        "pruned": len(C.finished(study)) - len(C.completed(study)),
-        "trials_run": sum(t.user_attrs.get("details", {}).get("trials", 0) for t in C.finished(study)),
+        "candidates": len(completed(study)),
+        "pruned": len(finished(study)) - len(completed(study)),
+        "trials_run": sum(t.user_attrs.get("details", {}).get("trials", 0) for t in finished(study)),
         "baseline_on_the_sample": baseline,
         "best": None
         if best is None

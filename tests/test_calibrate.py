@@ -21,6 +21,7 @@ from mantaray.paths import REPO
 from mantaray.sim import calibrate as C
 from mantaray.sim import logfit as L
 from mantaray.sim import parameters as P
+from mantaray.sim import study as S
 from mantaray.sim.bridge import Bridge, TrialSpec
 from mantaray.sim.executors import LocalPool
 from mantaray.sim.plant import Plant
@@ -63,7 +64,7 @@ def test_every_searched_value_lies_in_its_declared_range():
     for _ in range(200):
         trial = study.ask()
         for p in keys:
-            value = C.suggest(trial, p)
+            value = S.suggest(trial, p)
             assert p.check(value) == value
         study.tell(trial, 0.0)
 
@@ -126,7 +127,7 @@ def test_a_tiny_search_is_interrupted_and_the_same_command_continues_it(tmp_path
     report = json.loads(again.stdout)
     assert report["candidates"] == before + 1 and report["best"] is not None
     assert set(report["best"]["details"]["findings"]) == {"F1", "F2", "F3", "F4", "F5"}
-    study = optuna.load_study(study_name=C.STUDY_NAME, storage=f"sqlite:///{out / 'study.db'}")
+    study = optuna.load_study(study_name=S.STUDY_NAME, storage=f"sqlite:///{out / 'study.db'}")
     failed = [t for t in study.trials if t.state == optuna.trial.TrialState.FAIL]
     done = [t for t in study.trials if t.state == optuna.trial.TrialState.COMPLETE]
     assert failed and any(t.params == failed[0].params for t in done)  # the interrupted candidate ran again
@@ -257,7 +258,7 @@ def _toy_study(path):
     keys = C.searched(["fabric.size_m"], {})
     study = optuna.create_study(
         storage=f"sqlite:///{path}",
-        study_name=C.STUDY_NAME,
+        study_name=S.STUDY_NAME,
         load_if_exists=True,
         sampler=optuna.samplers.RandomSampler(seed=2),
     )
@@ -266,12 +267,12 @@ def _toy_study(path):
 
 def test_an_unstable_candidate_scores_the_penalty_and_is_never_the_best(tmp_path):
     study, evidence, keys = _toy_study(tmp_path / "toy.db")
-    C.run_study(study, evidence, keys, {}, 25, pool=None)
-    done = C.completed(study)
+    S.run_study(study, evidence, keys, {}, 25, pool=None)
+    done = S.completed(study)
     unstable = [t for t in done if "unstable" in t.user_attrs["details"]]
     assert unstable and all(t.values == [1.0] for t in unstable)
     assert all(t.user_attrs["values"]["fabric.size_m"] > 0.58 for t in unstable)
-    best = C.best_trial(study)
+    best = S.best_trial(study)
     assert best.user_attrs["values"]["fabric.size_m"] <= 0.58 and best.values[0] == min(
         t.values[0] for t in done if t not in unstable
     )
@@ -280,18 +281,18 @@ def test_an_unstable_candidate_scores_the_penalty_and_is_never_the_best(tmp_path
 def test_a_candidate_left_running_by_a_killed_search_is_queued_again(tmp_path):
     study, evidence, keys = _toy_study(tmp_path / "toy.db")
     orphan = study.ask()
-    size = C.suggest(orphan, keys[0])  # the search was killed here: the trial stays RUNNING
-    C.requeue_abandoned(study, {p.key for p in keys})
+    size = S.suggest(orphan, keys[0])  # the search was killed here: the trial stays RUNNING
+    S.requeue_abandoned(study, {p.key for p in keys})
     assert study.trials[orphan.number].state == optuna.trial.TrialState.FAIL
-    C.run_study(study, evidence, keys, {}, 1, pool=None)
-    assert C.completed(study)[0].user_attrs["values"]["fabric.size_m"] == size
+    S.run_study(study, evidence, keys, {}, 1, pool=None)
+    assert S.completed(study)[0].user_attrs["values"]["fabric.size_m"] == size
 
 
 def test_a_candidate_killed_while_its_values_were_drawn_fails_and_is_not_queued(tmp_path):
     """Values drawn in part are no candidate: queued, they would run with the rest drawn afresh, as another one."""
     study, evidence, keys = _toy_study(tmp_path / "toy.db")
     orphan = study.ask()  # killed before its values were drawn
-    C.requeue_abandoned(study, {p.key for p in keys})
+    S.requeue_abandoned(study, {p.key for p in keys})
     assert study.trials[orphan.number].state == optuna.trial.TrialState.FAIL
     assert not study.get_trials(states=(optuna.trial.TrialState.WAITING,))
 
@@ -311,10 +312,10 @@ def test_an_interrupted_candidate_is_evaluated_first_when_the_search_continues(t
 
     flaky = Interrupting()
     with pytest.raises(KeyboardInterrupt):
-        C.run_study(study, flaky, keys, {}, 5, pool=None)
-    assert len(C.completed(study)) == 1
-    C.run_study(study, _Toy(), keys, {}, 2, pool=None)
-    assert C.completed(study)[1].user_attrs["values"] == flaky.interrupted
+        S.run_study(study, flaky, keys, {}, 5, pool=None)
+    assert len(S.completed(study)) == 1
+    S.run_study(study, _Toy(), keys, {}, 2, pool=None)
+    assert S.completed(study)[1].user_attrs["values"] == flaky.interrupted
 
 
 def test_a_candidate_scores_the_same_on_two_worker_processes_as_in_this_one():

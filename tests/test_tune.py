@@ -295,21 +295,21 @@ def test_the_rungs_are_nested_stratified_samples_that_end_at_the_whole_sample():
 
 
 def test_a_pruned_search_stops_hopeless_candidates_early_and_keeps_the_good_one(tmp_path):
-    from mantaray.sim import calibrate as C
+    from mantaray.sim import study as S
 
     evidence = T.TuningEvidence(
         controller="manhattan", plant="polyester", cells_per_stratum=4, trials_per_cell=3, prune=True
     )
     study = T.open_tuning(tmp_path / "study.db", evidence)
     pool = _ByGain()
-    C.run_study(study, evidence, T.knobs("manhattan"), {}, 30, pool)
+    S.run_study(study, evidence, T.knobs("manhattan"), {}, 30, pool)
     full = 4 * 5 * 3  # the whole sample's trials
-    finished, completed = C.finished(study), C.completed(study)
+    finished, completed = S.finished(study), S.completed(study)
     assert len(finished) == 30 and 0 < len(completed) < 30  # some stopped, and --candidates counts them
     pruned = [t for t in finished if t not in completed]
     assert all(t.user_attrs["details"]["trials"] < full for t in pruned)
     assert pool.trials == sum(t.user_attrs["details"]["trials"] for t in finished) < 30 * full
-    best = C.best_trial(study)
+    best = S.best_trial(study)
     assert abs(math.log(best.user_attrs["values"]["pid.*.kp"] / 30.0)) < 0.4  # the good region's candidate
     report = T.write_report(study, evidence, tmp_path, None)
     assert report["pruned"] == len(pruned) and report["trials_run"] == pool.trials
@@ -320,7 +320,7 @@ def test_replaying_an_unpruned_search_through_the_pruner_runs_what_the_pruned_se
     candidates after the same trials, and scores the completed ones as the pruned search did."""
     import optuna
 
-    from mantaray.sim import calibrate as C
+    from mantaray.sim import study as S
 
     runs = {}
     for prune in (True, False):
@@ -329,8 +329,8 @@ def test_replaying_an_unpruned_search_through_the_pruner_runs_what_the_pruned_se
         )
         study = T.open_tuning(tmp_path / f"prune{prune}.db", evidence)
         study.sampler = optuna.samplers.RandomSampler(seed=5)
-        C.run_study(study, evidence, T.knobs("manhattan"), {}, 24, _ByGain())
-        runs[prune] = (evidence, C.finished(study))
+        S.run_study(study, evidence, T.knobs("manhattan"), {}, 24, _ByGain())
+        runs[prune] = (evidence, S.finished(study))
     evidence, pruned_search = runs[True]
     replayed = T.replay_pruned(evidence, runs[False][1])
     assert [r["number"] for r in replayed] == [t.number for t in pruned_search]
@@ -357,7 +357,7 @@ class _ByGainAndMesh(_ByGain):
 
 
 def test_confirming_the_best_candidates_at_a_finer_fidelity_takes_the_best_there_and_resumes(tmp_path):
-    from mantaray.sim import calibrate as C
+    from mantaray.sim import study as S
     from mantaray.sim.rig import Fidelity
 
     evidence = T.TuningEvidence(
@@ -370,7 +370,7 @@ def test_confirming_the_best_candidates_at_a_finer_fidelity_takes_the_best_there
     )  # screened on a cheap mesh
     study = T.open_tuning(tmp_path / "study.db", evidence)
     pool = _ByGainAndMesh()
-    C.run_study(study, evidence, T.knobs("manhattan"), {}, 16, pool)
+    S.run_study(study, evidence, T.knobs("manhattan"), {}, 16, pool)
     finer = Fidelity(15, 0.001)
     confirmation = T.confirm(study, evidence, finer, 6, pool)
     assert confirmation["candidates"] == 6 and len(confirmation["scores"]) == 6

@@ -1,0 +1,111 @@
+"""`mantaray sim fidelity`: the fidelity gate, does a cheaper physics keep a finer one's outcomes."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from mantaray.outputs import writable_dir
+
+from .cli_common import interruptible, output, workers
+
+
+def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """`sim fidelity`: the paired sample run (or --runs loaded), compared, and the verdict as the exit status."""
+    import shlex
+
+    from . import fidelity as G
+    from .experiment import ExperimentMismatch
+    from .model import SimulationUnstable
+    from .progress import Progress
+    from .results_file import ResultsFileBusy
+
+    try:
+        if args.runs:
+            runs = G.load_runs(*args.runs)
+            candidate, finer = (G.run_fidelity(getattr(runs[0], n)) for n in ("candidate", "finer"))
+            shift_m, sample_text = runs[0].floor.protocol.start_shift_m, f"the runs {', '.join(args.runs)}"
+        else:
+            candidate, finer = G.parse_fidelity(args.candidate), G.parse_fidelity(args.finer)
+            arms = tuple(G.Arm.parse(c) for c in (args.controller or ("manhattan", "euclidean")))
+            sample = G.GateSample(
+                object_name=args.object,
+                plant=args.plant,
+                alpha_m=args.alpha,
+                arms=arms,
+                cells_per_stratum=args.cells_per_stratum,
+                trials_per_cell=args.trials_per_cell,
+                seed=args.seed,
+                duration_s=args.duration,
+            )
+            shift_m = args.shift
+            sample.protocol(arms[0], candidate, shift_m)  # the protocol's own checks, before any work
+            runs = G.open_runs(sample, candidate, finer, Path(args.trials_dir), shift_m)
+            sample_text = (
+                f"{args.object} on the {args.plant} plant, α = {args.alpha:g} m, "
+                f"{', '.join(a.label for a in arms)}: {len(sample.cells())} cells "
+                f"({args.cells_per_stratum} from each stratum) x {args.trials_per_cell} trials, seed "
+                f"{args.seed}, T = {args.duration:g} s"
+            )
+    except ExperimentMismatch as exc:
+        print(
+            f"mantaray sim fidelity: {exc} (the gate keeps its runs in --trials-dir {args.trials_dir})", file=sys.stderr
+        )
+        return 2
+    except (ValueError, ResultsFileBusy) as exc:
+        print(f"mantaray sim fidelity: {exc}", file=sys.stderr)
+        return 2
+    if not args.runs:
+        left = G.missing_trials(runs)
+        total = 3 * sum(len(r.finer.protocol.cell_ids()) * r.finer.protocol.trials_per_cell for r in runs)
+        bar = Progress(total, initial=total - left, unit="trial", label="fidelity")
+        interruptible()
+        try:
+            G.run_missing(runs, workers(args.jobs), on_record=lambda record: bar.update(1))
+        except KeyboardInterrupt:
+            bar.close()
+            print(
+                f"\ninterrupted: the finished trials are in {args.trials_dir}; the same command continues",
+                file=sys.stderr,
+            )
+            return 130
+        except SimulationUnstable as exc:
+            bar.close()
+            print(f"mantaray sim fidelity: {exc}; the finished trials are kept in {args.trials_dir}", file=sys.stderr)
+            return 3
+        bar.close()
+    try:
+        report = G.compare(runs)
+    except G.GateMismatch as exc:
+        print(f"mantaray sim fidelity: {exc}", file=sys.stderr)
+        return 2
+    report.update(
+        candidate=candidate.label,
+        finer=finer.label,
+        shift_m=shift_m,
+        sample_text=sample_text,
+        command=shlex.join(["mantaray", *sys.argv[1:]]),
+    )
+    p = runs[0].finer.protocol
+    out = output(
+        parser,
+        writable_dir,
+        args.out or f"out/fidelity/{p.object_name}_{p.plant}_alpha{p.alpha_m:g}_{candidate.slug}_vs_{finer.slug}",
+    )
+    paths = G.write_report(report, out)
+    if args.json:
+        print(json.dumps(report))
+    elif report["verdict"] is None:
+        print(
+            f"{candidate.label} against {finer.label}: incomplete ({report['pairs']} of {report['expected_pairs']} "
+            f"paired trials); {paths[1]}"
+        )
+    else:
+        print(
+            f"{candidate.label} {report['verdict']} of {finer.label} ({report['pairs']} paired trials)"
+            + "".join(f"\n  {c}" for c in report["changed"])
+            + f"\n{paths[1]}"
+        )
+    return {G.KEEPS: 0, G.CHANGES: 1}.get(report["verdict"], 3)
