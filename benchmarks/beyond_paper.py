@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import gzip
 import json
-import math
 import os
 import shutil
 import sqlite3
@@ -28,7 +27,8 @@ from pathlib import Path
 
 import paper_heatmaps  # a sibling script: the baselines' committed trials, and the zones of the paper's maps
 
-from mantaray.sim.paired import discordance
+from mantaray.sim import committed
+from mantaray.sim.paired import edge_falls, mcnemar
 from mantaray.sim.results_file import write_whole
 
 REPO = Path(__file__).resolve().parents[1]
@@ -81,38 +81,10 @@ def collect(run: str) -> None:
     print(f"{run}: kept in {kept.relative_to(REPO)}", flush=True)
 
 
-def mcnemar(a: dict, b: dict, key: str) -> dict:
-    """Paired trials (same cell and k) of two results files: those where key (success, reached, or fell_off) holds
-    only in a, only in b, and McNemar's z (positive: more in a)."""
-    common = sorted(set(a) & set(b))
-    d = discordance([bool(a[k][key]) for k in common], [bool(b[k][key]) for k in common])
-    z = (d.only_a - d.only_b) / math.sqrt(d.flips) if d.flips else 0.0
-    return {"paired": d.pairs, "only_tuned": d.only_a, "only_paper": d.only_b, "z": round(z, 2)}
-
-
-def edge_falls(a: dict, b: dict) -> dict:
-    """In the outer 5 cm band, paired trials of a (tuned) and b (paper): the falls, how many of them had reached ε
-    first (the reach rule counts those as successes), and the trials a keeps on the sheet where b fell."""
-    band = [k for k in sorted(set(a) & set(b)) if max(abs(v) for v in a[k]["target_m"]) > 0.20]
-    kept = [k for k in band if b[k]["fell_off"] and not a[k]["fell_off"]]
-    out = {
-        "trials": len(band),
-        "kept_on_by_tuned": len(kept),
-        "of_those_reached": {
-            "tuned": sum(bool(a[k]["reached"]) for k in kept),
-            "paper_manhattan": sum(bool(b[k]["reached"]) for k in kept),
-        },
-    }
-    for name, rec in (("tuned", a), ("paper_manhattan", b)):
-        fell = [k for k in band if rec[k]["fell_off"]]
-        out[f"fell_{name}"] = {"trials": len(fell), "reached_first": sum(bool(rec[k]["reached"]) for k in fell)}
-    return out
-
-
 def baseline(run: str) -> Path:
     """The baseline's trials: out/ holds them where paper_heatmaps.py ran here, else they come from docs/results/."""
     path = BASELINES / RUNS[run][3] / "results.jsonl"
-    paper_heatmaps.restore(path, paper_heatmaps.COMMITTED / f"{RUNS[run][3]}.jsonl.gz")
+    committed.restore(path, paper_heatmaps.COMMITTED / f"{RUNS[run][3]}.jsonl.gz")
     return path
 
 

@@ -20,8 +20,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-import paper_heatmaps  # a sibling script: keep() writes a run's trials back gzipped, whole, only when they changed
-
+from mantaray.sim.committed import keep
 from mantaray.sim.results_file import write_whole
 
 REPO = Path(__file__).resolve().parents[1]
@@ -81,7 +80,7 @@ def collect(name: str) -> None:
     """Write a gate's report and every trial of out/ back to docs/results/fidelity/."""
     (COMMITTED / "trials").mkdir(parents=True, exist_ok=True)
     for path in sorted(TRIALS.glob("*.jsonl")):
-        paper_heatmaps.keep(path, COMMITTED / "trials" / (path.name + ".gz"))
+        keep(path, COMMITTED / "trials" / (path.name + ".gz"))
     out = REPO / "out" / "fidelity" / name
     for report in ("report.json", "report.md"):
         if (out / report).exists():

@@ -99,3 +99,32 @@ def mean_interval(differences: Sequence[float], level: float = 0.95, seed: int =
 
 def _round(x: float, digits: int) -> float | None:
     return None if math.isnan(x) else round(x, digits)
+
+
+# --------------------------------------------------- a tuned controller's trials against the paper's, paired
+def mcnemar(a: dict, b: dict, key: str) -> dict:
+    """Paired trials (same cell and k) of two results files' records (a: the tuned controller's, b: the paper's): those where key (success, reached, or fell_off) holds
+    only in a, only in b, and McNemar's z (positive: more in a)."""
+    common = sorted(set(a) & set(b))
+    d = discordance([bool(a[k][key]) for k in common], [bool(b[k][key]) for k in common])
+    z = (d.only_a - d.only_b) / math.sqrt(d.flips) if d.flips else 0.0
+    return {"paired": d.pairs, "only_tuned": d.only_a, "only_paper": d.only_b, "z": round(z, 2)}
+
+
+def edge_falls(a: dict, b: dict) -> dict:
+    """In the outer 5 cm band, paired trials of a (tuned) and b (paper): the falls, how many of them had reached ε
+    first (the reach rule counts those as successes), and the trials a keeps on the sheet where b fell."""
+    band = [k for k in sorted(set(a) & set(b)) if max(abs(v) for v in a[k]["target_m"]) > 0.20]
+    kept = [k for k in band if b[k]["fell_off"] and not a[k]["fell_off"]]
+    out = {
+        "trials": len(band),
+        "kept_on_by_tuned": len(kept),
+        "of_those_reached": {
+            "tuned": sum(bool(a[k]["reached"]) for k in kept),
+            "paper_manhattan": sum(bool(b[k]["reached"]) for k in kept),
+        },
+    }
+    for name, rec in (("tuned", a), ("paper_manhattan", b)):
+        fell = [k for k in band if rec[k]["fell_off"]]
+        out[f"fell_{name}"] = {"trials": len(fell), "reached_first": sum(bool(rec[k]["reached"]) for k in fell)}
+    return out

@@ -25,7 +25,6 @@ def pytest_configure(config):
 # Test files whose tests run simulations, the AVR simulator, installs or long link-fault sequences (over about 20 s
 # each on 2 cores): marked slow, so that `make test-fast` (pytest -m "not slow") leaves them out.
 SLOW_FILES = {
-    "test_beyond_paper.py",
     "test_calibrate.py",
     "test_conformance_vmcu.py",
     "test_fig3.py",

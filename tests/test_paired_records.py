@@ -1,19 +1,15 @@
-"""The paired comparison benchmarks/beyond_paper.py publishes (McNemar's counts and z, the outer band's falls), and
-the committed trials it and paper_heatmaps.py start from."""
+"""The paired comparison of a tuned controller's trials with the paper's (McNemar's counts and z, the outer band's
+falls: sim/paired.py, what benchmarks/beyond_paper.py publishes), and the committed trials a run starts from
+(sim/committed.py)."""
 
 import gzip
 import math
-import sys
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mantaray.paths import REPO
-
-sys.path.insert(0, str(REPO / "benchmarks"))  # a script, and its sibling paper_heatmaps.py
-
-import beyond_paper as B  # noqa: E402
-import paper_heatmaps  # noqa: E402
+from mantaray.sim import committed as K
+from mantaray.sim import paired as B
 
 FLAGS = ("success", "reached", "fell_off")
 record = st.fixed_dictionaries(
@@ -54,31 +50,13 @@ def test_edge_falls_counts_only_the_outer_band(a, b):
         assert out[f"fell_{name}"]["reached_first"] == sum(rec[k]["fell_off"] and rec[k]["reached"] for k in band)
 
 
-def test_the_baseline_comes_from_the_committed_trials_when_out_has_none(tmp_path, monkeypatch):
-    monkeypatch.setattr(B, "BASELINES", tmp_path / "heatmap")
-    run = "bunny_cascade_alpha0.05"
-    committed = REPO / "docs" / "results" / f"{B.RUNS[run][3]}.jsonl.gz"
-    path = B.baseline(run)
-    assert path == tmp_path / "heatmap" / B.RUNS[run][3] / "results.jsonl"
-    assert path.read_bytes() == gzip.decompress(committed.read_bytes())
-
-
-def test_compare_says_which_file_is_missing_and_what_runs_it(tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr(B, "REPO", tmp_path)
-    monkeypatch.setattr(B, "BASELINES", tmp_path / "out" / "heatmap")
-    assert B.compare("sphere_cascade") is None
-    err = capsys.readouterr().err
-    assert "sphere_cascade: not compared: out/tune/sphere_cascade_alpha0_paper/final/results.jsonl is missing" in err
-    assert "`python3 benchmarks/beyond_paper.py --runs sphere_cascade` runs it" in err
-
-
 def test_restore_starts_from_the_committed_trials_once_and_never_over_what_out_holds(tmp_path):
     committed = tmp_path / "committed.jsonl.gz"
     committed.write_bytes(gzip.compress(b'{"header": 1}\n{"key": "0:0"}\n'))
     results = tmp_path / "out" / "run" / "results.jsonl"  # out/ and the run's folder do not exist yet
-    assert paper_heatmaps.restore(results, committed)
-    assert paper_heatmaps.trials_in(results) == 1
+    assert K.restore(results, committed)
+    assert K.trials_in(results) == 1
     results.write_bytes(b'{"header": 1}\n{"key": "0:0"}\n{"key": "0:1"}\n')  # the run went on
-    assert not paper_heatmaps.restore(results, committed)
-    assert paper_heatmaps.trials_in(results) == 2
-    assert not paper_heatmaps.restore(tmp_path / "other" / "results.jsonl", tmp_path / "none.jsonl.gz")
+    assert not K.restore(results, committed)
+    assert K.trials_in(results) == 2
+    assert not K.restore(tmp_path / "other" / "results.jsonl", tmp_path / "none.jsonl.gz")
