@@ -274,7 +274,7 @@ def objectives(manhattan: MapStats, euclidean: MapStats) -> tuple[float, float, 
     (central shortfall, F1; corners and shape shortfall, F2-F4; log-distance of the totals from the paper's, F5)."""
     m, e = manhattan, euclidean
     # A measure the trials could not give (no central or corner target, too few cells) is NaN, and so is the
-    # objective it enters: the search scores such a candidate as the worst (calibrate.run_study).
+    # objective it enters: the search scores such a candidate as the worst (study.run_study).
     central = _short(CENTRAL_AT - m.central_rate) + _short(CENTRAL_AT - e.central_rate)
     corners = (
         _short(FAILURE_REGION_AT - m.corner_rate)
