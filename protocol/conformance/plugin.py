@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import time
 
 import pytest
@@ -74,10 +73,12 @@ class Connection:
                 self.where = f"virtual MCU on {port}"
             else:
                 self.where = port
-                if not os.path.exists(port):
-                    raise ConnectError(
-                        f"--port {port}: no such device (is the board plugged in, or the simulator running?)"
-                    )
+                from mantaray.host.ports import PortError, check_port
+
+                try:
+                    check_port(port)  # every form that is no serial device, in one line, as every command does
+                except PortError as exc:
+                    raise ConnectError(f"--port {exc}") from None
             try:
                 self.link = Link(SerialTransport(port))
             except (OSError, serial.SerialException) as exc:
