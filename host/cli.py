@@ -8,9 +8,17 @@ import shlex
 import sys
 import time
 
-from mantaray.arguments import add_controller_arguments, controller_settings, number, parse_gains
+from mantaray.arguments import (
+    add_controller_arguments,
+    add_view_arguments,
+    controller_settings,
+    number,
+    parse_gains,
+    start_live,
+)
 from mantaray.outputs import IMAGE_SUFFIXES, OutputError, writable_dir, writable_file
 from mantaray.protocol import messages as m
+from mantaray.protocol import rig as rig_description
 from mantaray.protocol.codec import bounds_text
 
 from .ports import PortError, check_port
@@ -19,6 +27,10 @@ from .ports import PortError, check_port
 def _half_module_m() -> tuple[float, float]:
     """[m] half the module's sides, as configured on the firmware (protocol defaults)."""
     return m.Configure.module_x / 2, m.Configure.module_y / 2
+
+
+def _report(text: str) -> None:
+    print(f"mantaray rig: {text}", file=sys.stderr)
 
 
 def _xy(text: str) -> tuple[float, float]:
@@ -60,10 +72,24 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     of its own (configuration, every position and telemetry frame) and the paper's Fig. 3-style plot."""
     from .rig_run import EXIT_STATUS, RigRun, StopRules
     from .runlog import RunLog
+    from .view import RunView
 
     course = _course(args, parser)
     setup, source, tracker, out = _rig_inputs(args, parser, course.at(0.0))
-    log = RunLog.new(out, "rig", {"args": {k: v for k, v in vars(args).items() if k != "func"}})
+    settings = {k: v for k, v in vars(args).items() if k != "func"}
+    live = start_live(parser, args, _report)
+    log = RunLog.new(out, "rig", {"args": settings})
+    if live is not None:
+        _report(f"live view at {live.options.page_url}")
+    view = RunView(
+        "mantaray rig",
+        log.path.with_suffix(".rrd"),
+        live,
+        settings,
+        rig_description.ACTUATOR_COUNT,
+        (m.Configure.module_x, m.Configure.module_y),
+        _report,
+    )
     run = RigRun(
         args.port,
         setup,
@@ -73,10 +99,20 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         course,
         StopRules(args.tolerance, args.hold, args.timeout, _half_module_m()),
         reconnect_timeout_s=args.reconnect_timeout,
+        view=view,
     )
-    outcome = run.run()
+    try:
+        outcome = run.run()
+    finally:
+        recording = view.close()
+        if live is not None:
+            live.linger(args.linger, _report)
+            live.close()
     figure = run.figure(log.path.with_suffix(".png"))
-    print(f"{outcome}: {len(run.loop.t_s)} frames; log {log.path}; figure {figure}")
+    print(
+        f"{outcome}: {len(run.loop.t_s)} frames; log {log.path}; figure {figure}"
+        + (f"; recording {recording}" if recording else "")
+    )
     return EXIT_STATUS.get(outcome, 1)
 
 
@@ -538,6 +574,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         help="track a colour blob in this HSV range instead of the object's marker (the egg)",
     )
     rig.add_argument("--out", default="out/rig", help="directory for the run log and the figure")
+    add_view_arguments(rig)
     rig.set_defaults(func=lambda args: cmd_rig(args, rig))
 
     monitor = sub.add_parser(

@@ -86,6 +86,7 @@ class Link:
         self.rig_differences: list[str] = []  # rig constants the firmware reported otherwise (identify)
         self.resyncs = 0  # times a frame came behind the firmware's count and the link identified again
         self.resets = 0  # boot messages seen
+        self.retransmissions = 0  # commands sent again for want of an answer
         self._pending: collections.deque[Message] = collections.deque()
 
     # ---------------------------------------------------------------------------------- receiving
@@ -134,7 +135,8 @@ class Link:
         return self.seq
 
     def _await_reply(self, frame: bytes, accept: Callable[[Message], bool]) -> Message:
-        for _ in range(self.retries + 1):
+        for attempt in range(self.retries + 1):
+            self.retransmissions += attempt > 0
             self.transport.write(frame)
             deadline = time.monotonic() + self.ack_timeout_s
             while (remaining := deadline - time.monotonic()) > 0:

@@ -71,6 +71,7 @@ class ClosedLoop:
     target_m: list = field(default_factory=list)  # [m] the target at each frame
     tilt_deg: list = field(default_factory=list)  # [deg] theta_zx, theta_zy from telemetry (NaN: no answer)
     command_m: list = field(default_factory=list)  # [m] a_0..a_3 from telemetry
+    measured_m: list = field(default_factory=list)  # [m] the actuators' measured positions from telemetry
     state: list = field(default_factory=list)  # supervisor state (-1: no answer)
 
     def step(self, capture_s: float, measured_xy_m, target_m) -> m.Telemetry | None:
@@ -134,20 +135,23 @@ class ClosedLoop:
         if telemetry is None:
             self.tilt_deg.append((math.nan, math.nan))
             self.command_m.append((math.nan,) * 4)
+            self.measured_m.append((math.nan,) * 4)
             self.state.append(-1)
         else:
             self.tilt_deg.append((telemetry.tilt_zx, telemetry.tilt_zy))
             self.command_m.append(tuple(telemetry.command))
+            self.measured_m.append(tuple(telemetry.measured))
             self.state.append(int(telemetry.state))
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The rows as arrays: t_s (n,), measured_xy_m (n, 2), target_m (n, 2), tilt_deg (n, 2), command_m (n, 4),
-        state (n,)."""
+        measured_m (n, 4), state (n,)."""
         return {
             "t_s": np.asarray(self.t_s, dtype=float),
             "measured_xy_m": np.asarray(self.measured_xy_m, dtype=float).reshape(-1, 2),
             "target_m": np.asarray(self.target_m, dtype=float).reshape(-1, 2),
             "tilt_deg": np.asarray(self.tilt_deg, dtype=float).reshape(-1, 2),
             "command_m": np.asarray(self.command_m, dtype=float).reshape(-1, 4),
+            "measured_m": np.asarray(self.measured_m, dtype=float).reshape(-1, 4),
             "state": np.asarray(self.state, dtype=int),
         }

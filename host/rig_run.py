@@ -19,6 +19,7 @@ from .loop import STOPPED_REACHED, ClosedLoop, Frame, Tolerance
 from .runlog import RunLog
 from .session import BoardLost, RigSession, Setup
 from .tracker import FrameSource, Observation, Tracker
+from .view import RunView
 
 STOP, EMERGENCY_STOP = "stopped", "emergency stop"  # the outcomes of the keys
 KEYS = {"s": STOP, "e": EMERGENCY_STOP, " ": EMERGENCY_STOP}  # key (either case) -> how it ends the run
@@ -74,17 +75,23 @@ class RigRun:
         rules: StopRules,
         *,
         reconnect_timeout_s: float = 30.0,
+        view: RunView | None = None,
     ) -> None:
         self.source, self.tracker, self.log, self.course, self.rules = source, tracker, log, course, rules
+        self.view = view  # the run's streams (recording, live view): fed after every frame
         self.session = RigSession(port, setup, report=self.report, reconnect_timeout_s=reconnect_timeout_s)
         self.loop = ClosedLoop(self.session.position)
         self.outcome = "timeout"
         self._interrupted = False
         self._keys: Keys | None = None
         self._seen: Observation | None = None  # the tracker's last observation, for the log
+        self._image = None  # the camera's last image (BGR or grey), for the view
+        self._run_s = 0.0  # [s] run time of the last frame
 
     def report(self, text: str) -> None:
         self.log.write("event", {"text": text})
+        if self.view is not None:
+            self.view.event(self._run_s, text)
         print(f"mantaray rig: {text}", file=sys.stderr)
 
     def run(self) -> str:
@@ -142,11 +149,12 @@ class RigRun:
             image, capture_s = grabbed
             if t0 is None:
                 t0, wall0 = capture_s, time.monotonic()
-            run_s = capture_s - t0
+            run_s = self._run_s = capture_s - t0
             if self.source.is_file:  # a recording plays at its own pace, as a camera would
                 time.sleep(max(0.0, run_s - (time.monotonic() - wall0)))
             if run_s > self.rules.timeout_s:
                 return
+            self._image = image
             obs = self._seen = self.tracker.observe(image, capture_s)
             if obs.visible and (abs(obs.xy_m[0]) > 2 * half[0] or abs(obs.xy_m[1]) > 2 * half[1]):
                 self.report(
@@ -207,6 +215,20 @@ class RigRun:
                     for k, v in vars(telemetry).items()
                 },
             )
+        if self.view is not None:
+            self._show(frame, telemetry, obs)
+
+    def _show(self, frame: Frame, telemetry: m.Telemetry | None, obs: Observation) -> None:
+        """The frame in the view: the loop's values, the link's counters and the camera image with the target."""
+        view, t = self.view, frame.capture_s
+        assert view is not None
+        view.frame(
+            t, obs.xy_m if obs.visible else None, frame.target_m, self.rules.tolerance_m, telemetry, self.session.link
+        )
+        to_pixels = self.tracker.to_image if self.tracker.fitted else None
+        image, target, tolerance = self._image, frame.target_m, self.rules.tolerance_m
+        assert image is not None  # a frame is shown after its image was tracked
+        view.defer(t, lambda: view.camera(t, image, to_pixels, target, tolerance, obs.pixel))
 
     def _finish(self) -> None:
         """The board left safe: levelled and stopped (once, without recoveries, when the board was lost), or its
@@ -228,6 +250,8 @@ class RigRun:
             self.source.close()
             self.log.write("end", {"outcome": self.outcome})
             self.log.close()
+            if self.view is not None:
+                self.view.event(self._run_s, f"end: {self.outcome}", level="INFO")
 
     def figure(self, path):
         """The run's figure (the paper's Fig. 3: path, phase plot of the tilts, and the error, tilts and commands over

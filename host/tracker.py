@@ -49,6 +49,7 @@ class Observation:
     xy_m: tuple[float, float] | None = None
     corners_seen: tuple[int, ...] = ()  # which corner markers (0..3) this frame showed
     reused_frame_fit: bool = False  # the fabric frame came from an earlier image (a corner was hidden)
+    pixel: tuple[float, float] | None = None  # [px] where the object was found in the image (x right, y down)
 
     @property
     def visible(self) -> bool:
@@ -109,7 +110,7 @@ class Tracker:
         if point is None:
             return Observation(t, NO_OBJECT, corners_seen=seen, reused_frame_fit=reused)
         x, y = self._to_fabric(point)
-        return Observation(t, OK, (float(x), float(y)), seen, reused)
+        return Observation(t, OK, (float(x), float(y)), seen, reused, (float(point[0]), float(point[1])))
 
     def _fit_frame(self, image_corners: np.ndarray):
         import cv2
@@ -126,6 +127,26 @@ class Tracker:
         if not ok:
             raise RuntimeError("solvePnP failed on the four corner markers")
         return rvec, tvec
+
+    @property
+    def fitted(self) -> bool:
+        """Whether the fabric frame has been found in some image (to_image needs it)."""
+        return self._fit is not None
+
+    def to_image(self, points_m: np.ndarray) -> np.ndarray:
+        """(k, 2) points [m] on the corner markers' plane (z = 0 of the fabric frame) to (k, 2) pixels of the last
+        fitted image: what the view draws the target and epsilon with."""
+        import cv2
+
+        assert self._fit is not None  # callers check fitted first
+        fit = self._fit[0]
+        plane = np.asarray(points_m, dtype=np.float64).reshape(-1, 2)
+        if self.calibration is None:
+            return cv2.perspectiveTransform(plane.reshape(-1, 1, 2), np.linalg.inv(fit)).reshape(-1, 2)
+        rvec, tvec = fit
+        objects = np.hstack([plane, np.zeros((len(plane), 1))])
+        pixels, _ = cv2.projectPoints(objects, rvec, tvec, self.calibration.camera_matrix, self.calibration.distortion)
+        return pixels.reshape(-1, 2)
 
     def _to_fabric(self, pixel: np.ndarray) -> tuple[float, float]:
         import cv2

@@ -90,3 +90,58 @@ def add_controller_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FILE",
         help="a controller's settings (TOML, as mantaray sim tune writes: host/controller_settings.py)",
     )
+
+
+def add_view_arguments(parser: argparse.ArgumentParser) -> None:
+    """--live, --live-port and --bind: the run's live view in a browser (host/view.py)."""
+    from mantaray.host.view import DEFAULT_WEB_PORT, LOOPBACK
+
+    parser.add_argument(
+        "--live",
+        action="store_true",
+        help="watch the run live in the Rerun viewer, in a browser on this machine (the address is printed); "
+        "the recording (.rrd) is written either way",
+    )
+    parser.add_argument(
+        "--live-port",
+        type=number(1024, 65534, integer=True),
+        default=DEFAULT_WEB_PORT,
+        help="the live view's web page port; its data server takes the next one (default %(default)s)",
+    )
+    parser.add_argument(
+        "--linger",
+        type=number(0, 24 * 3600),
+        metavar="SECONDS",
+        help="keep the live view up this long after the run, for a browser opened late (default: from a terminal "
+        "until Enter, else not at all)",
+    )
+    parser.add_argument(
+        "--bind",
+        default=LOOPBACK,
+        metavar="ADDRESS",
+        help="the address the live view listens on (default %(default)s: this machine only; 0.0.0.0 opens it to "
+        "the network, with a warning)",
+    )
+
+
+def start_live(parser: argparse.ArgumentParser, args: argparse.Namespace, report):
+    """The live view's server when --live asks for one (None otherwise); a port in use is a usage error."""
+    from mantaray.host.view import DEFAULT_WEB_PORT, LOOPBACK, LiveOptions, LiveServer, ViewError
+
+    if not args.live:
+        given = [
+            option
+            for option, unset in (
+                ("--live-port", args.live_port == DEFAULT_WEB_PORT),
+                ("--linger", args.linger is None),
+                ("--bind", args.bind == LOOPBACK),
+            )
+            if not unset
+        ]
+        if given:
+            parser.error(f"{', '.join(given)} set up the live view: add --live")
+        return None
+    try:
+        return LiveServer(LiveOptions(args.bind, args.live_port), report)
+    except ViewError as exc:
+        parser.error(str(exc))

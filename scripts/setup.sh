@@ -4,9 +4,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 # Debian packages: compilers, test and format tools for the firmware core, the AVR toolchain and Arduino core,
-# the AVR simulator. Installed only where missing.
+# the AVR simulator, and the browser the live view's test opens the viewer in. Installed only where missing.
 DEBIAN_PACKAGES=(cmake ninja-build g++ clang libclang-rt-14-dev doctest-dev clang-format
-                 gcc-avr avr-libc binutils-avr arduino-core-avr simavr libsimavr-dev libelf-dev)
+                 gcc-avr avr-libc binutils-avr arduino-core-avr simavr libsimavr-dev libelf-dev chromium)
 missing=()
 for pkg in "${DEBIAN_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
@@ -25,7 +25,7 @@ if [ -n "$installed" ] && [ "$installed" != "$(pwd -P)" ]; then
   echo "setup: the mantaray package installed is the checkout in $installed; installing this one ($(pwd -P)) instead"
 fi
 if [ "$installed" != "$(pwd -P)" ] ||
-   ! python3 -c "import mantaray, pytest, hypothesis, serial, numpy, mujoco, matplotlib, tqdm, imageio, imageio_ffmpeg, ray, cv2, optuna, scikit_build_core, ruff, mypy" 2>/dev/null ||
+   ! python3 -c "import mantaray, pytest, hypothesis, serial, numpy, mujoco, matplotlib, tqdm, imageio, imageio_ffmpeg, ray, cv2, optuna, scikit_build_core, ruff, mypy, rerun, playwright" 2>/dev/null ||
    ! python3 -m pip show -q mantaray >/dev/null 2>&1; then
   echo "setup: installing the mantaray Python package"
   python3 -m pip install -q --disable-pip-version-check -e ".[test,lint]"

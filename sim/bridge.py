@@ -152,6 +152,7 @@ class TrialResult:
     measured_xy_m: np.ndarray  # [m] what the firmware was sent (NaN: dropped)
     tilt_deg: np.ndarray  # [deg] theta_zx, theta_zy from telemetry (NaN: no answer)
     command_m: np.ndarray  # [m] a_0..a_3 from telemetry
+    measured_m: np.ndarray  # [m] the actuators' measured positions from telemetry
     state: np.ndarray  # supervisor state per frame (-1: no answer)
     watch: LinkWatch
 
@@ -226,6 +227,7 @@ class Bridge:
         self._answered: set[int] = set()
         self.viewer = None  # a mujoco.viewer handle: synced after every camera frame
         self.recorder = None  # a video.Recorder: offered every physics step
+        self.view = None  # a trial_view.TrialView: sees every camera frame with its answer
 
     def _watch_message(self, msg) -> None:
         if isinstance(msg, m.Boot):
@@ -258,6 +260,8 @@ class Bridge:
         self._watch, self._answered = LinkWatch(), set()
         resets0, lost0 = self.link.resets, self.link.lost_frames
         trial = self._start(spec)
+        if self.view is not None:
+            self.view.start(spec.tolerance_m)
         loop = ClosedLoop(
             lambda msg: self._send(msg, trial),
             time_base_us=trial.base_us,
@@ -269,6 +273,8 @@ class Bridge:
 
         def record(frame: Frame, telemetry) -> None:
             true_xy_rows.append(frame.judged_xy_m)
+            if self.view is not None:
+                self.view.frame(frame, telemetry)
             if progress is not None:
                 progress(frame.capture_s)
 
@@ -404,6 +410,7 @@ class Bridge:
             measured_xy_m=rows["measured_xy_m"],
             tilt_deg=rows["tilt_deg"],
             command_m=rows["command_m"],
+            measured_m=rows["measured_m"],
             state=rows["state"],
             watch=self._watch,
         )

@@ -6,7 +6,7 @@ import argparse
 import importlib
 import math
 
-from mantaray.arguments import add_controller_arguments, number, parse_gains
+from mantaray.arguments import add_controller_arguments, add_view_arguments, number, parse_gains
 from mantaray.protocol import messages as m
 from mantaray.protocol.codec import bounds_text, choices
 
@@ -254,6 +254,7 @@ def _add_run(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None:
         help="show the MuJoCo viewer (needs a display; implies "
         "nothing about pacing: add --realtime to watch at real speed)",
     )
+    add_view_arguments(run)
     run.set_defaults(func=_handler("cli_run", run))
 
 

@@ -10,7 +10,7 @@ import os
 import sys
 from pathlib import Path
 
-from mantaray.arguments import controller_settings
+from mantaray.arguments import controller_settings, start_live
 from mantaray.outputs import writable_dir
 from mantaray.protocol import messages as m
 
@@ -22,12 +22,15 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from mantaray.host.link import Link
     from mantaray.host.ports import check_port
     from mantaray.host.transport import SerialTransport
+    from mantaray.host.view import RunView
     from mantaray.host.vmcu import VirtualMcu
     from mantaray.plots import path_phase_figure
 
     from .bridge import Bridge, TrialSpec
     from .experiment import controller_gains
+    from .mjcf import N_ACTUATORS
     from .plant import Plant
+    from .trial_view import TrialView
 
     settings = controller_settings(parser, args)
     args.plant = plant_for_settings(parser, settings, args.plant)
@@ -76,11 +79,26 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
     if args.viewer and not os.environ.get("DISPLAY"):
         parser.error("--viewer needs a display (DISPLAY is not set); use --video to record one instead")
+    live = start_live(parser, args, _report)
     with contextlib.ExitStack() as stack:
+        if live is not None:
+            stack.callback(live.close)
+            _report(f"live view at {live.options.page_url}")
         port = args.port or stack.enter_context(VirtualMcu(clock="wall" if args.realtime else "sim")).path
         link = Link(SerialTransport(port))
         stack.callback(link.close)
         bridge = Bridge(link, rig, tracking, lockstep=not args.realtime)
+        view = RunView(
+            "mantaray sim run",
+            out / f"{stem}.rrd",
+            live,
+            {**_settings(args), "plant": args.plant, "object": rig.object.name},
+            N_ACTUATORS,
+            (rig.frame.size_x_m, rig.frame.size_y_m),
+            _report,
+            world=True,
+        )
+        bridge.view = TrialView(view, bridge.model, bridge.data, rig, link)
         viewer = None
         if args.viewer:
             import mujoco.viewer
@@ -99,8 +117,12 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
                 f"--start {args.start[0]:g},{args.start[1]:g} is not over the hanging sheet (it sags in from "
                 f"the frame at its corners): start further in"
             )
+        finally:
+            recording = view.close()
         if viewer is not None:
             viewer.close()
+        if live is not None:
+            live.linger(args.linger, _report)
     if progress is not None:
         bar.close()
 
@@ -125,6 +147,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         )
     )
     summary["trajectory"] = str(save_trajectory(result, out / f"{stem}.npz"))
+    summary["recording"] = None if recording is None else str(recording)
     if args.video:
         summary["video"] = str(bridge.recorder.save(out / f"{stem}.mp4"))
     for message in result.watch.messages:
@@ -166,15 +189,20 @@ def _inside(parser: argparse.ArgumentParser, name: str, xy: tuple[float, float],
         parser.error(f"{name} {xy[0]:g},{xy[1]:g} is outside the fabric (|x| <= {half[0]:g} m, |y| <= {half[1]:g} m)")
 
 
+def _report(text: str) -> None:
+    print(f"mantaray sim run: {text}", file=sys.stderr)
+
+
+def _settings(args: argparse.Namespace) -> dict:
+    """What the trial was: every argument but where its outputs go and how it is watched."""
+    watching = ("out", "json", "video", "video_fps", "viewer", "live", "live_port", "bind")
+    return {k: v for k, v in sorted(vars(args).items()) if k not in (*watching, "func", "command", "sim_command")}
+
+
 def _trial_stem(args: argparse.Namespace) -> str:
     """The file name of one trial's outputs: what it was, readably, and a digest of every other setting, so two
     different trials never overwrite each other's files and the same trial run again does."""
-    settings = {
-        k: v
-        for k, v in sorted(vars(args).items())
-        if k not in ("out", "json", "video", "viewer", "func", "command", "sim_command")
-    }
-    digest = hashlib.sha1(repr(settings).encode()).hexdigest()[:6]
+    digest = hashlib.sha1(repr(_settings(args)).encode()).hexdigest()[:6]
     (sx, sy), (tx, ty) = args.start, args.target
     return f"{args.object}_{args.controller}_{sx:+.3f},{sy:+.3f}_to_{tx:+.3f},{ty:+.3f}_seed{args.seed}_{digest}"
 
@@ -190,6 +218,7 @@ def save_trajectory(result, path: Path) -> Path:
         measured_xy_m=result.measured_xy_m,
         tilt_deg=result.tilt_deg,
         command_m=result.command_m,
+        measured_m=result.measured_m,
         state=result.state,
         start_m=result.spec.start_m,
         target_m=result.spec.target_m,

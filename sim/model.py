@@ -102,12 +102,17 @@ def fabric_vertices(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
     return data.flexvert_xpos[model.flex_vertadr[flex] : model.flex_vertadr[flex] + model.flex_vertnum[flex]]
 
 
+def fabric_triangles(model: mujoco.MjModel) -> np.ndarray:
+    """The fabric's triangles: (k, 3) indices into fabric_vertices' rows."""
+    flex = _flex_id(model)
+    adr, num = model.flex_elemdataadr[flex], model.flex_elemnum[flex]
+    return model.flex_elem[adr : adr + 3 * num].reshape(-1, 3)
+
+
 def fabric_height(model: mujoco.MjModel, data: mujoco.MjData, x_m: float, y_m: float) -> float:
     """Height [m, world z] of the fabric's top surface at (x, y): highest triangle above that point."""
     flex = _flex_id(model)
-    v = fabric_vertices(model, data)
-    adr, num = model.flex_elemdataadr[flex], model.flex_elemnum[flex]
-    tri = v[model.flex_elem[adr : adr + 3 * num].reshape(-1, 3)]
+    tri = fabric_vertices(model, data)[fabric_triangles(model)]
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
     det = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1])
     ok = np.abs(det) > 1e-12

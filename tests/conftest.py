@@ -37,6 +37,7 @@ SLOW_FILES = {
     "test_sim_bridge.py",
     "test_sim_model.py",
     "test_simavr.py",
+    "test_view.py",
     "test_tracker_sim.py",
     "test_video.py",
 }

@@ -63,3 +63,12 @@ def render(object_xy=None, marker_height_m=0.0, cam=None, hide_corner=None, nois
     if noise:
         image += (rng or np.random.default_rng(0)).normal(0, noise, image.shape)
     return np.clip(image, 0, 255).astype(np.uint8)
+
+
+def write_video(path, xy_of_frame, frames: int, fps: float) -> str:
+    """A video file of the rendered object at xy_of_frame(k) in frame k: a camera for `mantaray rig --camera`."""
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), fps, (W, H))
+    for k in range(frames):
+        writer.write(cv2.cvtColor(render(xy_of_frame(k)), cv2.COLOR_GRAY2BGR))
+    writer.release()
+    return str(path)

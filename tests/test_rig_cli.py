@@ -17,7 +17,7 @@ import time
 import cv2
 import numpy as np
 import pytest
-from synthetic_camera import H, W, camera, intrinsics, render
+from synthetic_camera import H, W, camera, intrinsics, write_video
 
 from mantaray.host.controller_settings import ControllerSettings
 from mantaray.host.link import Link
@@ -31,11 +31,7 @@ FPS = 12.0
 
 
 def _video(path, xy_of_frame, frames: int) -> str:
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), FPS, (W, H))
-    for k in range(frames):
-        writer.write(cv2.cvtColor(render(xy_of_frame(k)), cv2.COLOR_GRAY2BGR))
-    writer.release()
-    return str(path)
+    return write_video(path, xy_of_frame, frames, FPS)
 
 
 def _mantaray(*args: str, **kwargs) -> subprocess.CompletedProcess:

@@ -84,3 +84,23 @@ def test_frames_from_a_video_file_carry_the_videos_time(tmp_path):
     assert [round(o.xy_m[0], 2) for o in seen] == [-0.1, 0.0, 0.1]
     with pytest.raises(OSError, match="cannot open"):
         T.FrameSource(str(tmp_path / "missing.avi"))
+
+
+@pytest.mark.parametrize("calibrated", [False, True])
+def test_to_image_draws_fabric_points_where_the_camera_sees_them_and_the_detection_is_the_markers_pixel(calibrated):
+    """What the view draws the target and epsilon with: points on the markers' plane back to pixels, within a pixel
+    of the camera's own projection, for points drawn from a seed; and the detection's pixel at the object's marker."""
+    rng = np.random.default_rng(5)
+    cam = camera(1.0, tilt_deg=8.0)
+    calibration = T.Calibration(intrinsics(), np.zeros(5)) if calibrated else None
+    tracker = T.Tracker(LAYOUT, marker_height_m=0.0, calibration=calibration)
+    assert not tracker.fitted
+    truth = rng.uniform(-0.2, 0.2, 2)
+    obs = tracker.observe(render(truth, cam=cam, rng=rng), capture_time_s=1.0)
+    assert obs.visible and tracker.fitted
+    points = rng.uniform(-0.25, 0.25, (50, 2))
+    expected, _ = cv2.projectPoints(np.hstack([points, np.zeros((50, 1))]), *cam, intrinsics(), None)
+    error_px = np.hypot(*(tracker.to_image(points) - expected.reshape(-1, 2)).T)
+    assert error_px.max() < 1.0, error_px.max()
+    marker_px, _ = cv2.projectPoints(np.array([[*truth, 0.0]]), *cam, intrinsics(), None)
+    assert np.hypot(*(np.asarray(obs.pixel) - marker_px.reshape(2))) < 1.0

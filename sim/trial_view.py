@@ -1,0 +1,86 @@
+"""The simulation's part of a run's view (host/view.py): the overhead camera rendered, the fabric's mesh, the object."""
+
+from __future__ import annotations
+
+import math
+import queue
+
+import mujoco
+import numpy as np
+
+from mantaray.host.link import Link
+from mantaray.host.loop import Frame
+from mantaray.host.view import QUEUE_FRAMES, RunView
+from mantaray.protocol import messages as m
+
+from . import mjcf as J
+from . import model as M
+from .rig import Rig
+
+CAMERA_PX = 320  # [px] side of the rendered camera image the view shows (square, as the overhead camera's field)
+# What the view's camera leaves out: on a machine without a GPU (llvmpipe) shadows and reflections are three
+# quarters of a frame's rendering, measured by benchmarks/view_overhead.py.
+PLAIN = (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION, mujoco.mjtRndFlag.mjRND_SKYBOX)
+
+
+class TrialView:
+    """Feeds a RunView from the simulated rig after every camera frame: the loop's values, the rendered camera with
+    the target drawn in pixels, the fabric's mesh and the object (its height above the fabric's plane: MuJoCo's
+    world z is the fabric frame's z + z0)."""
+
+    def __init__(self, view: RunView, model: mujoco.MjModel, data: mujoco.MjData, rig: Rig, link: Link) -> None:
+        self.view, self.model, self.data, self.rig, self.link = view, model, data, rig, link
+        self.camera = model.camera(J.OVERHEAD).id
+        self.triangles = M.fabric_triangles(model)
+        self.radius_m = max(rig.object.size_m or (rig.object.half_height_m,))
+        self.tolerance_m = 0.0  # [m] the present trial's epsilon
+        self.renderer: mujoco.Renderer | None = None  # made on the view's thread, which alone renders
+        # copies of the physics state for the view's thread: one per frame it may lag behind, and one being drawn
+        self._free: queue.Queue = queue.Queue()
+        for _ in range(QUEUE_FRAMES + 2):
+            self._free.put(mujoco.MjData(model))
+
+    def start(self, tolerance_m: float) -> None:
+        """A trial begins, with its epsilon [m]."""
+        self.tolerance_m = tolerance_m
+
+    def frame(self, frame: Frame, telemetry: m.Telemetry | None) -> None:
+        """The loop's values now; the camera, the mesh and the object drawn on the view's thread from a copy of the
+        physics state."""
+        seen = None if frame.dropped else frame.measured_xy_m
+        self.view.frame(frame.capture_s, seen, frame.target_m, self.tolerance_m, telemetry, self.link)
+        snapshot = self._free.get()
+        mujoco.mj_copyData(snapshot, self.model, self.data)
+        t, target, tolerance = frame.capture_s, frame.target_m, self.tolerance_m
+        self.view.defer(t, lambda: self._draw(t, snapshot, seen, target, tolerance))
+
+    def _draw(self, t_s: float, data: mujoco.MjData, seen, target_m, tolerance_m: float) -> None:
+        try:
+            if self.renderer is None:
+                self.renderer = mujoco.Renderer(self.model, CAMERA_PX, CAMERA_PX)
+                for flag in PLAIN:
+                    self.renderer.scene.flags[flag] = False
+            self.renderer.update_scene(data, camera=self.camera)
+            centre = data.body(J.OBJECT).xpos
+            detection = None
+            if seen is not None and np.all(np.isfinite(seen)):
+                detection = self.to_pixels(data, np.asarray([seen], dtype=float), float(centre[2]))[0]
+            image_bgr = self.renderer.render()[:, :, ::-1]
+            self.view.camera(t_s, image_bgr, lambda p: self.to_pixels(data, p), target_m, tolerance_m, detection)
+            self.view.mesh(t_s, M.fabric_vertices(self.model, data), self.triangles)
+            self.view.object3d(t_s, centre, self.radius_m)
+        finally:
+            self._free.put(data)
+
+    def to_pixels(self, data: mujoco.MjData, points_m: np.ndarray, z_m: float | None = None) -> np.ndarray:
+        """(k, 2) points [m] in the fabric frame at world height z_m (default: the carriages' plane z0) to (k, 2)
+        pixels of the rendered camera (x right, y down), through MuJoCo's pinhole: fovy over the image height."""
+        z = self.rig.frame.z0_m if z_m is None else z_m
+        world = np.column_stack([points_m, np.full(len(points_m), z)])
+        rotation = data.cam_xmat[self.camera].reshape(3, 3)  # camera axes in world: x right, y up, looks along -z
+        local = (world - data.cam_xpos[self.camera]) @ rotation
+        focal_px = (CAMERA_PX / 2) / math.tan(math.radians(self.model.cam_fovy[self.camera]) / 2)
+        depth = -local[:, 2]
+        return np.column_stack(
+            [CAMERA_PX / 2 + focal_px * local[:, 0] / depth, CAMERA_PX / 2 - focal_px * local[:, 1] / depth]
+        )
