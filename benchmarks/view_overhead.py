@@ -51,9 +51,9 @@ def main() -> int:
                     view = None
                     if setup != "no view":
                         view = RunView(
-                            "view_overhead",
+                            "mantaray_view_overhead",
                             path,
-                            live if setup == "live view" else None,
+                            live.options.grpc_url if setup == "live view" else None,
                             {"setup": setup},
                             N_ACTUATORS,
                             (rig.frame.size_x_m, rig.frame.size_y_m),

@@ -82,9 +82,9 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     if live is not None:
         _report(f"live view at {live.options.page_url}")
     view = RunView(
-        "mantaray rig",
+        "mantaray_rig",
         log.path.with_suffix(".rrd"),
-        live,
+        None if live is None else live.options.grpc_url,
         settings,
         rig_description.ACTUATOR_COUNT,
         (m.Configure.module_x, m.Configure.module_y),

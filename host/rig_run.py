@@ -23,7 +23,11 @@ from .view import RunView
 
 STOP, EMERGENCY_STOP = "stopped", "emergency stop"  # the outcomes of the keys
 KEYS = {"s": STOP, "e": EMERGENCY_STOP, " ": EMERGENCY_STOP}  # key (either case) -> how it ends the run
-KEYS_HELP = "keys: s stops (levels the surface), e or space is the emergency stop (latched), Ctrl-C ends (levels)"
+KEYS_HELP = (
+    "keys: s stops (levels the surface), e or space is the emergency stop (latched), Ctrl-C ends (levels); "
+    "t X,Y Enter sends the object to a new target [m]"
+)
+TARGET_KEY, ENTER, ESCAPE = "t", ("\r", "\n"), "\x1b"  # typing a target: t, then X,Y, then Enter (Escape: cancel)
 EXIT_STATUS = {"reached": 0, "interrupted": 130}  # every other outcome: 1
 
 
@@ -87,6 +91,7 @@ class RigRun:
         self._seen: Observation | None = None  # the tracker's last observation, for the log
         self._image = None  # the camera's last image (BGR or grey), for the view
         self._run_s = 0.0  # [s] run time of the last frame
+        self._typed: str | None = None  # a target being typed after the t key; None: not typing
 
     def report(self, text: str) -> None:
         self.log.write("event", {"text": text})
@@ -177,6 +182,9 @@ class RigRun:
         """A key pressed since the last frame, or an emergency stop the board reported: True when the run ends."""
         assert self._keys is not None  # run() opens them first
         for key in self._keys.read():
+            if self._typed is not None or key.lower() == TARGET_KEY:
+                self._type_target(key)
+                continue
             outcome = KEYS.get(key.lower())
             if outcome == EMERGENCY_STOP:
                 self.session.emergency_stop()  # at once, through the session: latched across reconnections
@@ -188,6 +196,45 @@ class RigRun:
             self.outcome = EMERGENCY_STOP
             return True
         return False
+
+    def _type_target(self, key: str) -> None:
+        """One key of a target being typed: t starts it, Enter sends it, Escape drops it."""
+        if self._typed is None:
+            self._typed = ""
+            print("mantaray rig: new target X,Y [m], then Enter: ", end="", file=sys.stderr, flush=True)
+        elif key == ESCAPE:
+            self._typed = None
+            print("(cancelled)", file=sys.stderr)
+        elif key in ENTER:
+            typed, self._typed = self._typed, None
+            print(file=sys.stderr)
+            self.new_target(typed)
+        else:
+            self._typed += key
+            print(key, end="", file=sys.stderr, flush=True)
+
+    def new_target(self, text: str) -> bool:
+        """A target typed while the run goes on, as X,Y [m]: sent to the firmware when it lies on the fabric; a
+        mistake is reported (terminal, log, view) and the run goes on to the old target."""
+        half = self.rules.half_module_m
+        try:
+            x, y = (float(v) for v in text.replace(",", " ").split())
+        except ValueError:
+            self.report(f"target {text!r} refused: type two numbers X,Y in metres; the run goes on")
+            return False
+        if self.course.moving:
+            self.report("target refused: the run follows a path, which moves the target itself; the run goes on")
+            return False
+        if not (math.isfinite(x) and math.isfinite(y)) or abs(x) > half[0] or abs(y) > half[1]:
+            self.report(
+                f"target {x:g},{y:g} refused: outside the fabric (|x| <= {half[0]:g} m, |y| <= {half[1]:g} m); "
+                f"the run goes on"
+            )
+            return False
+        self.session.set_target(x, y)
+        self.course = Course((x, y))
+        self.report(f"new target {x:+.3f},{y:+.3f} m")
+        return True
 
     def _move_target(self, target) -> bool:
         """Before a frame along a path: the target moves on (the run goes on)."""
@@ -204,6 +251,7 @@ class RigRun:
                 "capture_s": round(frame.capture_s, 6),
                 "status": obs.status,
                 "xy_m": obs.xy_m,
+                "target_m": list(frame.target_m),
                 "corners_seen": list(obs.corners_seen),
             },
         )
@@ -261,7 +309,8 @@ class RigRun:
         rows = self.loop.arrays()
         xy = rows["measured_xy_m"]
         configure = self.session.setup.configure
-        targets = rows["target_m"] if self.course.moving and len(xy) else [self.course.centre_m]  # a path, or one
+        fixed = [tuple(t) for t in dict.fromkeys(map(tuple, rows["target_m"]))]  # each target in turn
+        targets = rows["target_m"] if self.course.moving and len(xy) else (fixed or [self.course.centre_m])
         return path_phase_figure(
             xy,
             rows["tilt_deg"],

@@ -45,10 +45,13 @@ from .link import Link
 LOOPBACK = "127.0.0.1"
 DEFAULT_WEB_PORT = 9090  # the browser's page; the viewer's data server listens on the next port
 PR_SET_PDEATHSIG = 1  # prctl(2): the signal a child gets when its parent ends
-START_TIMEOUT_S = 20.0  # [s] for the viewer server to accept connections
+START_TIMEOUT_S = 20.0
+SERVER_MEMORY = "1GiB"  # what the live server keeps for browsers that come late; beyond it the oldest goes  # [s] for the viewer server to accept connections
 TRAIL_FRAMES = 600  # camera frames of trail drawn (50 s at the paper's 12 Hz)
 CIRCLE_POINTS = 48  # points of the epsilon circle
-JPEG_QUALITY = 85
+JPEG_QUALITY = 80
+# [px] A wider camera image is shown halved (or less): a 1280 x 720 camera at 30 Hz would record over 100 MB a minute.
+CAMERA_MAX_WIDTH_PX = 640
 TIMELINE = "trial_time"
 FABRIC_RGB = (90, 160, 230)  # the fabric's colour in the 3D view
 QUEUE_FRAMES = 4  # camera frames the view's thread may fall behind before the run waits for it
@@ -124,6 +127,8 @@ class LiveServer:
             str(options.grpc_port),
             "--web-viewer-port",
             str(options.web_port),
+            "--server-memory-limit",
+            SERVER_MEMORY,
         ]
         self._errors = tempfile.TemporaryFile()  # its messages: a pipe nobody reads would fill and stop it
         self.process = subprocess.Popen(
@@ -196,22 +201,25 @@ def _die_with_parent() -> None:
 
 
 class RunView:
-    """One run's streams: to a recording file (unless None) and to a live server (unless None).
+    """One run's streams: to a recording file (unless None) and to a live server at live_url (unless None: a
+    LiveOptions.grpc_url).
 
     properties: the run's settings, stored as the recording's metadata. actuators: how many there are (4 on one
     module, n on an array). module_m: the module's size [m] (x, y). report: where a problem with the recording is
-    said, once; the run goes on without it. world: the run has a 3D scene (world/: the simulation's)."""
+    said, once; the run goes on without it. world: the run has a 3D scene (world/: the simulation's). name: the
+    recording's id in the viewer's list (default: a fresh one); application: its group there (letters, digits, _)."""
 
     def __init__(
         self,
         application: str,
         recording: Path | None,
-        live: LiveServer | None,
+        live_url: str | None,
         properties: dict[str, object],
         actuators: int,
         module_m: tuple[float, float],
         report: Callable[[str], None],
         world: bool = False,
+        name: str | None = None,
     ) -> None:
         import rerun as rr
         import rerun.blueprint
@@ -227,10 +235,12 @@ class RunView:
                 sinks.append(rr.FileSink(str(recording)))
             except OSError as exc:
                 self._give_up_recording(f"cannot write the recording {recording}: {exc.strerror or exc}")
-        if live is not None:
-            sinks.append(rr.GrpcSink(live.options.grpc_url))
+        if live_url is not None:
+            sinks.append(rr.GrpcSink(live_url))
         # with nowhere to go, every log call is a no-op
-        self.stream = rr.RecordingStream(application, send_properties=False, default_enabled=bool(sinks))
+        self.stream = rr.RecordingStream(
+            application, recording_id=name, send_properties=False, default_enabled=bool(sinks)
+        )
         if sinks:
             self.stream.set_sinks(*sinks, default_blueprint=_layout(rr.blueprint, world))
         self._trail_px: list[tuple[float, float]] = []
@@ -346,25 +356,29 @@ class RunView:
         tolerance_m: float,
         detection_px: Sequence[float] | None = None,
     ) -> None:
-        """The camera's frame (BGR, as OpenCV gives it, or grey) as JPEG, with the detection, the target, epsilon and
-        the trail over it (costs milliseconds: defer it).
+        """The camera's frame (BGR, as OpenCV gives it, or grey) as JPEG, at most CAMERA_MAX_WIDTH_PX wide, with the
+        detection, the target, epsilon and the trail over it (costs milliseconds: defer it).
 
         to_pixels maps (k, 2) points [m] on the fabric's plane to (k, 2) pixels; None draws only the detection."""
         import cv2
 
         rr, log = self.rr, self.stream.log
         self._at(t_s)
+        scale = min(1.0, CAMERA_MAX_WIDTH_PX / image_bgr.shape[1])
+        if scale < 1.0:
+            image_bgr = cv2.resize(image_bgr, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
         ok, jpeg = cv2.imencode(".jpg", image_bgr, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
         if ok:
             log("camera/image", rr.EncodedImage(contents=jpeg.tobytes(), media_type="image/jpeg"))
         if detection_px is not None:
-            self._trail_px = (self._trail_px + [(float(detection_px[0]), float(detection_px[1]))])[-TRAIL_FRAMES:]
-            log("camera/detection", rr.Points2D([detection_px], radii=6.0, colors=(0, 255, 0)))
+            point = (float(detection_px[0]) * scale, float(detection_px[1]) * scale)
+            self._trail_px = (self._trail_px + [point])[-TRAIL_FRAMES:]
+            log("camera/detection", rr.Points2D([point], radii=6.0, colors=(0, 255, 0)))
             log("camera/trail", rr.LineStrips2D([self._trail_px], colors=(0, 200, 255)))
         if to_pixels is not None:
-            target_px = to_pixels(np.asarray([target_m], dtype=float))
+            target_px = to_pixels(np.asarray([target_m], dtype=float)) * scale
             log("camera/target", rr.Points2D(target_px, radii=5.0, colors=(255, 0, 255)))
-            circle_px = to_pixels(np.asarray(_circle(target_m, tolerance_m), dtype=float))
+            circle_px = to_pixels(np.asarray(_circle(target_m, tolerance_m), dtype=float)) * scale
             log("camera/epsilon", rr.LineStrips2D([circle_px], colors=(255, 0, 255)))
 
     def mesh(self, t_s: float, vertices_m: np.ndarray, triangles: np.ndarray) -> None:

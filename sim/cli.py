@@ -193,6 +193,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     _add_calibrate(sim_sub, shared, fmt)
     _add_tune(sim_sub, shared, fmt)
     _add_fidelity(sim_sub, shared, fmt)
+    _add_replay(sim_sub, fmt)
     compare = sim_sub.add_parser(
         "compare",
         help="difference map of two heatmap runs (first minus second)",
@@ -258,6 +259,23 @@ def _add_run(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None:
     run.set_defaults(func=_handler("cli_run", run))
 
 
+def _add_replay(sim_sub: argparse._SubParsersAction, fmt) -> None:
+    replay = sim_sub.add_parser(
+        "replay",
+        help="run one trial of a results file again, recorded (and live) for the viewer",
+        description="One trial of a heatmap, calibration, tuning or fidelity run, by its cell and trial number, run "
+        "again exactly as it ran (trials are deterministic) and written as a recording (.rrd) for the Rerun viewer "
+        "(`rerun FILE`); it says whether the outcome matches the results file's.",
+        formatter_class=fmt,
+        parents=[_out("the recording (default: beside the results file)")],
+    )
+    replay.add_argument("results", help="results.jsonl (or .jsonl.gz) of a run, or its folder")
+    replay.add_argument("--cell", type=number(0, integer=True), required=True, help="the trial's cell index")
+    replay.add_argument("--trial", type=number(0, integer=True), required=True, help="the trial's number in its cell")
+    add_view_arguments(replay)
+    replay.set_defaults(func=_handler("cli_replay", replay))
+
+
 def _add_heatmap(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None:
     out = _out(
         "results.jsonl, cells.csv, summary.json, heatmap.png and heatmap_reach.png (the paper's stopping rule) "
@@ -280,6 +298,7 @@ def _add_heatmap(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None
         "under the paper's stopping rule is the same, but 'ends within ε at T' is then not measured",
     )
     heat.add_argument("--only-cells", type=_cells, metavar="I,J,...", help="run only these cells (index ix + iy*cells)")
+    add_view_arguments(heat)
     heat.set_defaults(func=_handler("cli_heatmap", heat))
 
 

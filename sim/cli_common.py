@@ -91,3 +91,21 @@ def _interrupt(signum, frame) -> None:
 def workers(jobs: int | None) -> int:
     """--jobs as given, else every core."""
     return jobs or os.cpu_count() or 1
+
+
+def load_results(parser: argparse.ArgumentParser, given: str, command: str):
+    """The results file at given (or results.jsonl in the folder given), read whatever its protocol; its warnings
+    printed; a missing or unreadable one is a usage error."""
+    from .results_file import ResultsFile
+
+    path = Path(given)
+    path = path / "results.jsonl" if path.is_dir() else path
+    if not path.exists():
+        parser.error(f"no heatmap results at {given}")
+    try:
+        results = ResultsFile.load(path)
+    except ValueError as exc:
+        parser.error(str(exc))
+    for warning in results.warnings():
+        print(f"mantaray sim {command}: warning: {warning}", file=sys.stderr)
+    return results

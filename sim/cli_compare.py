@@ -4,33 +4,20 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from mantaray.outputs import FIGURE_SUFFIXES, writable_file
 
-from .cli_common import output
+from .cli_common import load_results, output
 
 
 def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """`sim compare`: the difference map of two heatmap runs, both measured alike."""
     from mantaray.plots import heatmap_figure
 
-    from .results_file import ResultsFile
     from .summary import summarize
 
     output(parser, writable_file, args.out, FIGURE_SUFFIXES)
-    runs = []
-    for given in (args.first, args.second):
-        path = Path(given)
-        path = path / "results.jsonl" if path.is_dir() else path
-        if not path.exists():
-            parser.error(f"no heatmap results at {given}")
-        try:
-            runs.append(ResultsFile.load(path))
-        except ValueError as exc:
-            parser.error(str(exc))
-        for warning in runs[-1].warnings():
-            print(f"mantaray sim compare: warning: {warning}", file=sys.stderr)
+    runs = [load_results(parser, given, "compare") for given in (args.first, args.second)]
     (a, b), (pa, pb) = [summarize(r) for r in runs], [r.protocol for r in runs]
     # what success means, and where it is measured, must be the same in both runs; object, controller, alpha,
     # gains and plant are what a comparison is for

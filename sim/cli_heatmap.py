@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from mantaray.arguments import controller_settings
+from mantaray.arguments import controller_settings, start_live
 from mantaray.outputs import writable_dir
 
 from .cli_common import check_ray, interruptible, output, plant_for_settings, workers
@@ -16,7 +16,7 @@ from .plant import DEFAULT_PLANT
 
 def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """`sim heatmap`: the protocol checked, its results file opened or continued, the missing trials run."""
-    from .executors import RayUnavailable, run, run_local, run_ray
+    from .executors import RayUnavailable, Watch, run, run_local, run_ray
     from .experiment import Experiment, ExperimentMismatch
     from .model import SimulationUnstable
     from .results_file import ResultsFile, ResultsFileBusy
@@ -45,6 +45,8 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         parser.error(str(exc))
     plant = "" if args.plant == DEFAULT_PLANT else f"_{args.plant}"
     check_ray(parser, args)
+    if args.live and args.executor == "ray":
+        parser.error("--live shows the trial of a worker of this machine: use it with --executor local")
     tuned = f"_{Path(args.settings).stem}" if args.settings else ""
     out = output(
         parser,
@@ -66,13 +68,17 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         )
     from .progress import Progress
 
+    live = start_live(parser, args, _report)
+    if live is not None:
+        _report(f"live view of one worker's trials at {live.options.page_url}")
     bar = Progress(total, initial=total - len(todo), unit="trial", label="heatmap")  # on stderr, beside --json
     interruptible()
     try:
         if args.executor == "ray":
             records = run_ray(protocol, todo, args.jobs, args.ray_address)
         else:
-            records = run_local(protocol, todo, workers(args.jobs))
+            watch = None if live is None else Watch(live.options.grpc_url)
+            records = run_local(protocol, todo, workers(args.jobs), watch)
         run(results, records, progress=lambda record: bar.update(1))
     except KeyboardInterrupt:
         bar.close()
@@ -94,6 +100,10 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         bar.close()
         print(f"mantaray sim heatmap: {exc}", file=sys.stderr)
         return 2
+    finally:
+        if live is not None:
+            live.linger(args.linger, _report)
+            live.close()
     bar.close()
     title = (
         f"{args.object}, {args.controller}, α = {args.alpha:g} m, ε = {args.tolerance:g} m, T = {args.duration:g} s, "
@@ -111,6 +121,10 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             + f"; {out}/results.jsonl, cells.csv, summary.json, heatmap.png"
         )
     return 0
+
+
+def _report(text: str) -> None:
+    print(f"mantaray sim heatmap: {text}", file=sys.stderr)
 
 
 def heatmap_outputs(results, out: Path, title: str) -> dict:

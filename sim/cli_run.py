@@ -89,9 +89,9 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         stack.callback(link.close)
         bridge = Bridge(link, rig, tracking, lockstep=not args.realtime)
         view = RunView(
-            "mantaray sim run",
+            "mantaray_sim_run",
             out / f"{stem}.rrd",
-            live,
+            None if live is None else live.options.grpc_url,
             {**_settings(args), "plant": args.plant, "object": rig.object.name},
             N_ACTUATORS,
             (rig.frame.size_x_m, rig.frame.size_y_m),

@@ -7,7 +7,10 @@ import json
 import os
 import signal
 import socket
+import sys
 from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
 from urllib.parse import urlsplit
 
 from .experiment import Experiment, Trial, trial_spec
@@ -15,18 +18,27 @@ from .model import SimulationUnstable
 from .results_file import ResultsFile, trial_record, unplaceable_record
 
 
+@dataclass(frozen=True)
+class Watch:
+    """Where a runner shows its trials (host/view.py): a live view's server, a recording file; either may be None."""
+
+    live_url: str | None = None
+    recording: Path | None = None
+
+
 class TrialRunner:
     """Runs trials in this process: the firmware core in-process (no pty) and the MuJoCo model of the trial's rig.
 
     The runner keeps one link (the firmware runs on across trials, as a board does); it loads a model when a
-    trial's rig differs from the last one's (the two controllers of one plant share it).
+    trial's rig differs from the last one's (the two controllers of one plant share it). With a watch, each trial
+    is streamed to the view as a recording of its own, named by its cell and trial number.
     """
 
-    def __init__(self, protocol: Experiment | None = None) -> None:
+    def __init__(self, protocol: Experiment | None = None, watch: Watch | None = None) -> None:
         from mantaray.host.link import Link
         from mantaray.host.transport import InProcessTransport
 
-        self.protocol = protocol
+        self.protocol, self.watch = protocol, watch
         self._link = Link(InProcessTransport(simulated_clock=True))
         self._rig_key: str | None = None
         self._bridge_now = None
@@ -53,11 +65,39 @@ class TrialRunner:
         """The bridge.TrialResult of one trial of protocol (default: the runner's own)."""
         protocol = protocol or self.protocol
         bridge = self._bridge(protocol)
+        view = self._show(bridge, protocol, trial) if self.watch is not None else None
         try:
             return bridge.run(trial_spec(protocol, trial))
         except SimulationUnstable as exc:  # this rig diverges: its other trials are refused without running
             self._unstable = (self._rig_key, exc)
             raise
+        finally:
+            if view is not None:
+                bridge.view = None
+                view.close()
+
+    def _show(self, bridge, protocol: Experiment, trial: Trial):
+        """The trial's view, attached to the bridge: a RunView the caller closes."""
+        from mantaray.host.view import RunView
+
+        from .mjcf import N_ACTUATORS
+        from .trial_view import TrialView
+
+        assert self.watch is not None
+        frame = bridge.rig.frame
+        view = RunView(
+            "mantaray_sim_trials",
+            self.watch.recording,
+            self.watch.live_url,
+            {**protocol.to_json(), "cell": trial.cell, "trial": trial.k, "start_m": trial.start_m, "seed": trial.seed},
+            N_ACTUATORS,
+            (frame.size_x_m, frame.size_y_m),
+            lambda text: print(f"mantaray sim: {text}", file=sys.stderr),
+            world=True,
+            name=f"cell{trial.cell}_trial{trial.k}",
+        )
+        bridge.view = TrialView(view, bridge.model, bridge.data, bridge.rig, self._link)
+        return view
 
     def run(self, trial: Trial, protocol: Experiment | None = None) -> dict:
         """The record of one trial of protocol (default: the runner's own)."""
@@ -77,10 +117,15 @@ class TrialRunner:
 _worker: TrialRunner | None = None
 
 
-def _init_worker() -> None:
+def _init_worker(watch: Watch | None = None, claim=None) -> None:
+    """A pool worker's runner; the first worker to take the claim (a shared flag) shows its trials in the watch."""
     global _worker
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle: no traceback per worker
-    _worker = TrialRunner()
+    shows = False
+    if claim is not None:
+        with claim.get_lock():
+            shows, claim.value = not claim.value, True
+    _worker = TrialRunner(watch=watch if shows else None)
 
 
 def _run_in_worker(job: tuple[dict, Trial]) -> dict:
@@ -94,18 +139,21 @@ def _call_in_worker(job: tuple[Callable, object]) -> object:
 
 
 class LocalPool:
-    """Worker processes of this machine that run (protocol, trial) jobs; `jobs` = 1 runs them in this process."""
+    """Worker processes of this machine that run (protocol, trial) jobs; `jobs` = 1 runs them in this process.
+    With a watch, one worker (this process, when jobs = 1) shows the trial it is running."""
 
-    def __init__(self, jobs: int) -> None:
-        self.jobs = jobs
+    def __init__(self, jobs: int, watch: Watch | None = None) -> None:
+        self.jobs, self.watch = jobs, watch
         self._pool = None
-        self._runner = TrialRunner() if jobs == 1 else None
+        self._runner = TrialRunner(watch=watch) if jobs == 1 else None
 
     def __enter__(self) -> LocalPool:
         if self.jobs > 1:
             import multiprocessing
 
-            self._pool = multiprocessing.get_context("forkserver").Pool(self.jobs, initializer=_init_worker)
+            context = multiprocessing.get_context("forkserver")
+            claim = context.Value("b", False) if self.watch is not None else None
+            self._pool = context.Pool(self.jobs, initializer=_init_worker, initargs=(self.watch, claim))
         return self
 
     def __exit__(self, *exc) -> None:
@@ -223,9 +271,10 @@ class RayPool:
         return list(self._pool.map(lambda actor, a: actor.call.remote(fn, a), args))
 
 
-def run_local(protocol: Experiment, todo: list[Trial], jobs: int) -> Iterator[dict]:
-    """Records of the trials as they finish, on `jobs` processes of this machine (1: this process)."""
-    with LocalPool(jobs) as pool:
+def run_local(protocol: Experiment, todo: list[Trial], jobs: int, watch: Watch | None = None) -> Iterator[dict]:
+    """Records of the trials as they finish, on `jobs` processes of this machine (1: this process), one of them
+    shown in the watch (if any)."""
+    with LocalPool(jobs, watch) as pool:
         yield from pool.imap([(protocol, t) for t in todo])
 
 

@@ -534,6 +534,36 @@ def test_a_key_during_the_run_stops_it_or_latches_the_emergency_stop(still_video
     assert after[3] == before[3]  # the terminal echoes again
 
 
+@pytest.mark.parametrize(
+    "typed, said, target",
+    [
+        (b"t-0.1,0.05\r", "new target -0.100,+0.050 m", (-0.1, 0.05)),
+        (b"t0.9,0\r", "target 0.9,0 refused: outside the fabric", (-0.2, 0.2)),
+        (b"tnorth\r", "refused: type two numbers", (-0.2, 0.2)),
+        (b"t0.1,0\x1b", None, (-0.2, 0.2)),
+    ],
+)
+def test_a_target_typed_during_the_run_is_taken_or_refused_and_the_run_goes_on(
+    still_video, tmp_path, typed, said, target
+):
+    """The nearest thing to clicking a target in the view (Rerun's viewer sends nothing back): t X,Y Enter."""
+    with VirtualMcu(clock="wall") as vmcu:
+        rig, master = _rig_on_a_terminal(vmcu.path, still_video, tmp_path)
+        time.sleep(4)
+        os.write(master, typed)
+        time.sleep(2)
+        os.write(master, b"s")
+        out, err = rig.communicate(timeout=60)
+        os.close(master)
+        t = _board_state(vmcu.path)
+    assert rig.returncode == 1 and out.startswith("stopped"), err  # the run went on until the s key
+    events = [r["text"] for r in _log(tmp_path) if r["kind"] == "event"]
+    assert (said is None and not any("target" in e for e in events)) or any(said in e for e in events), events
+    positions = [r for r in _log(tmp_path) if r["kind"] == "position"]
+    assert positions[-1]["target_m"] == pytest.approx(target)
+    assert m.State(t.state) == m.State.IDLE
+
+
 def test_without_a_terminal_the_rig_reads_no_keys_and_runs_on(still_video, tmp_path):
     """Under nohup or from a pipe stdin is no terminal: what comes in on it is no key."""
     with VirtualMcu(clock="wall") as vmcu:

@@ -215,6 +215,16 @@ def test_live_options_without_live_are_refused_not_ignored(args, tmp_path):
     assert done.returncode == 2 and "add --live" in done.stderr
 
 
+def test_a_heatmaps_live_view_on_ray_is_refused_before_any_work(tmp_path):
+    done = subprocess.run(
+        [sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--executor", "ray", "--live", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 2 and "--executor local" in done.stderr and not (tmp_path / "results.jsonl").exists()
+
+
 def test_a_view_that_listens_beyond_this_machine_says_so(tmp_path):
     from mantaray.host.view import LiveServer
 
@@ -283,6 +293,98 @@ def test_a_rig_run_records_the_camera_with_its_detection_and_the_loop_as_its_log
     np.testing.assert_array_equal(_scalars(streams["/plots/tilt_deg/zx"][1]), [r["tilt_zx"] for r in telemetry])
     assert len(streams["/camera/image"][0]) == len(positions)
     marker_px, _ = cv2.projectPoints(np.array([[*truth, 0.0]]), *camera(1.0), intrinsics(), None)
+    image = cv2.imdecode(np.frombuffer(bytes(streams["/camera/image"][1][-1][0]), np.uint8), cv2.IMREAD_GRAYSCALE)
+    scale = image.shape[1] / 1280  # the view halves a 1280 px camera
+    assert scale == 0.5
     detection = np.asarray(streams["/camera/detection"][1][-1][0])
-    assert np.hypot(*(detection - marker_px.reshape(2))) < 1.0
+    assert np.hypot(*(detection - marker_px.reshape(2) * scale)) < 1.0
     assert "/log/events" in streams  # the run's end, as the log's end line says it
+
+
+@pytest.fixture(scope="module")
+def small_heatmap(tmp_path_factory) -> Path:
+    """A heatmap of 4 cells, 1 trial each, 1 s, on a cheap mesh (what is replayed is the mechanism, not physics)."""
+    out = tmp_path_factory.mktemp("heatmap")
+    done = subprocess.run(
+        [sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--cells", "2", "--trials", "1", "--duration", "1"]
+        + ["--resolution", "11", "--timestep", "0.002", "--jobs", "1", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr
+    return out
+
+
+def test_a_heatmap_trial_replays_by_cell_and_number_exactly_into_a_recording(small_heatmap, tmp_path):
+    from rerun.chunk import RrdReader
+
+    cell = random.Random(SEED).randrange(4)
+    done = subprocess.run(
+        [sys.executable, "-m", "mantaray.cli", "sim", "replay", str(small_heatmap), "--cell", str(cell)]
+        + ["--trial", "0", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0 and "as the results file has it" in done.stdout, done.stdout + done.stderr
+    recording = tmp_path / f"results_cell{cell}_trial0.rrd"
+    (entry,) = RrdReader(recording).recordings()
+    assert entry.recording_id == f"cell{cell}_trial0"
+    streams = _streams(recording)
+    assert len(streams["/camera/image"][0]) == len(streams["/plots/position_m/target_x"][0]) > 0
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--cell", "4", "--trial", "0"], "--cell 4 is not a cell of this run (it has cells 0..3)"),
+        (["--cell", "0", "--trial", "1"], "--trial 1: this run has trials 0..0"),
+        (["--cell", "-1", "--trial", "0"], "must be >= 0"),
+    ],
+)
+def test_a_replay_of_a_trial_not_in_the_run_is_refused_in_one_line(small_heatmap, args, needle):
+    done = subprocess.run(
+        [sys.executable, "-m", "mantaray.cli", "sim", "replay", str(small_heatmap), *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 2 and needle in done.stderr and "Traceback" not in done.stderr
+
+
+def test_a_heatmaps_live_view_shows_one_workers_trials_each_as_its_own_recording(small_heatmap, tmp_path):
+    from rerun.chunk import RrdReader
+
+    from mantaray.host.view import _rerun_command
+
+    port = _free_ports()
+    options = LiveOptions(web_port=port)
+    run = subprocess.Popen(
+        [sys.executable, "-m", "mantaray.cli", "sim", "heatmap", "--cells", "2", "--trials", "2", "--duration", "1"]
+        + ["--resolution", "11", "--timestep", "0.002", "--jobs", "2", "--out", str(tmp_path / "run")]
+        + ["--live", "--live-port", str(port), "--linger", "60"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    client = None
+    try:
+        assert options.page_url in run.stderr.readline()
+        client = subprocess.Popen(
+            [*_rerun_command(), options.grpc_url, "--save", str(tmp_path / "client.rrd"), "--port", "0"]
+            + ["--bind", "127.0.0.1"],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        while "stays at" not in run.stderr.readline():
+            pass
+        time.sleep(2)
+    finally:
+        for process in (client, run):
+            if process is not None and process.poll() is None:
+                process.send_signal(signal.SIGINT)
+                process.wait(timeout=30)
+    shown = {e.recording_id for e in RrdReader(tmp_path / "client.rrd").recordings()}
+    every = {f"cell{c}_trial{k}" for c in range(4) for k in range(2)}
+    assert shown and shown < every  # one worker's share of the 8 trials, not the other's

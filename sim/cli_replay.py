@@ -1,0 +1,64 @@
+"""`mantaray sim replay`: one trial of a results file run again, exactly, as a recording (and live) for the viewer."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from mantaray.arguments import start_live
+from mantaray.outputs import writable_dir
+
+from .cli_common import load_results, output
+
+OUTCOME = ("success", "reached", "fell_off", "final_error_m", "time_to_reach_s")  # what a replay must give again
+
+
+def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """`sim replay`: the trial found by cell and number, run in this process with its view, compared."""
+    from .executors import TrialRunner, Watch
+    from .experiment import trials
+    from .mjcf import model_identity
+
+    results = load_results(parser, args.results, "replay")
+    protocol = results.protocol
+    cells = protocol.cell_ids()
+    if args.cell not in cells:
+        parser.error(f"--cell {args.cell} is not a cell of this run (it has cells {cells[0]}..{cells[-1]})")
+    if args.trial >= protocol.trials_per_cell:
+        parser.error(f"--trial {args.trial}: this run has trials 0..{protocol.trials_per_cell - 1} in each cell")
+    if results.model is not None and results.model != model_identity(protocol.rig()):
+        parser.error(
+            f"{results.path} was run on another model ({results.model}); this checkout's would not replay its "
+            f"trials the same: check out the version that ran it"
+        )
+    (trial,) = [t for t in trials(protocol) if (t.cell, t.k) == (args.cell, args.trial)]
+    out = output(parser, writable_dir, args.out or str(results.path.parent))
+    stem = results.path.name.removesuffix(".gz").removesuffix(".jsonl")
+    recording = Path(out) / f"{stem}_cell{trial.cell}_trial{trial.k}.rrd"
+    live = start_live(parser, args, _report)
+    try:
+        if live is not None:
+            _report(f"live view at {live.options.page_url}")
+        runner = TrialRunner(protocol, Watch(None if live is None else live.options.grpc_url, recording))
+        record = runner.run(trial)
+    finally:
+        if live is not None:
+            live.linger(args.linger, _report)
+            live.close()
+    stored = results.records.get(trial.key)
+    if stored is None:
+        verdict = "not in the results file yet"
+    else:
+        differ = [k for k in OUTCOME if stored.get(k) != record.get(k)]
+        verdict = "as the results file has it" if not differ else f"unlike the results file in {', '.join(differ)}"
+    outcome = "fell off" if record["fell_off"] else ("success" if record["success"] else "not within ε at T")
+    print(
+        f"cell {trial.cell}, trial {trial.k}: {outcome}, final error {record['final_error_m'] * 100:.1f} cm "
+        f"({verdict}); recording {recording} (open it with: rerun {recording})"
+    )
+    return 0 if stored is None or verdict.startswith("as") else 1
+
+
+def _report(text: str) -> None:
+    print(f"mantaray sim replay: {text}", file=sys.stderr)
