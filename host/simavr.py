@@ -5,16 +5,14 @@ from __future__ import annotations
 import json
 import os
 import select
-import signal
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 from mantaray.paths import REPO, native_artifact
 
-from .vmcu import _die_with_parent
+from .processes import DIE_WITH_PARENT, end
 
 DEFAULT_ELF = REPO / "build" / "avr" / "firmware.elf"  # where scripts/avr_build.py puts the Uno image
 
@@ -71,7 +69,7 @@ class SimulatedUno:
             command,
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
-            preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None,
+            preexec_fn=DIE_WITH_PARENT,
         )
         self.path = self._read_pty(start_timeout_s)
 
@@ -101,13 +99,7 @@ class SimulatedUno:
         self.close()
 
     def close(self) -> None:
-        if self.process.poll() is None:
-            self.process.send_signal(signal.SIGTERM)
-            try:
-                self.process.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-                self.process.wait()
+        end(self.process, timeout_s=10)  # it writes its statistics on SIGTERM
         if self._stats_path.exists():
             self.stats = json.loads(self._stats_path.read_text())
         for stream in (self.process.stdout, self.process.stderr):

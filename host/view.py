@@ -25,7 +25,6 @@ from __future__ import annotations
 import contextlib
 import math
 import queue
-import signal
 import socket
 import subprocess
 import sys
@@ -41,10 +40,10 @@ import numpy as np
 from mantaray.protocol import messages as m
 
 from .link import Link
+from .processes import DIE_WITH_PARENT, end
 
 LOOPBACK = "127.0.0.1"
 DEFAULT_WEB_PORT = 9090  # the browser's page; the viewer's data server listens on the next port
-PR_SET_PDEATHSIG = 1  # prctl(2): the signal a child gets when its parent ends
 START_TIMEOUT_S = 20.0
 SERVER_MEMORY = "1GiB"  # what the live server keeps for browsers that come late; beyond it the oldest goes  # [s] for the viewer server to accept connections
 TRAIL_FRAMES = 600  # camera frames of trail drawn (50 s at the paper's 12 Hz)
@@ -137,7 +136,7 @@ class LiveServer:
             stdout=subprocess.DEVNULL,
             stderr=self._errors,
             start_new_session=True,  # a Ctrl-C meant for the run reaches this process, which closes the viewer
-            preexec_fn=_die_with_parent,
+            preexec_fn=DIE_WITH_PARENT,
         )
         self._wait_until_serving()
 
@@ -168,13 +167,7 @@ class LiveServer:
                 input()
 
     def close(self) -> None:
-        if self.process.poll() is None:
-            self.process.terminate()
-            try:
-                self.process.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-                self.process.wait()
+        end(self.process)
         self._errors.close()
 
 
@@ -190,14 +183,6 @@ def _rerun_command() -> list[str]:
         if binary.exists():
             return [str(binary)]
     raise ViewError(f"the rerun-sdk package has no viewer binary in {folder}: reinstall it (pip install rerun-sdk)")
-
-
-def _die_with_parent() -> None:
-    """In the viewer's process, before it starts (Linux): end it when this process ends, however that happens."""
-    if sys.platform.startswith("linux"):
-        import ctypes
-
-        ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 class RunView:

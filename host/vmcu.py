@@ -2,22 +2,14 @@
 
 from __future__ import annotations
 
-import ctypes
-import signal
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 from mantaray.paths import native_artifact
 
-PR_SET_PDEATHSIG = 1  # prctl option (linux/prctl.h): a signal the child gets when its parent dies
-
-
-def _die_with_parent() -> None:
-    """In the child before exec: get SIGTERM when the parent dies, so no virtual MCU outlives its host."""
-    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+from .processes import DIE_WITH_PARENT, end
 
 
 class VirtualMcu:
@@ -33,7 +25,7 @@ class VirtualMcu:
             [str(native_artifact("mantaray-vmcu")), "--pty", self.path, "--clock", clock],
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
-            preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None,
+            preexec_fn=DIE_WITH_PARENT,
         )
         deadline = time.monotonic() + start_timeout_s
         while not Path(self.path).exists():
@@ -46,13 +38,7 @@ class VirtualMcu:
             time.sleep(0.005)
 
     def close(self) -> None:
-        if self.process.poll() is None:
-            self.process.terminate()
-            try:
-                self.process.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-                self.process.wait()
+        end(self.process)
         if self.process.stderr is not None:
             self.process.stderr.close()
         self._dir.cleanup()
