@@ -388,3 +388,40 @@ def test_a_heatmaps_live_view_shows_one_workers_trials_each_as_its_own_recording
     shown = {e.recording_id for e in RrdReader(tmp_path / "client.rrd").recordings()}
     every = {f"cell{c}_trial{k}" for c in range(4) for k in range(2)}
     assert shown and shown < every  # one worker's share of the 8 trials, not the other's
+
+
+def test_a_viewer_that_comes_and_goes_mid_run_changes_nothing_in_the_run(tmp_path):
+    """Rerun's own client connects, disconnects and connects again while a run streams; the trajectory is the one
+    an unwatched run of the same trial gives."""
+    from mantaray.host.view import _rerun_command
+
+    port = _free_ports()
+    options = LiveOptions(web_port=port)
+    trial = ["--duration", "6", "--seed", "3"]
+    run = subprocess.Popen(
+        [*RUN, *trial, "--out", str(tmp_path / "live"), "--live", "--live-port", str(port)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert options.page_url in run.stderr.readline()
+        for k in range(2):  # comes, goes, comes back
+            client = subprocess.Popen(
+                [*_rerun_command(), options.grpc_url, "--save", str(tmp_path / f"{k}.rrd"), "--port", "0"]
+                + ["--bind", "127.0.0.1"],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
+            time.sleep(1.5)
+            client.kill()
+            client.wait()
+        assert run.poll() is None, "the run ended before the viewer came back: lengthen it"
+        out, _ = run.communicate(timeout=300)
+    finally:
+        if run.poll() is None:
+            run.kill()
+    quiet = subprocess.run([*RUN, *trial, "--out", str(tmp_path / "quiet")], capture_output=True, text=True, timeout=300)
+    a, b = np.load(json.loads(out)["trajectory"]), np.load(json.loads(quiet.stdout)["trajectory"])
+    for key in a.files:
+        np.testing.assert_array_equal(a[key], b[key], err_msg=key)
