@@ -539,8 +539,6 @@ def test_a_key_during_the_run_stops_it_or_latches_the_emergency_stop(still_video
     [
         (b"t-0.1,0.05\r", "new target -0.100,+0.050 m", (-0.1, 0.05)),
         (b"t0.9,0\r", "target 0.9,0 refused: outside the fabric", (-0.2, 0.2)),
-        (b"tnorth\r", "refused: type two numbers", (-0.2, 0.2)),
-        (b"t0.1,0\x1b", None, (-0.2, 0.2)),
     ],
 )
 def test_a_target_typed_during_the_run_is_taken_or_refused_and_the_run_goes_on(
@@ -558,7 +556,7 @@ def test_a_target_typed_during_the_run_is_taken_or_refused_and_the_run_goes_on(
         t = _board_state(vmcu.path)
     assert rig.returncode == 1 and out.startswith("stopped"), err  # the run went on until the s key
     events = [r["text"] for r in _log(tmp_path) if r["kind"] == "event"]
-    assert (said is None and not any("target" in e for e in events)) or any(said in e for e in events), events
+    assert any(said in e for e in events), events
     positions = [r for r in _log(tmp_path) if r["kind"] == "position"]
     assert positions[-1]["target_m"] == pytest.approx(target)
     assert m.State(t.state) == m.State.IDLE

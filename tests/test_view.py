@@ -421,7 +421,9 @@ def test_a_viewer_that_comes_and_goes_mid_run_changes_nothing_in_the_run(tmp_pat
     finally:
         if run.poll() is None:
             run.kill()
-    quiet = subprocess.run([*RUN, *trial, "--out", str(tmp_path / "quiet")], capture_output=True, text=True, timeout=300)
+    quiet = subprocess.run(
+        [*RUN, *trial, "--out", str(tmp_path / "quiet")], capture_output=True, text=True, timeout=300
+    )
     a, b = np.load(json.loads(out)["trajectory"]), np.load(json.loads(quiet.stdout)["trajectory"])
     for key in a.files:
         np.testing.assert_array_equal(a[key], b[key], err_msg=key)
