@@ -63,10 +63,10 @@ def main() -> int:
                     t = time.perf_counter()
                     result = bridge.run(spec)
                     walls[setup].append(time.perf_counter() - t)
-                    bridge.view = None
                     if view is not None:
-                        view.close()
+                        bridge.view.close()
                         sizes.append(path.stat().st_size / (result.sim_time_s / 60))
+                    bridge.view = None
                     print(f"  {setup:10s} run {k + 1}: {walls[setup][-1]:.2f} s wall", file=sys.stderr, flush=True)
     finally:
         live.close()
@@ -89,6 +89,9 @@ class _Timed:
 
     def start(self, tolerance_m: float) -> None:
         self.view.start(tolerance_m)
+
+    def close(self) -> None:
+        self.view.close()
 
     def frame(self, frame, telemetry) -> None:
         t = time.perf_counter()

@@ -78,35 +78,38 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     setup, source, tracker, out = _rig_inputs(args, parser, course.at(0.0))
     settings = {k: v for k, v in vars(args).items() if k != "func"}
     live = start_live(parser, args, _report)
-    log = RunLog.new(out, "rig", {"args": settings})
-    if live is not None:
-        _report(f"live view at {live.options.page_url}")
-    view = RunView(
-        "mantaray_rig",
-        log.path.with_suffix(".rrd"),
-        None if live is None else live.options.grpc_url,
-        settings,
-        rig_description.ACTUATOR_COUNT,
-        (m.Configure.module_x, m.Configure.module_y),
-        _report,
-    )
-    run = RigRun(
-        args.port,
-        setup,
-        source,
-        tracker,
-        log,
-        course,
-        StopRules(args.tolerance, args.hold, args.timeout, _half_module_m()),
-        reconnect_timeout_s=args.reconnect_timeout,
-        view=view,
-    )
     try:
-        outcome = run.run()
-    finally:
-        recording = view.close()
         if live is not None:
+            _report(f"live view at {live.options.page_url}")
+        log = RunLog.new(out, "rig", {"args": settings})
+        view = RunView(
+            "mantaray_rig",
+            log.path.with_suffix(".rrd"),
+            None if live is None else live.options.grpc_url,
+            settings,
+            rig_description.ACTUATOR_COUNT,
+            (m.Configure.module_x, m.Configure.module_y),
+            _report,
+        )
+        try:
+            run = RigRun(
+                args.port,
+                setup,
+                source,
+                tracker,
+                log,
+                course,
+                StopRules(args.tolerance, args.hold, args.timeout, _half_module_m()),
+                reconnect_timeout_s=args.reconnect_timeout,
+                view=view,
+            )
+            outcome = run.run()
+        finally:
+            recording = view.close()
+        if live is not None and outcome != "interrupted":
             live.linger(args.linger, _report)
+    finally:
+        if live is not None:
             live.close()
     figure = run.figure(log.path.with_suffix(".png"))
     print(

@@ -28,6 +28,8 @@ KEYS_HELP = (
     "t X,Y Enter sends the object to a new target [m]"
 )
 TARGET_KEY, ENTER, ESCAPE = "t", ("\r", "\n"), "\x1b"  # typing a target: t, then X,Y, then Enter (Escape: cancel)
+TARGET_CHARACTERS = set("0123456789.,+-")  # what a typed target is made of: any other key keeps its own meaning
+BACKSPACE = ("\x7f", "\b")
 EXIT_STATUS = {"reached": 0, "interrupted": 130}  # every other outcome: 1
 
 
@@ -182,9 +184,13 @@ class RigRun:
         """A key pressed since the last frame, or an emergency stop the board reported: True when the run ends."""
         assert self._keys is not None  # run() opens them first
         for key in self._keys.read():
-            if self._typed is not None or key.lower() == TARGET_KEY:
+            typing = self._typed is not None and (key in TARGET_CHARACTERS or key in ENTER + BACKSPACE + (ESCAPE,))
+            if typing or (self._typed is None and key.lower() == TARGET_KEY):
                 self._type_target(key)
                 continue
+            if self._typed is not None:  # a stop key while typing: it stops, and the target is dropped
+                self._typed = None
+                print("(target dropped)", file=sys.stderr)
             outcome = KEYS.get(key.lower())
             if outcome == EMERGENCY_STOP:
                 self.session.emergency_stop()  # at once, through the session: latched across reconnections
@@ -198,10 +204,15 @@ class RigRun:
         return False
 
     def _type_target(self, key: str) -> None:
-        """One key of a target being typed: t starts it, Enter sends it, Escape drops it."""
+        """One key of a target being typed: t starts it, digits . , + - make it, Backspace takes one back, Enter
+        sends it, Escape drops it."""
         if self._typed is None:
             self._typed = ""
             print("mantaray rig: new target X,Y [m], then Enter: ", end="", file=sys.stderr, flush=True)
+        elif key in BACKSPACE:
+            if self._typed:
+                self._typed = self._typed[:-1]
+                print("\b \b", end="", file=sys.stderr, flush=True)
         elif key == ESCAPE:
             self._typed = None
             print("(cancelled)", file=sys.stderr)
@@ -273,10 +284,11 @@ class RigRun:
         view.frame(
             t, obs.xy_m if obs.visible else None, frame.target_m, self.rules.tolerance_m, telemetry, self.session.link
         )
-        to_pixels = self.tracker.to_image if self.tracker.fitted else None
+        to_pixels = self.tracker.projection(self.tracker.marker_height_m)  # this image's fit, the detection's height
         image, target, tolerance = self._image, frame.target_m, self.rules.tolerance_m
         assert image is not None  # a frame is shown after its image was tracked
-        view.defer(t, lambda: view.camera(t, image, to_pixels, target, tolerance, obs.pixel))
+        # on the wall clock: a view that falls behind drops pictures rather than hold the loop back
+        view.defer(t, lambda: view.camera(t, image, to_pixels, target, tolerance, obs.pixel), wait=False)
 
     def _finish(self) -> None:
         """The board left safe: levelled and stopped (once, without recoveries, when the board was lost), or its

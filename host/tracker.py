@@ -128,25 +128,35 @@ class Tracker:
             raise RuntimeError("solvePnP failed on the four corner markers")
         return rvec, tvec
 
-    @property
-    def fitted(self) -> bool:
-        """Whether the fabric frame has been found in some image (to_image needs it)."""
-        return self._fit is not None
-
-    def to_image(self, points_m: np.ndarray) -> np.ndarray:
-        """(k, 2) points [m] on the corner markers' plane (z = 0 of the fabric frame) to (k, 2) pixels of the last
-        fitted image: what the view draws the target and epsilon with."""
+    def projection(self, height_m: float = 0.0):
+        """The last fitted image's projection of points height_m [m] above the corner markers' plane: a function of
+        (k, 2) points [m] in the fabric frame giving (k, 2) pixels, what the view draws the target and epsilon with
+        at the tracked marker's height; None before any image showed the four corner markers. The function keeps
+        the fit it was made from."""
         import cv2
 
-        assert self._fit is not None  # callers check fitted first
+        if self._fit is None:
+            return None
         fit = self._fit[0]
-        plane = np.asarray(points_m, dtype=np.float64).reshape(-1, 2)
         if self.calibration is None:
-            return cv2.perspectiveTransform(plane.reshape(-1, 1, 2), np.linalg.inv(fit)).reshape(-1, 2)
+            to_image = np.linalg.inv(fit)
+            c, h, camera_m = np.asarray(self.camera_xy_m), height_m, self.camera_height_m
+
+            def project(points_m: np.ndarray) -> np.ndarray:
+                # the plane point the camera sees behind a point h above it (the inverse of _to_fabric's parallax)
+                plane = c + (np.asarray(points_m, dtype=np.float64).reshape(-1, 2) - c) * camera_m / (camera_m - h)
+                return cv2.perspectiveTransform(plane.reshape(-1, 1, 2), to_image).reshape(-1, 2)
+
+            return project
         rvec, tvec = fit
-        objects = np.hstack([plane, np.zeros((len(plane), 1))])
-        pixels, _ = cv2.projectPoints(objects, rvec, tvec, self.calibration.camera_matrix, self.calibration.distortion)
-        return pixels.reshape(-1, 2)
+        matrix, distortion = self.calibration.camera_matrix, self.calibration.distortion
+
+        def project_calibrated(points_m: np.ndarray) -> np.ndarray:
+            plane = np.asarray(points_m, dtype=np.float64).reshape(-1, 2)
+            objects = np.hstack([plane, np.full((len(plane), 1), height_m)])
+            return cv2.projectPoints(objects, rvec, tvec, matrix, distortion)[0].reshape(-1, 2)
+
+        return project_calibrated
 
     def _to_fabric(self, pixel: np.ndarray) -> tuple[float, float]:
         import cv2

@@ -17,13 +17,15 @@ Streams (entity path: what):
     plots/state                   the supervisor's state (protocol enum value); log/supervisor: its changes and faults
     plots/link/{name}             link counters (retransmissions, CRC errors, frame errors, lost frames)
     world/fabric, world/object    (simulation) the fabric as a mesh and the object [m, world]
-    log/events                    what the run reported (stops, faults, warnings)
+    log/events                    what the rig's run reported (stops, refused targets, its end)
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import math
+import os
 import queue
 import socket
 import subprocess
@@ -44,8 +46,8 @@ from .processes import DIE_WITH_PARENT, end
 
 LOOPBACK = "127.0.0.1"
 DEFAULT_WEB_PORT = 9090  # the browser's page; the viewer's data server listens on the next port
-START_TIMEOUT_S = 20.0
-SERVER_MEMORY = "1GiB"  # what the live server keeps for browsers that come late; beyond it the oldest goes  # [s] for the viewer server to accept connections
+START_TIMEOUT_S = 20.0  # [s] for the viewer's server to accept connections
+SERVER_MEMORY = "1GiB"  # what the live server keeps for browsers that come late; beyond it the oldest goes
 TRAIL_FRAMES = 600  # camera frames of trail drawn (50 s at the paper's 12 Hz)
 CIRCLE_POINTS = 48  # points of the epsilon circle
 JPEG_QUALITY = 80
@@ -53,6 +55,7 @@ JPEG_QUALITY = 80
 CAMERA_MAX_WIDTH_PX = 640
 TIMELINE = "trial_time"
 FABRIC_RGB = (90, 160, 230)  # the fabric's colour in the 3D view
+FLUSH_TIMEOUT_S = 10.0  # [s] for the streams to take what is left at the end
 QUEUE_FRAMES = 4  # camera frames the view's thread may fall behind before the run waits for it
 
 
@@ -63,13 +66,19 @@ class ViewError(Exception):
 def port_free(host: str, port: int) -> bool:
     """Whether a TCP port can be bound on host now (by a server, which may reuse a port that closed connections
     still hold in TIME_WAIT)."""
-    with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as probe:
-        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        try:
+    return _bind_error(host, port) is None
+
+
+def _bind_error(host: str, port: int) -> OSError | None:
+    """Why a server could not bind host:port now, or None when it could."""
+    try:
+        family = socket.AF_INET6 if ":" in host else socket.AF_INET
+        with socket.socket(family) as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             probe.bind((host, port))
-        except OSError:
-            return False
-    return True
+    except OSError as exc:
+        return exc
+    return None
 
 
 @dataclass(frozen=True)
@@ -107,11 +116,19 @@ class LiveServer:
     def __init__(self, options: LiveOptions, report: Callable[[str], None]) -> None:
         self.options = options
         for port, what in ((options.web_port, "web page"), (options.grpc_port, "data server")):
-            if not port_free(options.host, port):
+            error = _bind_error(options.host, port)
+            if error is None:
+                continue
+            if error.errno == errno.EADDRINUSE:
+                other = options.web_port + 10 if options.web_port + 11 <= 65535 else options.web_port - 10
                 raise ViewError(
                     f"port {port} on {options.host} (the live view's {what}) is in use, perhaps by another live "
-                    f"view: choose another with --live-port {options.web_port + 10}"
+                    f"view: choose another with --live-port {other}"
                 )
+            raise ViewError(
+                f"the live view cannot listen on {options.host}:{port} ({error.strerror or error}): --bind takes an "
+                f"address of this machine"
+            )
         if options.host != LOOPBACK:
             report(
                 f"warning: the live view listens on {options.host}, not only this machine: anyone who can reach "
@@ -135,7 +152,7 @@ class LiveServer:
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=self._errors,
-            start_new_session=True,  # a Ctrl-C meant for the run reaches this process, which closes the viewer
+            start_new_session=True,  # a Ctrl-C at the terminal reaches the run only, which then closes the viewer
             preexec_fn=DIE_WITH_PARENT,
         )
         self._wait_until_serving()
@@ -146,6 +163,7 @@ class LiveServer:
             if self.process.poll() is not None:
                 self._errors.seek(0)
                 error = self._errors.read().decode(errors="replace").strip().splitlines()
+                self.close()
                 raise ViewError(f"the live view's server stopped at once: {error[-1] if error else 'no message'}")
             if not port_free(self.options.host, self.options.grpc_port) and not port_free(
                 self.options.host, self.options.web_port
@@ -162,7 +180,7 @@ class LiveServer:
             if seconds is not None and seconds > 0:
                 report(f"the run is over; its live view stays at {self.options.page_url} for {seconds:g} s")
                 time.sleep(seconds)
-            elif seconds is None and sys.stdin.isatty():
+            elif seconds is None and _in_foreground():
                 report(f"the run is over; its live view stays at {self.options.page_url} until you press Enter")
                 input()
 
@@ -183,6 +201,14 @@ def _rerun_command() -> list[str]:
         if binary.exists():
             return [str(binary)]
     raise ViewError(f"the rerun-sdk package has no viewer binary in {folder}: reinstall it (pip install rerun-sdk)")
+
+
+def _in_foreground() -> bool:
+    """stdin is a terminal this process may read (in the background, reading it would stop the process)."""
+    try:
+        return sys.stdin.isatty() and os.tcgetpgrp(sys.stdin.fileno()) == os.getpgrp()
+    except OSError:
+        return False
 
 
 class RunView:
@@ -234,13 +260,22 @@ class RunView:
         self._static(properties, module_m)
         self._queue: queue.Queue = queue.Queue(maxsize=QUEUE_FRAMES)
         self._failed = False
+        self.dropped = 0  # deferred work dropped because the view fell behind (defer(wait=False))
         self._thread = threading.Thread(target=self._work, name="run view", daemon=True)
         self._thread.start()
 
-    def defer(self, t_s: float, work: Callable[[], None]) -> None:
+    def defer(self, t_s: float, work: Callable[[], None], *, wait: bool = True) -> None:
         """Run work (the camera image, the mesh: what costs milliseconds) on the view's own thread, at trial time
-        t_s [s], while the run goes on; the run waits only when the view is QUEUE_FRAMES frames behind."""
-        self._queue.put((t_s, work))
+        t_s [s], while the run goes on. When the view is QUEUE_FRAMES frames behind, the run waits for it (wait=True:
+        lock-step, where waiting changes nothing), or the work is dropped and counted (wait=False: a run on the wall
+        clock, which must not act on stale frames for the view's sake)."""
+        if wait:
+            self._queue.put((t_s, work))
+            return
+        try:
+            self._queue.put_nowait((t_s, work))
+        except queue.Full:
+            self.dropped += 1
 
     def _work(self) -> None:
         while (item := self._queue.get()) is not None:
@@ -314,11 +349,12 @@ class RunView:
         log("plots/state", rr.Scalars(int(telemetry.state)))
         state = (int(telemetry.state), int(telemetry.faults))
         if state != self._state:
-            faults = m.Faults(telemetry.faults)
-            text = f"state {m.State(telemetry.state).name.lower()}" + (
-                f", faults {faults.name or int(faults)}" if int(faults) else ""
+            # a firmware newer than this host may send a state or fault bit it does not know: shown as its number
+            known = telemetry.state in m.State._value2member_map_
+            text = f"state {m.State(telemetry.state).name.lower() if known else int(telemetry.state)}" + (
+                f", faults 0x{int(telemetry.faults):04X}" if int(telemetry.faults) else ""
             )
-            log("log/supervisor", rr.TextLog(text, level="ERROR" if int(faults) else "INFO"))
+            log("log/supervisor", rr.TextLog(text, level="ERROR" if int(telemetry.faults) else "INFO"))
             self._state = state
 
     def _link(self, telemetry: m.Telemetry, link: Link) -> None:
@@ -400,8 +436,13 @@ class RunView:
         (said once)."""
         self._queue.put(None)
         self._thread.join()
-        self.stream.flush()
-        self.stream.disconnect()
+        if self.dropped:
+            self.report(f"the view fell behind and left out {self.dropped} camera frames; the run did not wait")
+        try:
+            self.stream.flush(timeout_sec=FLUSH_TIMEOUT_S)
+            self.stream.disconnect()
+        except RuntimeError as exc:  # the live server went away: the recording file is flushed all the same
+            self.report(f"the live view could not take the last of the run ({exc})")
         path = self.recording_path
         if path is not None and (not path.exists() or path.stat().st_size == 0):
             self._give_up_recording(f"the recording {path} could not be written (disk full?)")

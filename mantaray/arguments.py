@@ -105,8 +105,7 @@ def add_view_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--live-port",
         type=number(1024, 65534, integer=True),
-        default=DEFAULT_WEB_PORT,
-        help="the live view's web page port; its data server takes the next one (default %(default)s)",
+        help=f"the live view's web page port; its data server takes the next one (default {DEFAULT_WEB_PORT})",
     )
     parser.add_argument(
         "--linger",
@@ -117,9 +116,8 @@ def add_view_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--bind",
-        default=LOOPBACK,
         metavar="ADDRESS",
-        help="the address the live view listens on (default %(default)s: this machine only; 0.0.0.0 opens it to "
+        help=f"the address the live view listens on (default {LOOPBACK}: this machine only; 0.0.0.0 opens it to "
         "the network, with a warning)",
     )
 
@@ -130,18 +128,14 @@ def start_live(parser: argparse.ArgumentParser, args: argparse.Namespace, report
 
     if not args.live:
         given = [
-            option
-            for option, unset in (
-                ("--live-port", args.live_port == DEFAULT_WEB_PORT),
-                ("--linger", args.linger is None),
-                ("--bind", args.bind == LOOPBACK),
-            )
-            if not unset
+            name
+            for name, value in (("--live-port", args.live_port), ("--linger", args.linger), ("--bind", args.bind))
+            if value is not None
         ]
         if given:
             parser.error(f"{', '.join(given)} set up the live view: add --live")
         return None
     try:
-        return LiveServer(LiveOptions(args.bind, args.live_port), report)
+        return LiveServer(LiveOptions(args.bind or LOOPBACK, args.live_port or DEFAULT_WEB_PORT), report)
     except ViewError as exc:
         parser.error(str(exc))

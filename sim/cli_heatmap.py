@@ -80,6 +80,8 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             watch = None if live is None else Watch(live.options.grpc_url)
             records = run_local(protocol, todo, workers(args.jobs), watch)
         run(results, records, progress=lambda record: bar.update(1))
+        if live is not None:
+            live.linger(args.linger, _report)
     except KeyboardInterrupt:
         bar.close()
         print(
@@ -102,7 +104,6 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         return 2
     finally:
         if live is not None:
-            live.linger(args.linger, _report)
             live.close()
     bar.close()
     title = (

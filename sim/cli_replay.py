@@ -19,6 +19,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from .executors import TrialRunner, Watch
     from .experiment import trials
     from .mjcf import model_identity
+    from .model import SimulationUnstable
 
     results = load_results(parser, args.results, "replay")
     protocol = results.protocol
@@ -41,10 +42,15 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if live is not None:
             _report(f"live view at {live.options.page_url}")
         runner = TrialRunner(protocol, Watch(None if live is None else live.options.grpc_url, recording))
-        record = runner.run(trial)
-    finally:
+        try:
+            record = runner.run(trial)
+        except SimulationUnstable as exc:
+            _report(f"{exc}; the trial could not be replayed")
+            return 1
         if live is not None:
             live.linger(args.linger, _report)
+    finally:
+        if live is not None:
             live.close()
     stored = results.records.get(trial.key)
     if stored is None:
@@ -52,10 +58,17 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     else:
         differ = [k for k in OUTCOME if stored.get(k) != record.get(k)]
         verdict = "as the results file has it" if not differ else f"unlike the results file in {', '.join(differ)}"
+    if record.get("final_error_m") is None:  # a start not over the fabric: nothing ran, nothing was recorded
+        print(
+            f"cell {trial.cell}, trial {trial.k}: its start is not over the fabric, so it counts as fallen off "
+            f"({verdict}); there is nothing to record"
+        )
+        return 0 if stored is None or verdict.startswith("as") else 1
     outcome = "fell off" if record["fell_off"] else ("success" if record["success"] else "not within ε at T")
+    where = f"recording {recording} (open it with: rerun {recording})" if recording.exists() else "no recording"
     print(
         f"cell {trial.cell}, trial {trial.k}: {outcome}, final error {record['final_error_m'] * 100:.1f} cm "
-        f"({verdict}); recording {recording} (open it with: rerun {recording})"
+        f"({verdict}); {where}"
     )
     return 0 if stored is None or verdict.startswith("as") else 1
 

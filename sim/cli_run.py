@@ -98,7 +98,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             _report,
             world=True,
         )
-        bridge.view = TrialView(view, bridge.model, bridge.data, rig, link)
+        trial_view = bridge.view = TrialView(view, bridge.model, bridge.data, rig, link, lockstep=not args.realtime)
         viewer = None
         if args.viewer:
             import mujoco.viewer
@@ -118,7 +118,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
                 f"the frame at its corners): start further in"
             )
         finally:
-            recording = view.close()
+            recording = trial_view.close()
         if viewer is not None:
             viewer.close()
         if live is not None:
@@ -195,7 +195,7 @@ def _report(text: str) -> None:
 
 def _settings(args: argparse.Namespace) -> dict:
     """What the trial was: every argument but where its outputs go and how it is watched."""
-    watching = ("out", "json", "video", "video_fps", "viewer", "live", "live_port", "bind")
+    watching = ("out", "json", "video", "video_fps", "viewer", "live", "live_port", "bind", "linger")
     return {k: v for k, v in sorted(vars(args).items()) if k not in (*watching, "func", "command", "sim_command")}
 
 

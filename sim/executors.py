@@ -77,7 +77,7 @@ class TrialRunner:
                 view.close()
 
     def _show(self, bridge, protocol: Experiment, trial: Trial):
-        """The trial's view, attached to the bridge: a RunView the caller closes."""
+        """The trial's view, attached to the bridge: a TrialView the caller closes."""
         from mantaray.host.view import RunView
 
         from .mjcf import N_ACTUATORS
@@ -97,7 +97,7 @@ class TrialRunner:
             name=f"cell{trial.cell}_trial{trial.k}",
         )
         bridge.view = TrialView(view, bridge.model, bridge.data, bridge.rig, self._link)
-        return view
+        return bridge.view
 
     def run(self, trial: Trial, protocol: Experiment | None = None) -> dict:
         """The record of one trial of protocol (default: the runner's own)."""

@@ -87,20 +87,25 @@ def test_frames_from_a_video_file_carry_the_videos_time(tmp_path):
 
 
 @pytest.mark.parametrize("calibrated", [False, True])
-def test_to_image_draws_fabric_points_where_the_camera_sees_them_and_the_detection_is_the_markers_pixel(calibrated):
-    """What the view draws the target and epsilon with: points on the markers' plane back to pixels, within a pixel
-    of the camera's own projection, for points drawn from a seed; and the detection's pixel at the object's marker."""
+def test_the_projection_draws_fabric_points_where_the_camera_sees_them_and_the_detection_is_the_markers_pixel(
+    calibrated,
+):
+    """What the view draws the target and epsilon with: points at the marker's height back to pixels, within a
+    pixel of the camera's own projection, for points drawn from a seed; and the detection's pixel at the marker."""
     rng = np.random.default_rng(5)
-    cam = camera(1.0, tilt_deg=8.0)
+    height = 0.04
+    cam = camera(1.0) if not calibrated else camera(1.0, tilt_deg=8.0)  # homography mode: a camera straight above
     calibration = T.Calibration(intrinsics(), np.zeros(5)) if calibrated else None
-    tracker = T.Tracker(LAYOUT, marker_height_m=0.0, calibration=calibration)
-    assert not tracker.fitted
+    tracker = T.Tracker(LAYOUT, marker_height_m=height, calibration=calibration)
+    assert tracker.projection(height) is None
     truth = rng.uniform(-0.2, 0.2, 2)
-    obs = tracker.observe(render(truth, cam=cam, rng=rng), capture_time_s=1.0)
-    assert obs.visible and tracker.fitted
+    obs = tracker.observe(render(truth, marker_height_m=height, cam=cam, rng=rng), capture_time_s=1.0)
+    project = tracker.projection(height)
+    assert obs.visible and project is not None
     points = rng.uniform(-0.25, 0.25, (50, 2))
-    expected, _ = cv2.projectPoints(np.hstack([points, np.zeros((50, 1))]), *cam, intrinsics(), None)
-    error_px = np.hypot(*(tracker.to_image(points) - expected.reshape(-1, 2)).T)
+    expected, _ = cv2.projectPoints(np.hstack([points, np.full((50, 1), height)]), *cam, intrinsics(), None)
+    error_px = np.hypot(*(project(points) - expected.reshape(-1, 2)).T)
     assert error_px.max() < 1.0, error_px.max()
-    marker_px, _ = cv2.projectPoints(np.array([[*truth, 0.0]]), *cam, intrinsics(), None)
+    marker_px, _ = cv2.projectPoints(np.array([[*truth, height]]), *cam, intrinsics(), None)
     assert np.hypot(*(np.asarray(obs.pixel) - marker_px.reshape(2))) < 1.0
+    assert np.hypot(*(project(np.array([obs.xy_m]))[0] - obs.pixel)) < 1.0  # on target, drawn on the detection

@@ -24,6 +24,10 @@ class _Log:
 class _Session:
     def __init__(self) -> None:
         self.targets: list[tuple[float, float]] = []
+        self.estopped = False
+
+    def emergency_stop(self) -> None:
+        self.estopped = True
 
     def set_target(self, x: float, y: float) -> None:
         self.targets.append((x, y))
@@ -41,7 +45,7 @@ def _type(run: RigRun, keys: str) -> None:
 
 
 @settings(max_examples=300, deadline=None)
-@given(st.text(alphabet=st.characters(blacklist_characters="\r\n\x1b"), max_size=30))
+@given(st.text(alphabet="0123456789.,+-", max_size=30))
 def test_any_typed_text_is_taken_when_it_is_a_point_on_the_fabric_and_refused_in_words_otherwise(text):
     run = _run()
     _type(run, "t" + text + "\r")
@@ -60,6 +64,12 @@ def test_any_typed_text_is_taken_when_it_is_a_point_on_the_fabric_and_refused_in
         assert "refused" in events[0] and "the run goes on" in events[0]
 
 
+def test_backspace_takes_a_typed_character_back():
+    run = _run()
+    _type(run, "t0.19\x7f\x7f2,0\r")
+    assert run.session.targets == [(0.2, 0.0)]
+
+
 def test_escape_drops_a_target_being_typed_and_the_next_key_counts_again():
     run = _run()
     _type(run, "t0.1,0\x1b")
@@ -71,3 +81,23 @@ def test_a_run_along_a_path_refuses_a_typed_target():
     _type(run, "t0.1,0\r")
     assert run.session.targets == []
     assert "follows a path" in run.log.lines[-1][1]["text"]
+
+
+class _Keys:
+    def __init__(self, pressed: str) -> None:
+        self.pressed = pressed
+
+    def read(self) -> str:
+        pressed, self.pressed = self.pressed, ""
+        return pressed
+
+
+@given(st.text(alphabet="0123456789.,+-", max_size=10), st.sampled_from(["e", " ", "s", "S", "E"]))
+def test_a_stop_key_while_a_target_is_typed_still_stops_and_drops_the_target(typed, key):
+    from mantaray.host.rig_run import EMERGENCY_STOP, KEYS
+
+    run = _run()
+    run._keys = _Keys("t" + typed + key)
+    assert run._stopped_by_key()
+    assert run.outcome == KEYS[key.lower()] and run._typed is None and run.session.targets == []
+    assert run.session.estopped == (KEYS[key.lower()] == EMERGENCY_STOP)

@@ -427,3 +427,25 @@ def test_a_viewer_that_comes_and_goes_mid_run_changes_nothing_in_the_run(tmp_pat
     a, b = np.load(json.loads(out)["trajectory"]), np.load(json.loads(quiet.stdout)["trajectory"])
     for key in a.files:
         np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+
+
+def test_a_bind_address_not_of_this_machine_is_refused_in_one_line(tmp_path):
+    done = subprocess.run(
+        [*RUN, "--duration", "0.2", "--out", str(tmp_path), "--live", "--bind", "192.0.2.1"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 2 and "--bind takes an address of this machine" in done.stderr
+    assert "Traceback" not in done.stderr
+
+
+def test_a_state_or_fault_this_host_does_not_know_is_shown_as_its_number(tmp_path):
+    from rerun.chunk import RrdReader
+
+    said = []
+    view = RunView("mantaray_test", tmp_path / "r.rrd", None, {}, 4, (0.5, 0.5), said.append)
+    view.frame(0.0, (0.0, 0.0), (0.1, 0.1), 0.02, m.Telemetry(state=200, faults=0x8000))
+    assert view.close() == tmp_path / "r.rrd" and said == []
+    (chunk,) = [c for c in RrdReader(tmp_path / "r.rrd").stream().to_chunks() if "supervisor" in str(c.entity_path)]
+    assert chunk.to_record_batch().column("TextLog:text").to_pylist() == [["state 200, faults 0x8000"]]
