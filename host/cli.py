@@ -14,6 +14,7 @@ from mantaray.arguments import (
     controller_settings,
     number,
     parse_gains,
+    reporter,
     start_live,
 )
 from mantaray.outputs import IMAGE_SUFFIXES, OutputError, writable_dir, writable_file
@@ -29,19 +30,16 @@ def _half_module_m() -> tuple[float, float]:
     return m.Configure.module_x / 2, m.Configure.module_y / 2
 
 
-def _report(text: str) -> None:
-    print(f"mantaray rig: {text}", file=sys.stderr)
+_report = reporter("rig")
 
 
 def _xy(text: str) -> tuple[float, float]:
+    from .rig_run import fabric_point
+
     try:
-        x, y = (float(v) for v in text.replace(",", " ").split())
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected two numbers X,Y in metres, got {text!r}") from None
-    hx, hy = _half_module_m()
-    if not (math.isfinite(x) and math.isfinite(y)) or abs(x) > hx or abs(y) > hy:
-        raise argparse.ArgumentTypeError(f"{text!r} is not on the fabric (|x| <= {hx:g} m, |y| <= {hy:g} m)")
-    return x, y
+        return fabric_point(text, _half_module_m())
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def _hsv_range(text: str):

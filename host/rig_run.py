@@ -33,6 +33,18 @@ BACKSPACE = ("\x7f", "\b")
 EXIT_STATUS = {"reached": 0, "interrupted": 130}  # every other outcome: 1
 
 
+def fabric_point(text: str, half_m: tuple[float, float]) -> tuple[float, float]:
+    """X,Y [m] as typed (comma or space between): a point on the fabric (|x| <= half_m[0], |y| <= half_m[1]), or a
+    ValueError that says what is wrong in words."""
+    try:
+        x, y = (float(v) for v in text.replace(",", " ").split())
+    except ValueError:
+        raise ValueError(f"expected two numbers X,Y in metres, got {text!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y)) or abs(x) > half_m[0] or abs(y) > half_m[1]:
+        raise ValueError(f"{text!r} is not on the fabric (|x| <= {half_m[0]:g} m, |y| <= {half_m[1]:g} m)")
+    return x, y
+
+
 @dataclass(frozen=True)
 class Course:
     """Where the object is sent: a fixed target, or round a circle about it (--path circle, the paper's Fig. 1A)."""
@@ -227,20 +239,13 @@ class RigRun:
     def new_target(self, text: str) -> bool:
         """A target typed while the run goes on, as X,Y [m]: sent to the firmware when it lies on the fabric; a
         mistake is reported (terminal, log, view) and the run goes on to the old target."""
-        half = self.rules.half_module_m
-        try:
-            x, y = (float(v) for v in text.replace(",", " ").split())
-        except ValueError:
-            self.report(f"target {text!r} refused: type two numbers X,Y in metres; the run goes on")
-            return False
         if self.course.moving:
             self.report("target refused: the run follows a path, which moves the target itself; the run goes on")
             return False
-        if not (math.isfinite(x) and math.isfinite(y)) or abs(x) > half[0] or abs(y) > half[1]:
-            self.report(
-                f"target {x:g},{y:g} refused: outside the fabric (|x| <= {half[0]:g} m, |y| <= {half[1]:g} m); "
-                f"the run goes on"
-            )
+        try:
+            x, y = fabric_point(text, self.rules.half_module_m)
+        except ValueError as exc:
+            self.report(f"target refused: {exc}; the run goes on")
             return False
         self.session.set_target(x, y)
         self.course = Course((x, y))

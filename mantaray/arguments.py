@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from collections.abc import Callable
 
 from mantaray.protocol import messages as m
@@ -90,6 +91,15 @@ def add_controller_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FILE",
         help="a controller's settings (TOML, as mantaray sim tune writes: host/controller_settings.py)",
     )
+
+
+def reporter(command: str) -> Callable[[str], None]:
+    """What a command says on stderr while it works, each line named by the command (`mantaray COMMAND: ...`)."""
+
+    def report(text: str) -> None:
+        print(f"mantaray {command}: {text}", file=sys.stderr)
+
+    return report
 
 
 def add_view_arguments(parser: argparse.ArgumentParser) -> None:

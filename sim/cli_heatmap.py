@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from mantaray.arguments import controller_settings, start_live
+from mantaray.arguments import controller_settings, reporter, start_live
 from mantaray.outputs import writable_dir
 
 from .cli_common import check_ray, interruptible, output, plant_for_settings, workers
@@ -124,8 +124,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     return 0
 
 
-def _report(text: str) -> None:
-    print(f"mantaray sim heatmap: {text}", file=sys.stderr)
+_report = reporter("sim heatmap")
 
 
 def heatmap_outputs(results, out: Path, title: str) -> dict:

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
-from mantaray.arguments import start_live
+from mantaray.arguments import reporter, start_live
 from mantaray.outputs import writable_dir
 
 from .cli_common import load_results, output
@@ -73,5 +72,4 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     return 0 if stored is None or verdict.startswith("as") else 1
 
 
-def _report(text: str) -> None:
-    print(f"mantaray sim replay: {text}", file=sys.stderr)
+_report = reporter("sim replay")

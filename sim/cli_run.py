@@ -10,7 +10,7 @@ import os
 import sys
 from pathlib import Path
 
-from mantaray.arguments import controller_settings, start_live
+from mantaray.arguments import controller_settings, reporter, start_live
 from mantaray.outputs import writable_dir
 from mantaray.protocol import messages as m
 
@@ -189,8 +189,7 @@ def _inside(parser: argparse.ArgumentParser, name: str, xy: tuple[float, float],
         parser.error(f"{name} {xy[0]:g},{xy[1]:g} is outside the fabric (|x| <= {half[0]:g} m, |y| <= {half[1]:g} m)")
 
 
-def _report(text: str) -> None:
-    print(f"mantaray sim run: {text}", file=sys.stderr)
+_report = reporter("sim run")
 
 
 def _settings(args: argparse.Namespace) -> dict:

@@ -538,7 +538,7 @@ def test_a_key_during_the_run_stops_it_or_latches_the_emergency_stop(still_video
     "typed, said, target",
     [
         (b"t-0.1,0.05\r", "new target -0.100,+0.050 m", (-0.1, 0.05)),
-        (b"t0.9,0\r", "target 0.9,0 refused: outside the fabric", (-0.2, 0.2)),
+        (b"t0.9,0\r", "target refused: '0.9,0' is not on the fabric", (-0.2, 0.2)),
     ],
 )
 def test_a_target_typed_during_the_run_is_taken_or_refused_and_the_run_goes_on(
