@@ -397,7 +397,7 @@ def test_a_viewer_that_comes_and_goes_mid_run_changes_nothing_in_the_run(tmp_pat
 
     port = _free_ports()
     options = LiveOptions(web_port=port)
-    trial = ["--duration", "6", "--seed", "3"]
+    trial = ["--duration", "4", "--seed", "3"]
     run = subprocess.Popen(
         [*RUN, *trial, "--out", str(tmp_path / "live"), "--live", "--live-port", str(port)],
         stdout=subprocess.PIPE,
