@@ -94,17 +94,17 @@ class LiveOptions:
 
     @property
     def grpc_url(self) -> str:
-        return f"rerun+http://{_url_host(self.host)}:{self.grpc_port}/proxy"
+        """Where this machine reaches the data server (a wildcard bind is reached on the loopback)."""
+        return f"rerun+http://{self._reach}:{self.grpc_port}/proxy"
 
     @property
     def page_url(self) -> str:
-        host = LOOPBACK if self.host in ("0.0.0.0", "::") else _url_host(self.host)
-        proxy = f"rerun+http://{host}:{self.grpc_port}/proxy"
-        return f"http://{host}:{self.web_port}/?url={proxy.replace('+', '%2B')}"
+        return f"http://{self._reach}:{self.web_port}/?url={self.grpc_url.replace('+', '%2B')}"
 
-
-def _url_host(host: str) -> str:
-    return f"[{host}]" if ":" in host else host
+    @property
+    def _reach(self) -> str:
+        host = LOOPBACK if self.host in ("0.0.0.0", "::") else self.host
+        return f"[{host}]" if ":" in host else host
 
 
 class LiveServer:
