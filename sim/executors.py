@@ -239,7 +239,8 @@ class RayPool:
         import ray
         from ray.util import ActorPool
 
-        if not ray.is_initialized():
+        self._started = not ray.is_initialized()  # a Ray of this process's own, which ends with the pool
+        if self._started:
             try:
                 ray.init(
                     address=address or "local", include_dashboard=False, logging_level="ERROR", log_to_driver=False
@@ -255,7 +256,10 @@ class RayPool:
         return self
 
     def __exit__(self, *exc) -> None:
-        pass
+        if self._started:  # its processes would otherwise outlive the work for the rest of this process
+            import ray
+
+            ray.shutdown()
 
     def imap(self, jobs: list[tuple[Experiment, Trial]], ordered: bool = False) -> Iterator[dict]:
         """Records as the jobs finish (in any order), or in the jobs' order."""

@@ -389,6 +389,10 @@ def test_any_job_runs_on_the_pools_own_trial_runners_in_order(pool):
         assert workers.map_calls(_runner_kind_and_double, [1, 2, 3, 4]) == [
             ("TrialRunner", 2 * x) for x in (1, 2, 3, 4)
         ]
+    if pool == "ray":  # the Ray instance the pool started ends with it, not with this process
+        import ray
+
+        assert not ray.is_initialized()
 
 
 # ------------------------------------------------------------------------------------------- CLI end to end
