@@ -58,13 +58,29 @@ def _scalars(values: list) -> np.ndarray:
 
 
 def _free_ports() -> int:
-    """A web port whose next port is free too, drawn from the seed."""
+    """A web port whose next port is free too, drawn from the seed below the kernel's ephemeral ports (32768 and up),
+    which any outgoing connection may take between this check and the server's bind."""
     rng = random.Random(SEED)
     for _ in range(200):
-        port = rng.randrange(20000, 60000)
+        port = rng.randrange(20000, 32700)
         if port_free("127.0.0.1", port) and port_free("127.0.0.1", port + 1):
             return port
     raise RuntimeError("no two free ports in a row")
+
+
+def _stopped(process: subprocess.Popen | None) -> bool:
+    """End a process the test started as Ctrl-C would; whether it ended so within 30 s (else it is killed, so that a
+    failed test leaves nothing holding its ports)."""
+    if process is None or process.poll() is not None:
+        return True
+    process.send_signal(signal.SIGINT)
+    try:
+        process.wait(timeout=30)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+        return False
+    return True
 
 
 @pytest.fixture(scope="module")
@@ -183,10 +199,7 @@ def test_a_live_run_reaches_a_browser_and_the_viewers_own_client_unchanged(recor
             assert np.all(np.diff(times) > 0), f"{entity}: timestamps not increasing"
             np.testing.assert_array_equal(times, written[entity][0], err_msg=entity)
     finally:
-        for process in (run, client):
-            if process is not None and process.poll() is None:
-                process.send_signal(signal.SIGINT)
-                process.wait(timeout=30)
+        assert all([_stopped(process) for process in (run, client)]), "a process did not end on Ctrl-C within 30 s"
     live_summary = json.loads(run.stdout.read())
     a, b = np.load(live_summary["trajectory"]), np.load(summary["trajectory"])
     for key in a.files:  # a browser and a client that came and went changed nothing in the run
@@ -381,10 +394,7 @@ def test_a_heatmaps_live_view_shows_one_workers_trials_each_as_its_own_recording
             pass
         time.sleep(2)
     finally:
-        for process in (client, run):
-            if process is not None and process.poll() is None:
-                process.send_signal(signal.SIGINT)
-                process.wait(timeout=30)
+        assert all([_stopped(process) for process in (client, run)]), "a process did not end on Ctrl-C within 30 s"
     shown = {e.recording_id for e in RrdReader(tmp_path / "client.rrd").recordings()}
     every = {f"cell{c}_trial{k}" for c in range(4) for k in range(2)}
     assert shown and shown < every  # one worker's share of the 8 trials, not the other's
