@@ -13,7 +13,7 @@ from .objects import ASSETS
 from .rig import Rig
 
 MODEL_FILE = "manta_ray.xml"
-FABRIC = "fabric"  # flexcomp name; its vertex bodies are fabric_<id>
+FABRIC = "fabric"  # the flex; its vertex bodies and their sites are fabric_<id>
 OBJECT = "object"  # the object's body and geom
 # The object's six dofs: slides along world x, y, z [m], then a ball joint (its rotation, which alone is damped).
 # MuJoCo steps them bit for bit as it steps a free joint (tests/test_sim_model.py), whose MJCF damping would
@@ -28,6 +28,8 @@ N_ACTUATORS = 4
 CORNERS = ((-1, -1), (1, -1), (-1, 1), (1, 1))
 POST_OFFSET_M = 0.03  # [m] visual frame posts stand this far outboard of each corner (no collisions)
 CARRIAGE_HALF_SIZE_M = (0.02, 0.02, 0.03)  # [m] visual carriage block (no collisions; mass from the rig)
+VERTEX_INERTIA_BOX_M = 0.01  # [m] side of the box whose inertia each fabric vertex is given (as flexcomp's default)
+HIDDEN_GROUP = 3  # visual group MuJoCo's renderer hides by default: the threads, which the flex already draws
 OFFSCREEN_PX = (1920, 1920)  # [px] offscreen framebuffer: the largest image the renderer can make
 
 
@@ -42,7 +44,7 @@ def _exact(*values: float) -> str:
 
 
 def corner_vertex(resolution: int, actuator: int) -> int:
-    """Flex vertex id at actuator's corner: flexcomp grids number vertices ix * N + iy (ix along x)."""
+    """Flex vertex id at actuator's corner: vertices are numbered ix * N + iy (ix along x, grid_points)."""
     sx, sy = CORNERS[actuator]
     ix = 0 if sx < 0 else resolution - 1
     iy = 0 if sy < 0 else resolution - 1
@@ -92,17 +94,96 @@ def alternating_elements(resolution: int) -> np.ndarray:
 def grid_points(resolution: int, spacing_m: float) -> np.ndarray:
     """(N*N, 3) vertex positions [m] of the flat sheet around its centre, numbered ix * N + iy (ix along x).
 
-    The spacing is taken as written to 6 digits, like every length in these files (it is where flexcomp's grid
-    put the vertices, so trials made on that grid step the same).
+    The spacing is taken as written to 6 digits, like every length in these files.
     """
     spacing = float(_v(spacing_m))
     along = [spacing * (i - (resolution - 1) / 2) for i in range(resolution)]
     return np.array([(x, y, 0.0) for x in along for y in along])
 
 
+def threads(resolution: int, spacing_m: float) -> list[tuple[int, int, float]]:
+    """(vertex, vertex, rest length [m]) of the sheet's threads (Fabric.stretch "threads"): every edge of the grid and
+    both diagonals of every cell. Each is a tension-only length limit: it holds the sheet's stretch and shear, and
+    lets it buckle under compression as cloth does (sim/README.md, Convergence, item 7)."""
+    n, spacing = resolution, float(_v(spacing_m))
+    diagonal = float(_v(spacing * np.sqrt(2.0)))
+    out = []
+    for ix in range(n):
+        for iy in range(n):
+            v = ix * n + iy
+            if ix + 1 < n:
+                out.append((v, v + n, spacing))
+            if iy + 1 < n:
+                out.append((v, v + 1, spacing))
+            if ix + 1 < n and iy + 1 < n:
+                out += [(v, v + n + 1, diagonal), (v + 1, v + n, diagonal)]
+    return out
+
+
+def _fabric_xml(rig: Rig) -> tuple[str, str]:
+    """The sheet as MJCF: what goes in the worldbody, and what follows it (before the equalities).
+
+    With edges, a flexcomp: its vertex bodies, and its flex whose edges hold their lengths both ways. With threads,
+    the same bodies written out (each with a site for its threads), the flex without edge constraints, and one
+    tension-only tendon per thread. Either way each vertex is a point mass on three slides, the whole sheet's mass
+    shared evenly, and the flex's triangles carry the contacts and the bending."""
+    fab, c = rig.fabric, rig.contact
+    n, z0 = fab.resolution, rig.frame.z0_m
+    elements = " ".join(map(str, alternating_elements(n).ravel()))
+    contact = (
+        f'<contact condim="{c.condim}" friction="{_v(*c.friction)}" solref="{_v(*c.solref)}"\n'
+        f'               solimp="{_v(*c.solimp)}" selfcollide="none"/>'
+    )
+    elasticity = (
+        f'<elasticity young="{_v(fab.young_pa)}" poisson="{_v(fab.poisson)}" thickness="{_v(fab.thickness_m)}"\n'
+        f'                  damping="{_v(fab.damping_s)}" elastic2d="bend"/>'
+    )
+    solref = _v(fab.edge_timeconst_s, fab.edge_solref[1])
+    if fab.stretch == "edges":
+        return (
+            f"""    <flexcomp name="{FABRIC}" type="direct" dim="2" dof="full" pos="{_v(0, 0, z0)}"
+              point="{_exact(*grid_points(n, fab.spacing_m).ravel())}"
+              element="{elements}"
+              radius="{_v(fab.radius_m)}" mass="{_v(fab.mass_kg)}" rgba="0.25 0.45 0.85 1">
+      {contact}
+      <edge equality="true" solref="{solref}" solimp="{_v(*fab.edge_solimp)}"/>
+      {elasticity}
+    </flexcomp>""",
+            "",
+        )
+    mass = fab.mass_kg / n**2
+    inertia = mass * VERTEX_INERTIA_BOX_M**2 / 6  # [kg m^2] required by MuJoCo, unused: a vertex only slides
+    bodies = "\n".join(
+        f'    <body name="{FABRIC}_{i}" pos="{_exact(x, y, z0 + z)}">\n'
+        f'      <inertial pos="0 0 0" mass="{_v(mass)}" diaginertia="{_v(inertia, inertia, inertia)}"/>\n'
+        f'      <joint type="slide" axis="1 0 0"/>\n      <joint type="slide" axis="0 1 0"/>\n'
+        f'      <joint type="slide" axis="0 0 1"/>\n      <site name="{FABRIC}_{i}"/>\n    </body>'
+        for i, (x, y, z) in enumerate(grid_points(n, fab.spacing_m))
+    )
+    limit = f'solreflimit="{solref}" solimplimit="{_v(*fab.edge_solimp)}" group="{HIDDEN_GROUP}"'
+    tendons = "\n".join(
+        f'    <spatial range="0 {_v(length)}" {limit}><site site="{FABRIC}_{a}"/><site site="{FABRIC}_{b}"/></spatial>'
+        for a, b, length in threads(n, fab.spacing_m)
+    )
+    return bodies, (
+        f"""  <deformable>
+    <flex name="{FABRIC}" dim="2" radius="{_v(fab.radius_m)}" rgba="0.25 0.45 0.85 1"
+          body="{" ".join(f"{FABRIC}_{i}" for i in range(n * n))}"
+          element="{elements}">
+      {contact}
+      {elasticity}
+    </flex>
+  </deformable>
+  <tendon>
+{tendons}
+  </tendon>
+"""
+    )
+
+
 def model_xml(rig: Rig) -> str:
     """The rig alone: options, frame, four actuated carriages, the fabric and its corner welds."""
-    f, a, fab, c, s = rig.frame, rig.actuators, rig.fabric, rig.contact, rig.solver
+    f, a, fab, s = rig.frame, rig.actuators, rig.fabric, rig.solver
     hx, hy, z0 = f.size_x_m / 2, f.size_y_m / 2, f.z0_m
     post_top = z0 + a.range_m + 0.05
     posts, carriages, welds, actuators = [], [], [], []
@@ -139,6 +220,7 @@ def model_xml(rig: Rig) -> str:
         f'    <geom class="frame" type="box" size="{_v(hx + 0.04, 0.01, 0.01)}" pos="{_v(0, sy * (hy + POST_OFFSET_M), post_top)}"/>'
         for sy in (-1, 1)
     ]
+    fabric, after_worldbody = _fabric_xml(rig)
     nl = "\n"
     return f"""<!-- MANTA-RAY rig, generated by mantaray.sim.mjcf from sim/rig.py: do not edit by hand. -->
 <mujoco model="manta_ray">
@@ -155,18 +237,9 @@ def model_xml(rig: Rig) -> str:
   <worldbody>
 {nl.join(posts + rails)}
 {nl.join(carriages)}
-    <flexcomp name="{FABRIC}" type="direct" dim="2" dof="full" pos="{_v(0, 0, z0)}"
-              point="{_exact(*grid_points(fab.resolution, fab.spacing_m).ravel())}"
-              element="{" ".join(map(str, alternating_elements(fab.resolution).ravel()))}"
-              radius="{_v(fab.radius_m)}" mass="{_v(fab.mass_kg)}" rgba="0.25 0.45 0.85 1">
-      <contact condim="{c.condim}" friction="{_v(*c.friction)}" solref="{_v(*c.solref)}"
-               solimp="{_v(*c.solimp)}" selfcollide="none"/>
-      <edge equality="true" solref="{_v(fab.edge_timeconst_s, fab.edge_solref[1])}" solimp="{_v(*fab.edge_solimp)}"/>
-      <elasticity young="{_v(fab.young_pa)}" poisson="{_v(fab.poisson)}" thickness="{_v(fab.thickness_m)}"
-                  damping="{_v(fab.damping_s)}" elastic2d="bend"/>
-    </flexcomp>
+{fabric}
   </worldbody>
-  <equality>
+{after_worldbody}  <equality>
 {nl.join(welds)}
   </equality>
   <actuator>

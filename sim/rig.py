@@ -85,9 +85,13 @@ FIDELITIES = {"fast": Fidelity(11, 0.002), "reference": Fidelity(15, 0.0005)}
 DEFAULT_FIDELITY = FIDELITIES["reference"]
 
 
+STRETCH_MODELS = ("edges", "threads")  # Fabric.stretch's choices (sim/plant.toml, fabric.stretch)
+
+
 @dataclass(frozen=True)
 class Fabric:
-    """The polyester sheet: a MuJoCo flexcomp grid (dim 2, full dofs), welded at its four corners to the carriages."""
+    """The polyester sheet: a MuJoCo flex grid of point masses (dim 2, full dofs), welded at its four corners to the
+    carriages; its length held by its edges or by threads (stretch)."""
 
     size_m: float = _d("fabric.size_m")  # [m] side of the square sheet (the paper: simulation 0.5, rig 0.6)
     resolution: int = DEFAULT_FIDELITY.resolution  # [vertices per side] odd, so the alternating mesh is
@@ -98,8 +102,8 @@ class Fabric:
     thickness_m: float = _d("fabric.thickness_m")  # [m]
     damping_s: float = _d("fabric.damping_s")  # [s] elastic (Rayleigh, stiffness-proportional) damping
     radius_m: float = _d("fabric.radius_m")  # [m] collision thickness of the triangles
-    edge_solref: tuple[float, float] = (_d("fabric.edge_solref[0]"), 1.0)  # [s, -] edge-length equality: time
-    # constant, critical damping
+    edge_solref: tuple[float, float] = (_d("fabric.edge_solref[0]"), 1.0)  # [s, -] the edges' length equality or the
+    # threads' length limit (stretch): time constant, critical damping
     edge_solimp: tuple[float, float, float] = (
         _d("fabric.edge_solimp[0]"),
         _d("fabric.edge_solimp[1]"),
@@ -109,12 +113,17 @@ class Fabric:
         _d("fabric.corner_weld_solref[0]"),
         1.0,
     )  # [s, -] corner-to-carriage welds
+    stretch: str = _d(
+        "fabric.stretch"
+    )  # what holds the sheet's length: "edges" (two-sided) or "threads" (tension only)
     corner_clamp_m: float = _d("fabric.corner_clamp_m")  # [m] length of each edge, from its corner, the corner's clamp
     # holds straight at the carriage (0: a point attachment)
 
     def __post_init__(self) -> None:
         if self.resolution < 3 or self.resolution % 2 == 0:
             raise ValueError(f"fabric resolution must be odd and >= 3, got {self.resolution}")
+        if self.stretch not in STRETCH_MODELS:
+            raise ValueError(f"fabric stretch must be one of {', '.join(STRETCH_MODELS)}, got {self.stretch!r}")
 
     @property
     def spacing_m(self) -> float:

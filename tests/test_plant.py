@@ -43,9 +43,9 @@ def test_the_rig_takes_its_defaults_from_the_table():
 @given(data=st.data())
 def test_a_plant_sets_any_value_within_range_on_the_field_it_names(data):
     p = data.draw(st.sampled_from(PHYSICAL))
-    value = data.draw(st.floats(p.low, p.high, allow_nan=False))
+    value = data.draw(st.sampled_from(p.choices) if p.choices else st.floats(p.low, p.high, allow_nan=False))
     rig = Plant().set({p.key: value}).rig()
-    assert _rig_value(rig, p) == pytest.approx(value)
+    assert _rig_value(rig, p) == (value if p.choices else pytest.approx(value))
 
 
 @pytest.mark.parametrize(

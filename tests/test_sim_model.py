@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import mujoco
 import numpy as np
 import pytest
@@ -9,7 +11,7 @@ import pytest
 from mantaray.sim import mjcf as J
 from mantaray.sim import model as M
 from mantaray.sim.objects import OBJECTS
-from mantaray.sim.rig import Rig
+from mantaray.sim.rig import STRETCH_MODELS, Rig
 
 RIG = Rig()
 REST_SPEED_M_PER_S = 0.02  # [m/s] "at rest" for the test: well below rolling, above the fabric's jitter
@@ -71,9 +73,11 @@ def _same_start(source: tuple[mujoco.MjModel, mujoco.MjData], model: mujoco.MjMo
     return data
 
 
-def test_the_written_scene_is_the_model_that_runs(tmp_path):
+@pytest.mark.parametrize("stretch", STRETCH_MODELS)
+def test_the_written_scene_is_the_model_that_runs(tmp_path, stretch):
     rng = np.random.default_rng(13)
     rig = RIG.with_object(str(rng.choice(list(OBJECTS))))
+    rig = dataclasses.replace(rig, fabric=dataclasses.replace(rig.fabric, stretch=stretch))
     loaded, data = M.load(rig)
     written = mujoco.MjModel.from_xml_path(str(J.write_model(rig, tmp_path)))
     for name in dir(loaded):  # every compiled array but the keyframe load() fills and the asset paths (other folders)

@@ -1,0 +1,76 @@
+"""The sheet's two stretch models (fabric.stretch): edges hold their length both ways, threads only pull."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from mantaray.sim import mjcf as J
+from mantaray.sim import model as M
+from mantaray.sim.parameters import ParameterError
+from mantaray.sim.plant import Plant
+
+RESOLUTION = 11  # [vertices per side] the cheapest mesh: what is tested holds on every one
+STEP_S = 0.0005  # [s]
+
+
+def _loaded(stretch: str, resolution: int = RESOLUTION) -> tuple:
+    rig = Plant("polyester").set({"fabric.stretch": stretch}).rig(resolution=resolution, timestep_s=STEP_S)
+    return (rig, *M.load(rig))
+
+
+def _thread_strain(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+    """Each thread's length over its rest length (its range's top), minus 1."""
+    return data.ten_length / model.tendon_range[:, 1] - 1
+
+
+def test_threads_join_every_grid_neighbour_and_both_diagonals_of_every_cell_and_nothing_else_changes():
+    rig, threads, _ = _loaded("threads")
+    _, edges, _ = _loaded("edges")
+    n, spacing = RESOLUTION, rig.fabric.spacing_m
+    pairs = {tuple(sorted((a, b))): length for a, b, length in J.threads(n, spacing)}
+    assert len(pairs) == threads.ntendon == 2 * n * (n - 1) + 2 * (n - 1) ** 2 and edges.ntendon == 0
+    for (a, b), length in pairs.items():  # each joins its vertices at their distance on the flat sheet
+        (ia, ja), (ib, jb) = divmod(a, n), divmod(b, n)
+        assert max(abs(ia - ib), abs(ja - jb)) == 1
+        assert length == pytest.approx(spacing * np.hypot(ia - ib, ja - jb), rel=1e-5)
+    assert np.all(threads.tendon_limited == 1) and np.all(threads.tendon_range[:, 0] == 0)
+    flex = M._flex_id(threads)
+    for name in (
+        "flex_elem",
+        "flex_radius",
+        "flex_condim",
+        "flex_friction",
+        "flex_stiffness",
+        "flex_bending",
+        "flex_damping",
+    ):
+        assert np.array_equal(getattr(threads, name), getattr(edges, name)), name
+    bodies = [threads.body(f"{J.FABRIC}_{i}").id for i in range(n * n)]
+    assert np.allclose(threads.body_mass[bodies], rig.fabric.mass_kg / n**2)
+    assert threads.flex_edgeequality[flex] == 0 and edges.flex_edgeequality[M._flex_id(edges)] == 1
+
+
+def test_a_settled_sheet_of_threads_is_taut_where_it_pulls_and_slack_where_it_would_push():
+    _, model, data = _loaded("threads")
+    strain = _thread_strain(model, data)
+    assert strain.max() < 5e-4  # a taut thread stretches less than 0.05 %
+    assert (strain < -0.01).mean() > 0.1  # and many are more than 1 % slack: the sheet buckles there
+
+
+def test_the_sheets_lowest_point_is_the_same_on_two_meshes_with_threads_and_not_with_edges():
+    """sim/README.md, Convergence, item 7: threads sag 92.9 and 93.2 mm on 11 and 15 vertices a side; edges 83.9
+    and 82.2, and 87.8 on 21 (benchmarks/mesh_statics.py)."""
+    sag = {}
+    for stretch in ("threads", "edges"):
+        for n in (11, 15):
+            rig, model, data = _loaded(stretch, n)
+            sag[stretch, n] = rig.frame.z0_m - M.fabric_vertices(model, data)[:, 2].min()
+    assert sag["threads", 11] == pytest.approx(sag["threads", 15], abs=0.001)
+    assert abs(sag["edges", 11] - sag["edges", 15]) > 0.001
+
+
+def test_a_stretch_model_that_is_not_one_is_refused():
+    with pytest.raises(ParameterError, match="fabric.stretch must be one of edges, threads"):
+        Plant("polyester").set({"fabric.stretch": "wool"})
