@@ -28,7 +28,8 @@ COMMITTED = REPO / "docs" / "results" / "fidelity"
 TRIALS = REPO / "out" / "fidelity" / "trials"
 CASCADE = "docs/results/tune/sphere_cascade/settings.toml"
 ARMS = {"paper": ("manhattan", CASCADE), "polyester": ("manhattan", "euclidean")}
-GATES = {  # name: (plant, candidate, finer), in the order they run
+THREADS = (("fabric.stretch", "threads"),)  # the sheet held by tension-only threads (sim/README.md, Convergence 7)
+GATES = {  # name: (plant, candidate, finer[, values fixed over the plant]), in the order they run
     "paper_15x15_2ms": ("paper", "15:0.002", "15:0.001"),
     "paper_11x11_2ms": ("paper", "11:0.002", "15:0.001"),
     "paper_11x11_1ms": ("paper", "11:0.001", "15:0.001"),
@@ -41,12 +42,14 @@ GATES = {  # name: (plant, candidate, finer), in the order they run
     "paper_15x15_1ms_vs_21x21": ("paper", "15:0.001", "21:0.001"),
     "polyester_15x15_0.5ms_vs_21x21": ("polyester", "15:0.0005", "21:0.0005"),  # the reference's mesh (no clamp)
     "polyester_15x15_0.25ms_vs_0.5ms": ("polyester", "15:0.00025", "15:0.0005"),  # the reference's step
+    "polyester_threads_15x15_0.5ms_vs_21x21": ("polyester", "15:0.0005", "21:0.00025", THREADS),  # threads' mesh
 }
 
 
 def command(name: str, jobs: int | None) -> list[str]:
-    plant, candidate, finer = GATES[name]
+    plant, candidate, finer, *fixed = GATES[name]
     arms = [a for arm in ARMS[plant] for a in ("--controller", arm)]
+    sets = [a for key, value in (fixed[0] if fixed else ()) for a in ("--set", f"{key}={value}")]
     return [
         "mantaray",
         "sim",
@@ -57,6 +60,7 @@ def command(name: str, jobs: int | None) -> list[str]:
         finer,
         "--plant",
         plant,
+        *sets,
         *arms,
         "--trials-dir",
         str(TRIALS.relative_to(REPO)),
@@ -102,7 +106,7 @@ def table() -> str:
         "flips fell | flips within ε | verdict |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for name, (plant, _, _) in GATES.items():
+    for name, (plant, _, _, *fixed) in GATES.items():
         path = COMMITTED / name / "report.json"
         if not path.exists():
             continue
@@ -117,7 +121,7 @@ def table() -> str:
 
         verdict = r["verdict"] or f"incomplete ({r['pairs']} of {r['expected_pairs']})"
         rows.append(
-            f"| {plant} | {r['candidate']} | {r['finer']} | {r['pairs']} | {rates('reached')} | "
+            f"| {plant}{''.join(f', {v}' for _, v in (fixed[0] if fixed else ()))} | {r['candidate']} | {r['finer']} | {r['pairs']} | {rates('reached')} | "
             f"{rates('fell_off')} | {rates('success')} | {flips('reached')} | {flips('fell_off')} | "
             f"{flips('success')} | [{verdict}]({name}/report.md) |"
         )

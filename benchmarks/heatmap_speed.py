@@ -1,7 +1,9 @@
 """Benchmark: heatmap trials per wall second at each physics fidelity, side by side in one run on the same trials.
 
 Run: python3 benchmarks/heatmap_speed.py [--configs reference,15:0.001,15:0.002,fast] [--jobs 2] [--plant paper]
-Each config (a named fidelity of sim/rig.py, or RESOLUTION:TIMESTEP [vertices per side : s]) runs the same
+     [--stretch edges,threads]
+Each config (a named fidelity of sim/rig.py, or RESOLUTION:TIMESTEP [vertices per side : s]), under each stretch
+model of the sheet (sim/plant.toml, fabric.stretch; the plant's own unless --stretch names them), runs the same
 sample of cells (a 4 x 4 spread over the 20 x 20 grid, the paper's 10 trials each, T = 10 s) on --jobs workers,
 firmware core in-process. Prints, per config: trials per wall second and its ratio to the first config,
 simulated seconds per wall second, the share of the trials' wall time spent outside mj_step, the share of trials
@@ -15,6 +17,7 @@ in --out (one results file per config), so a rerun only adds what is missing: gi
 from __future__ import annotations
 
 import argparse
+import itertools
 import os
 import sys
 import time
@@ -27,6 +30,7 @@ from mantaray.sim import experiment as E
 from mantaray.sim import fidelity as G
 from mantaray.sim import results_file as R
 from mantaray.sim.plant import DEFAULT_PLANT
+from mantaray.sim.rig import STRETCH_MODELS
 
 SAMPLE_IX = (2, 7, 12, 17)  # cells ix, iy of the sample: centres at -0.1875, -0.0625, 0.0625, 0.1875 m
 FULL_TRIALS = 4000  # the paper's protocol: 20 x 20 cells x 10 trials
@@ -94,6 +98,10 @@ def main() -> int:
     parser.add_argument("--object", default="sphere")
     parser.add_argument("--alpha", type=float, default=0.0)
     parser.add_argument("--plant", default=DEFAULT_PLANT, help="a named plant of sim/plant.toml")
+    parser.add_argument(
+        "--stretch",
+        help=f"comma-separated stretch models of the sheet to run each config under: {', '.join(STRETCH_MODELS)}",
+    )
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     parser.add_argument("--out", default="out/bench/heatmap_speed")
     parser.add_argument("--batched", action="store_true", help="also measure mujoco.rollout's batched stepping")
@@ -101,6 +109,9 @@ def main() -> int:
     if args.jobs < 1:
         raise SystemExit(f"heatmap_speed: --jobs must be at least 1, got {args.jobs}")
     configs = parse_configs(args.configs)
+    stretches = [None] if args.stretch is None else args.stretch.split(",")
+    if not set(stretches) <= {None, *STRETCH_MODELS}:
+        raise SystemExit(f"heatmap_speed: --stretch takes {', '.join(STRETCH_MODELS)}, got {args.stretch!r}")
     if args.batched:
         batched_stepping()
 
@@ -111,10 +122,10 @@ def main() -> int:
         f"{args.plant} plant, {args.jobs} workers"
     )
     print(
-        f"{'config':>16s} {'trials/s':>9s} {'x first':>8s} {'sim s/wall s':>12s} {'outside mj_step':>15s} "
+        f"{'config':>25s} {'trials/s':>9s} {'x first':>8s} {'sim s/wall s':>12s} {'outside mj_step':>15s} "
         f"{'fell early':>10s} {'4,000 trials':>12s}"
     )
-    for fidelity in configs:
+    for fidelity, stretch in itertools.product(configs, stretches):
         protocol = E.Experiment(
             object_name=args.object,
             controller=args.controller,
@@ -123,10 +134,11 @@ def main() -> int:
             timestep_s=fidelity.timestep_s,
             only_cells=cells,
             plant=args.plant,
+            plant_set=() if stretch is None else (("fabric.stretch", stretch),),
         )
+        named = f"{args.object}_{args.controller}_alpha{args.alpha:g}_{args.plant}_{fidelity.slug}"
         results = R.ResultsFile.open(
-            Path(args.out) / f"{args.object}_{args.controller}_alpha{args.alpha:g}_{args.plant}_{fidelity.slug}.jsonl",
-            protocol,
+            Path(args.out) / f"{named}{'' if stretch is None else '_' + stretch}.jsonl", protocol
         )
         todo = results.missing()
         t0 = time.perf_counter()
@@ -134,7 +146,7 @@ def main() -> int:
         wall = time.perf_counter() - t0
         done = {t.key for t in todo}
         new = [r for r in results.records.values() if r["key"] in done]
-        line = f"{fidelity.label:>16s}"
+        line = f"{fidelity.label + ('' if stretch is None else ', ' + stretch):>25s}"
         if not new:
             print(line + "  (cached: give a new --out to time it)", flush=True)
             continue

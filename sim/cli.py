@@ -11,8 +11,8 @@ from mantaray.protocol import messages as m
 from mantaray.protocol.codec import bounds_text, choices
 
 from .objects import OBJECTS
-from .parameters import plant_names
-from .plant import DEFAULT_PLANT
+from .parameters import ParameterError, plant_names
+from .plant import DEFAULT_PLANT, parse_setting
 from .rig import DEFAULT_FIDELITY, FIDELITIES, VISION_MODES
 
 RUN = """One target-reaching trial: the native firmware on a pty drives the simulated rig in lock-step.
@@ -152,6 +152,27 @@ def _plant(default: str) -> argparse.ArgumentParser:
     plant = _options()
     plant.add_argument("--plant", choices=plant_names(), default=default, help="the simulated plant (sim/plant.toml)")
     return plant
+
+
+def _setting(text: str) -> tuple[str, float | str]:
+    try:
+        return parse_setting(text)
+    except ParameterError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _plant_set() -> argparse.ArgumentParser:
+    """--set KEY=VALUE: a value of the plant fixed for this command, checked against its declared range."""
+    fixed = _options()
+    fixed.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        type=_setting,
+        metavar="KEY=VALUE",
+        help="fix a value of the plant (a key of sim/plant.toml, within its declared range); repeatable",
+    )
+    return fixed
 
 
 def _out(what: str, default: str | None = None) -> argparse.ArgumentParser:
@@ -312,7 +333,7 @@ def _add_calibrate(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> No
         help="fit the plant to the paper's findings or to rig logs (Optuna, resumable)",
         description=CALIBRATE,
         formatter_class=fmt,
-        parents=[shared[k] for k in ("trial", "fidelity", "pool", "json")] + [_plant(DEFAULT_PLANT), out],
+        parents=[shared[k] for k in ("trial", "fidelity", "pool", "json")] + [_plant(DEFAULT_PLANT), _plant_set(), out],
     )
     cal.add_argument(
         "--candidates",
@@ -324,13 +345,6 @@ def _add_calibrate(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> No
         "--params",
         metavar="KEY,KEY",
         help="search only these parameters (keys of sim/plant.toml; default every one declared search = true)",
-    )
-    cal.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="fix a parameter (checked against its declared range); repeatable",
     )
     cal.add_argument(
         "--log",
@@ -446,6 +460,7 @@ def _add_fidelity(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> Non
         parents=[shared[k] for k in ("trial", "alpha", "jobs", "json")]
         + [
             _plant(DEFAULT_PLANT),
+            _plant_set(),
             _out("report.json and report.md (default out/fidelity/OBJECT_PLANT_alphaA_CANDIDATE_vs_FINER)"),
         ],
     )

@@ -20,10 +20,10 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from . import parameters as P
     from . import study as S
     from .logfit import LogEvidence, check_logs
-    from .plant import Plant, parse_setting
+    from .plant import Plant
 
     try:
-        fixed = dict(parse_setting(text) for text in args.set)
+        fixed = dict(args.set)
         keys = C.searched(args.params.split(",") if args.params else None, fixed)
         Plant(args.plant).set(fixed)
         if args.log:

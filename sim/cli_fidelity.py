@@ -33,6 +33,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             sample = G.GateSample(
                 object_name=args.object,
                 plant=args.plant,
+                plant_set=tuple(args.set),
                 alpha_m=args.alpha,
                 arms=arms,
                 cells_per_stratum=args.cells_per_stratum,
@@ -44,7 +45,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             sample.protocol(arms[0], candidate, shift_m)  # the protocol's own checks, before any work
             runs = G.open_runs(sample, candidate, finer, Path(args.trials_dir), shift_m)
             sample_text = (
-                f"{args.object} on the {args.plant} plant, α = {args.alpha:g} m, "
+                f"{args.object} on the {sample.plant_label} plant, α = {args.alpha:g} m, "
                 f"{', '.join(a.label for a in arms)}: {len(sample.cells())} cells "
                 f"({args.cells_per_stratum} from each stratum) x {args.trials_per_cell} trials, seed "
                 f"{args.seed}, T = {args.duration:g} s"
@@ -92,7 +93,9 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     out = output(
         parser,
         writable_dir,
-        args.out or f"out/fidelity/{p.object_name}_{p.plant}_alpha{p.alpha_m:g}_{candidate.slug}_vs_{finer.slug}",
+        args.out
+        or f"out/fidelity/{p.object_name}_{p.plant}{''.join(f'_{k}={v}' for k, v in p.plant_set)}_alpha{p.alpha_m:g}"
+        f"_{candidate.slug}_vs_{finer.slug}",
     )
     paths = G.write_report(report, out)
     if args.json:

@@ -92,6 +92,7 @@ class GateSample:
 
     object_name: str = "sphere"
     plant: str = DEFAULT_PLANT
+    plant_set: tuple[tuple[str, float | str], ...] = ()  # values fixed over the plant's (sim/plant.toml keys)
     alpha_m: float = 0.0  # [m]
     arms: tuple[Arm, ...] = (Arm("manhattan", "manhattan"), Arm("euclidean", "euclidean"))
     cells_per_stratum: int = 8
@@ -112,6 +113,12 @@ class GateSample:
     def cells(self) -> tuple[int, ...]:
         return F.stratified_sample(Experiment.cells, self.cells_per_stratum, self.seed)
 
+    @property
+    def plant_label(self) -> str:
+        """The plant as named, with the values fixed over it: polyester, or polyester with fabric.stretch=threads."""
+        fixed = ", ".join(f"{k}={v}" for k, v in self.plant_set)
+        return f"{self.plant} with {fixed}" if fixed else self.plant
+
     def protocol(self, arm: Arm, fidelity: Fidelity, shift_m: float = 0.0) -> Experiment:
         return Experiment(
             object_name=self.object_name,
@@ -125,15 +132,17 @@ class GateSample:
             timestep_s=fidelity.timestep_s,
             only_cells=self.cells(),
             plant=self.plant,
+            plant_set=self.plant_set,
             start_shift_m=shift_m,
         )
 
     def results_path(self, trials_dir: Path, arm: Arm, fidelity: Fidelity, shift_m: float = 0.0) -> Path:
         """Where one arm's run at one fidelity keeps its trials: shared by every gate that needs that run."""
         shift = f"_moved{shift_m * 1000:g}mm" if shift_m else ""
+        fixed = "".join(f"_{k}={v}" for k, v in self.plant_set)
         return (
-            Path(trials_dir) / f"{self.object_name}_{arm.label}_alpha{self.alpha_m:g}_{self.plant}_seed{self.seed}"
-            f"_{fidelity.slug}{shift}.jsonl"
+            Path(trials_dir) / f"{self.object_name}_{arm.label}_alpha{self.alpha_m:g}_{self.plant}{fixed}"
+            f"_seed{self.seed}_{fidelity.slug}{shift}.jsonl"
         )
 
 

@@ -312,6 +312,21 @@ def test_the_command_says_what_is_wrong_with_its_input_in_one_line(tmp_path):
         (("--shift", "0.5"), "start shift"),
         (("--shift", "0"), "must move every start"),
         (("--candidate", "7:0.002"), "nothing to compare"),
+        (("--set", "fabric.stretch=wool"), "fabric.stretch must be one of edges, threads"),
+        (("--set", "fabric.stretch"), "expected KEY=VALUE"),
     ):
         run = _gate(tmp_path, *extra)
         assert run.returncode == 2 and said in run.stderr and "Traceback" not in run.stderr, run.stderr
+
+
+def test_values_fixed_over_the_plant_go_into_every_run_and_name_its_trials_apart(tmp_path):
+    fixed = (("fabric.stretch", "threads"),)
+    sample = G.GateSample(plant_set=fixed, arms=(G.Arm("manhattan", "manhattan"),))
+    plain = G.GateSample(arms=(G.Arm("manhattan", "manhattan"),))
+    fidelity = G.parse_fidelity("15:0.001")
+    arm = sample.arms[0]
+    assert sample.protocol(arm, fidelity).plant_model().rig().fabric.stretch == "threads"
+    assert plain.protocol(arm, fidelity).plant_model().rig().fabric.stretch == "edges"
+    assert sample.results_path(tmp_path, arm, fidelity) != plain.results_path(tmp_path, arm, fidelity)
+    assert "fabric.stretch=threads" in sample.results_path(tmp_path, arm, fidelity).name
+    assert sample.plant_label == "polyester with fabric.stretch=threads"
