@@ -29,7 +29,7 @@ CORNERS = ((-1, -1), (1, -1), (-1, 1), (1, 1))
 POST_OFFSET_M = 0.03  # [m] visual frame posts stand this far outboard of each corner (no collisions)
 CARRIAGE_HALF_SIZE_M = (0.02, 0.02, 0.03)  # [m] visual carriage block (no collisions; mass from the rig)
 VERTEX_INERTIA_BOX_M = 0.01  # [m] side of the box whose inertia each fabric vertex is given (as flexcomp's default)
-HIDDEN_GROUP = 3  # visual group MuJoCo's renderer hides by default: the threads, which the flex already draws
+HIDDEN_GROUP = 3  # visual group MuJoCo's renderer hides by default: the threads and their vertices' sites
 OFFSCREEN_PX = (1920, 1920)  # [px] offscreen framebuffer: the largest image the renderer can make
 
 
@@ -157,7 +157,7 @@ def _fabric_xml(rig: Rig) -> tuple[str, str]:
         f'    <body name="{FABRIC}_{i}" pos="{_exact(x, y, z0 + z)}">\n'
         f'      <inertial pos="0 0 0" mass="{_v(mass)}" diaginertia="{_v(inertia, inertia, inertia)}"/>\n'
         f'      <joint type="slide" axis="1 0 0"/>\n      <joint type="slide" axis="0 1 0"/>\n'
-        f'      <joint type="slide" axis="0 0 1"/>\n      <site name="{FABRIC}_{i}"/>\n    </body>'
+        f'      <joint type="slide" axis="0 0 1"/>\n      <site name="{FABRIC}_{i}" group="{HIDDEN_GROUP}"/>\n    </body>'
         for i, (x, y, z) in enumerate(grid_points(n, fab.spacing_m))
     )
     limit = f'solreflimit="{solref}" solimplimit="{_v(*fab.edge_solimp)}" group="{HIDDEN_GROUP}"'

@@ -74,3 +74,16 @@ def test_the_sheets_lowest_point_is_the_same_on_two_meshes_with_threads_and_not_
 def test_a_stretch_model_that_is_not_one_is_refused():
     with pytest.raises(ParameterError, match="fabric.stretch must be one of edges, threads"):
         Plant("polyester").set({"fabric.stretch": "wool"})
+
+
+def test_a_sheet_of_threads_renders_as_the_same_scene_as_one_of_edges():
+    """The threads and their sites are hidden: the camera, the video and the view show the same objects."""
+    drawn = {}
+    for stretch in ("edges", "threads"):
+        _, model, data = _loaded(stretch)
+        scene = mujoco.MjvScene(model, maxgeom=10_000)
+        mujoco.mjv_updateScene(
+            model, data, mujoco.MjvOption(), None, mujoco.MjvCamera(), mujoco.mjtCatBit.mjCAT_ALL, scene
+        )
+        drawn[stretch] = sorted((g.objtype, g.type) for g in scene.geoms[: scene.ngeom])
+    assert drawn["threads"] == drawn["edges"]
