@@ -121,8 +121,9 @@ def table() -> str:
             return f"{o[key]['candidate_vs_finer']['flips']} / {o[key]['floor_vs_finer']['flips']}"
 
         verdict = r["verdict"] or f"incomplete ({r['pairs']} of {r['expected_pairs']})"
+        label = plant + "".join(f", {v}" for _, v in (fixed[0] if fixed else ()))
         rows.append(
-            f"| {plant}{''.join(f', {v}' for _, v in (fixed[0] if fixed else ()))} | {r['candidate']} | {r['finer']} | {r['pairs']} | {rates('reached')} | "
+            f"| {label} | {r['candidate']} | {r['finer']} | {r['pairs']} | {rates('reached')} | "
             f"{rates('fell_off')} | {rates('success')} | {flips('reached')} | {flips('fell_off')} | "
             f"{flips('success')} | [{verdict}]({name}/report.md) |"
         )

@@ -5,8 +5,8 @@ Run: python3 benchmarks/mesh_statics.py [--plants polyester,paper] [--meshes 11:
 For each plant, corner clamp (the plant's own, or a length in metres), stretch model (sim/plant.toml,
 fabric.stretch) and mesh (RESOLUTION:TIMESTEP, or a named fidelity) it loads the model, lets the bare sheet settle as
 every trial does (sim/model.py, load), and prints the lowest vertex's depth below the corners and the sheet's mean
-depth [mm], the edges' mean and extreme strain [%] (a thread is never shorter than its rest length under load, but
-may be slack), and the time constant MuJoCo is given for the edges or threads on that mesh (sim/rig.py,
+depth [mm], the edges' (or threads') least, mean and largest strain [%] (a thread pulls only when stretched: one
+shorter than its rest length is slack), and the time constant MuJoCo is given for the edges or threads on that mesh (sim/rig.py,
 Fabric.edge_timeconst_s), marking one it runs longer than given (refsafe: two steps at least), and the wall time
 of compiling the model and settling it (2 s simulated; compare rows of one run). A mesh whose physics
 diverges (threads under Euler need a smaller step on a finer mesh: the bending is explicit) is reported as such.
@@ -33,11 +33,14 @@ def statics(plant: Plant, fidelity: Fidelity) -> dict:
     wall_s = time.perf_counter() - started
     flex = M._flex_id(model)
     v = M.fabric_vertices(model, data)
-    adr, num = model.flex_edgeadr[flex], model.flex_edgenum[flex]
-    edges = model.flex_edge[adr : adr + num]
-    length = np.linalg.norm(v[edges[:, 0]] - v[edges[:, 1]], axis=1)
-    rest = model.flexedge_length0[adr : adr + num]
-    strain = (length - rest) / rest
+    if rig.fabric.stretch == "threads":  # each thread's length against its rest length, its range's top
+        strain = data.ten_length / model.tendon_range[:, 1] - 1
+    else:
+        adr, num = model.flex_edgeadr[flex], model.flex_edgenum[flex]
+        edges = model.flex_edge[adr : adr + num]
+        length = np.linalg.norm(v[edges[:, 0]] - v[edges[:, 1]], axis=1)
+        rest = model.flexedge_length0[adr : adr + num]
+        strain = (length - rest) / rest
     return {
         "sag_mm": (rig.frame.z0_m - v[:, 2].min()) * 1000,
         "mean_depth_mm": (rig.frame.z0_m - v[:, 2].mean()) * 1000,

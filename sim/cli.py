@@ -461,7 +461,7 @@ def _add_fidelity(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> Non
         + [
             _plant(DEFAULT_PLANT),
             _plant_set(),
-            _out("report.json and report.md (default out/fidelity/OBJECT_PLANT_alphaA_CANDIDATE_vs_FINER)"),
+            _out("report.json and report.md (default out/fidelity/OBJECT_PLANT[_KEY=VALUE]_alphaA_CANDIDATE_vs_FINER)"),
         ],
     )
     gate.add_argument(

@@ -33,7 +33,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             sample = G.GateSample(
                 object_name=args.object,
                 plant=args.plant,
-                plant_set=tuple(args.set),
+                plant_set=tuple(sorted(args.set)),  # the same values given in any order name the same runs
                 alpha_m=args.alpha,
                 arms=arms,
                 cells_per_stratum=args.cells_per_stratum,
@@ -94,7 +94,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         parser,
         writable_dir,
         args.out
-        or f"out/fidelity/{p.object_name}_{p.plant}{''.join(f'_{k}={v}' for k, v in p.plant_set)}_alpha{p.alpha_m:g}"
+        or f"out/fidelity/{p.object_name}_{p.plant}{G.fixed_slug(p.plant_set)}_alpha{p.alpha_m:g}"
         f"_{candidate.slug}_vs_{finer.slug}",
     )
     paths = G.write_report(report, out)

@@ -42,6 +42,11 @@ class GateMismatch(ValueError):
     """Two runs the gate was given are not the same trials: comparing them would mean nothing."""
 
 
+def fixed_slug(plant_set: tuple[tuple[str, float | str], ...]) -> str:
+    """Values fixed over a plant, as file names carry them: _KEY=VALUE each, or nothing."""
+    return "".join(f"_{k}={v}" for k, v in plant_set)
+
+
 def parse_fidelity(text: str) -> Fidelity:
     """A named fidelity (fast, reference) or RESOLUTION:TIMESTEP (15:0.002)."""
     if text in FIDELITIES:
@@ -114,6 +119,11 @@ class GateSample:
         return F.stratified_sample(Experiment.cells, self.cells_per_stratum, self.seed)
 
     @property
+    def fixed_slug(self) -> str:
+        """The values fixed over the plant as a file name puts them: _fabric.stretch=threads, or nothing."""
+        return fixed_slug(self.plant_set)
+
+    @property
     def plant_label(self) -> str:
         """The plant as named, with the values fixed over it: polyester, or polyester with fabric.stretch=threads."""
         fixed = ", ".join(f"{k}={v}" for k, v in self.plant_set)
@@ -139,9 +149,8 @@ class GateSample:
     def results_path(self, trials_dir: Path, arm: Arm, fidelity: Fidelity, shift_m: float = 0.0) -> Path:
         """Where one arm's run at one fidelity keeps its trials: shared by every gate that needs that run."""
         shift = f"_moved{shift_m * 1000:g}mm" if shift_m else ""
-        fixed = "".join(f"_{k}={v}" for k, v in self.plant_set)
         return (
-            Path(trials_dir) / f"{self.object_name}_{arm.label}_alpha{self.alpha_m:g}_{self.plant}{fixed}"
+            Path(trials_dir) / f"{self.object_name}_{arm.label}_alpha{self.alpha_m:g}_{self.plant}{self.fixed_slug}"
             f"_seed{self.seed}_{fidelity.slug}{shift}.jsonl"
         )
 

@@ -26,9 +26,11 @@ class Parameter:
 
     key: str  # section.field or section.field[i]
     value: float | str  # the default: the polyester plant
-    low: float | None  # inclusive range; None for a reading with choices
+    low: float | None  # inclusive range; None for a parameter with choices
     high: float | None
-    choices: tuple[str, ...]  # a reading's choices; () for a number
+    choices: tuple[
+        str, ...
+    ]  # the choices of a string (a reading, or a structure such as fabric.stretch); () for a number
     scale: str
     unit: str
     kind: str
@@ -131,6 +133,12 @@ def parameters() -> dict[str, Parameter]:
 def default(key: str) -> float | str:
     """The declared default of one parameter (what sim/rig.py's dataclasses start from)."""
     return lookup(key).value
+
+
+def recorded_values(values: dict[str, float | str]) -> dict[str, float | str]:
+    """A plant's values as a results file recorded them, with every parameter declared since at its value: a new
+    parameter's value reproduces the model as it was before it (sim/plant.toml)."""
+    return {key: values.get(key, p.value) for key, p in parameters().items()} | values
 
 
 def plant_values(name: str) -> dict[str, float | str]:

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
 
+from . import parameters as P
 from .experiment import Experiment, ExperimentMismatch, Trial, trials
 from .mjcf import model_identity
 
@@ -293,7 +294,9 @@ def _read(path: Path) -> _Contents:
         protocol = Experiment.from_json(header["protocol"])
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"{path}: its header's protocol is not valid ({exc})") from None
-    out = _Contents(protocol, header.get("plant_values"), header.get("model"), cut=lines[-1] != b"")
+    recorded = header.get("plant_values")
+    plant_values = None if recorded is None else P.recorded_values(recorded)
+    out = _Contents(protocol, plant_values, header.get("model"), cut=lines[-1] != b"")
     for number, line in enumerate(lines[1:-1], start=2):  # the last element follows the final newline
         if not line.strip():
             continue

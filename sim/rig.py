@@ -15,6 +15,7 @@ from mantaray.protocol import rig as _rig
 
 from .objects import OBJECTS, ObjectSpec
 from .parameters import default as _d
+from .parameters import lookup
 
 
 @dataclass(frozen=True)
@@ -85,7 +86,7 @@ FIDELITIES = {"fast": Fidelity(11, 0.002), "reference": Fidelity(15, 0.0005)}
 DEFAULT_FIDELITY = FIDELITIES["reference"]
 
 
-STRETCH_MODELS = ("edges", "threads")  # Fabric.stretch's choices (sim/plant.toml, fabric.stretch)
+STRETCH_MODELS = lookup("fabric.stretch").choices  # what may hold the sheet's length (Fabric.stretch)
 
 
 @dataclass(frozen=True)

@@ -29,27 +29,42 @@ def test_threads_join_every_grid_neighbour_and_both_diagonals_of_every_cell_and_
     rig, threads, _ = _loaded("threads")
     _, edges, _ = _loaded("edges")
     n, spacing = RESOLUTION, rig.fabric.spacing_m
-    pairs = {tuple(sorted((a, b))): length for a, b, length in J.threads(n, spacing)}
-    assert len(pairs) == threads.ntendon == 2 * n * (n - 1) + 2 * (n - 1) ** 2 and edges.ntendon == 0
-    for (a, b), length in pairs.items():  # each joins its vertices at their distance on the flat sheet
+    joined = {}  # the compiled tendons: (vertex, vertex) -> rest length [m]
+    for t in range(threads.ntendon):
+        adr = threads.tendon_adr[t]
+        assert threads.tendon_num[t] == 2 and np.all(threads.wrap_type[adr : adr + 2] == mujoco.mjtWrap.mjWRAP_SITE)
+        a, b = (int(threads.site(int(threads.wrap_objid[adr + k])).name.removeprefix(f"{J.FABRIC}_")) for k in (0, 1))
+        joined[tuple(sorted((a, b)))] = threads.tendon_range[t, 1]
+    assert threads.ntendon == len(joined) == 2 * n * (n - 1) + 2 * (n - 1) ** 2 and edges.ntendon == 0
+    for (a, b), length in joined.items():  # each joins grid neighbours at their distance on the flat sheet
         (ia, ja), (ib, jb) = divmod(a, n), divmod(b, n)
         assert max(abs(ia - ib), abs(ja - jb)) == 1
         assert length == pytest.approx(spacing * np.hypot(ia - ib, ja - jb), rel=1e-5)
     assert np.all(threads.tendon_limited == 1) and np.all(threads.tendon_range[:, 0] == 0)
     flex = M._flex_id(threads)
-    for name in (
-        "flex_elem",
-        "flex_radius",
-        "flex_condim",
-        "flex_friction",
-        "flex_stiffness",
-        "flex_bending",
-        "flex_damping",
-    ):
+    for name in ("flex_elem", "flex_radius", "flex_condim", "flex_friction", "flex_stiffness", "flex_bending"):
         assert np.array_equal(getattr(threads, name), getattr(edges, name)), name
-    bodies = [threads.body(f"{J.FABRIC}_{i}").id for i in range(n * n)]
-    assert np.allclose(threads.body_mass[bodies], rig.fabric.mass_kg / n**2)
     assert threads.flex_edgeequality[flex] == 0 and edges.flex_edgeequality[M._flex_id(edges)] == 1
+    for i in range(n * n):  # the same point masses on the same slides, welded alike
+        tb, eb = threads.body(f"{J.FABRIC}_{i}"), edges.body(f"{J.FABRIC}_{i}")
+        assert np.array_equal(tb.pos, eb.pos) and tb.mass == pytest.approx(rig.fabric.mass_kg / n**2, rel=1e-5)
+        assert tb.mass == pytest.approx(eb.mass, rel=1e-5)  # written to 6 digits, like every number of the MJCF
+        tj, ej = (
+            slice(m.body_jntadr[b.id], m.body_jntadr[b.id] + m.body_jntnum[b.id])
+            for m, b in ((threads, tb), (edges, eb))
+        )
+        assert np.array_equal(threads.jnt_type[tj], edges.jnt_type[ej]) and np.array_equal(
+            threads.jnt_axis[tj], edges.jnt_axis[ej]
+        )
+    welds = {
+        m: sorted(
+            (m.body(int(a)).name, m.body(int(b)).name)
+            for a, b, kind in zip(m.eq_obj1id, m.eq_obj2id, m.eq_type, strict=True)
+            if kind == mujoco.mjtEq.mjEQ_WELD
+        )
+        for m in (threads, edges)
+    }
+    assert welds[threads] == welds[edges] and len(welds[edges]) >= 4  # every corner to its carriage
 
 
 def test_a_settled_sheet_of_threads_is_taut_where_it_pulls_and_slack_where_it_would_push():

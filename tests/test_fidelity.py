@@ -257,6 +257,22 @@ def test_a_results_file_of_another_model_is_not_continued_and_says_how_to_start_
     assert R.ResultsFile.load(path).protocol == protocol  # still read for figures and comparisons
 
 
+def test_a_results_file_written_before_a_parameter_was_declared_continues_as_run_at_its_value(tmp_path):
+    """sim/plant.toml: a parameter is added with the value that reproduces the model before it."""
+    protocol = E.Experiment(cells=2, trials_per_cell=1, duration_s=0.5)
+    path = tmp_path / "results.jsonl"
+    R.ResultsFile.open(path, protocol)
+    header, rest = path.read_text().split("\n", 1)
+    stored = json.loads(header)
+    del stored["plant_values"]["fabric.stretch"]  # as a file written before it was declared
+    path.write_text(json.dumps(stored) + "\n" + rest)
+    assert R.ResultsFile.open(path, protocol).plant_values["fabric.stretch"] == "edges"
+    stored["plant_values"]["fabric.stretch"] = "threads"  # but a value it did record is held to
+    path.write_text(json.dumps(stored) + "\n" + rest)
+    with pytest.raises(E.ExperimentMismatch, match="fabric.stretch differ"):
+        R.ResultsFile.open(path, protocol)
+
+
 # ------------------------------------------------------------------------------------------- the command
 def _gate(tmp_path, *extra):
     return subprocess.run(

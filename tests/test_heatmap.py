@@ -380,7 +380,7 @@ def _runner_kind_and_double(runner, x):
 
 
 @pytest.mark.parametrize("pool", ["local", "ray"])
-def test_any_job_runs_on_the_pools_own_trial_runners_in_order(pool):
+def test_any_job_runs_on_the_pools_own_trial_runners_in_order_and_a_ray_the_pool_started_ends_with_it(pool):
     if pool == "ray":  # Ray's workers cannot import this test module: send the function by value
         from ray import cloudpickle
 
