@@ -243,6 +243,7 @@ def _add_run(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None:
             shared["trial"],
             shared["alpha"],
             shared["closed_loop"],
+            _plant_set(),
             _out("the figure, trajectory and video", "out/sim"),
         ],
     )
@@ -300,14 +301,16 @@ def _add_replay(sim_sub: argparse._SubParsersAction, fmt) -> None:
 def _add_heatmap(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None:
     out = _out(
         "results.jsonl, cells.csv, summary.json, heatmap.png and heatmap_reach.png (the paper's stopping rule) "
-        "(default out/heatmap/OBJECT_CONTROLLER_alphaA, with _PLANT for a plant other than polyester)"
+        "(default out/heatmap/OBJECT_CONTROLLER_alphaA, with _PLANT for a plant other than polyester and _KEY=VALUE "
+        "for each --set)"
     )
     heat = sim_sub.add_parser(
         "heatmap",
         help="the paper's success heatmap (Fig. 2) over the workspace",
         description=HEATMAP,
         formatter_class=fmt,
-        parents=[shared[k] for k in ("trial", "alpha", "closed_loop", "fidelity", "pool", "json")] + [out],
+        parents=[shared[k] for k in ("trial", "alpha", "closed_loop", "fidelity", "pool", "json")]
+        + [_plant_set(), out],
     )
     heat.add_argument("--cells", type=int, default=20, help="cells per side of the workspace (paper: 20)")
     heat.add_argument("--trials", type=int, default=10, help="trials per cell, N (paper: 10)")

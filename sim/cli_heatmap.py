@@ -18,6 +18,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """`sim heatmap`: the protocol checked, its results file opened or continued, the missing trials run."""
     from .executors import RayUnavailable, Watch, run, run_local, run_ray
     from .experiment import Experiment, ExperimentMismatch
+    from .fidelity import fixed_slug
     from .model import SimulationUnstable
     from .results_file import ResultsFile, ResultsFileBusy
 
@@ -38,12 +39,13 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             timestep_s=args.timestep,
             only_cells=args.only_cells,
             plant=args.plant,
+            plant_set=tuple(sorted(args.set)),
             stop_when_reached=args.stop_when_reached,
             settings=settings.values,
         )
     except ValueError as exc:
         parser.error(str(exc))
-    plant = "" if args.plant == DEFAULT_PLANT else f"_{args.plant}"
+    plant = ("" if args.plant == DEFAULT_PLANT else f"_{args.plant}") + fixed_slug(protocol.plant_set)
     check_ray(parser, args)
     if args.live and args.executor == "ray":
         parser.error("--live shows the trial of a worker of this machine: use it with --executor local")

@@ -34,7 +34,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
     settings = controller_settings(parser, args)
     args.plant = plant_for_settings(parser, settings, args.plant)
-    plant = Plant(args.plant)
+    plant = Plant(args.plant).set(dict(args.set))
     rig = plant.rig(args.object)
     if args.vision:
         rig = rig.with_vision(args.vision)
@@ -126,7 +126,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     if progress is not None:
         bar.close()
 
-    summary = {**result.summary(), "plant": args.plant}
+    summary = {**result.summary(), "plant": args.plant, "plant_set": dict(args.set)}
     spec = result.spec
     outcome = "fell off" if result.fell_off else ("success" if result.success else "not within ε at T")
     summary["figure"] = str(
@@ -175,7 +175,9 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             else f"reached ε first at {result.time_to_reach_s:.2f} s"
         )
         print(
-            f"{outcome}: {args.object}, {args.controller}, {args.plant} plant, start {args.start[0]:+.3f},{args.start[1]:+.3f} -> "
+            f"{outcome}: {args.object}, {args.controller}, {args.plant} plant"
+            + "".join(f", {k}={v}" for k, v in args.set)
+            + f", start {args.start[0]:+.3f},{args.start[1]:+.3f} -> "
             f"target {args.target[0]:+.3f},{args.target[1]:+.3f} m; final error {result.final_error_m * 100:.1f} cm "
             f"(ε {args.tolerance * 100:g} cm), {reach}; {result.sim_time_s:.1f} sim s in {result.wall_time_s:.1f} wall s "
             f"({result.sim_time_s / result.wall_time_s:.2f}x, physics {result.physics_share:.0%}); "

@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
+
 import mujoco
 import numpy as np
 import pytest
 
 from mantaray.sim import mjcf as J
 from mantaray.sim import model as M
+from mantaray.sim import results_file as R
 from mantaray.sim.parameters import ParameterError
 from mantaray.sim.plant import Plant
 
@@ -102,3 +107,30 @@ def test_a_sheet_of_threads_renders_as_the_same_scene_as_one_of_edges():
         )
         drawn[stretch] = sorted((g.objtype, g.type) for g in scene.geoms[: scene.ngeom])
     assert drawn["threads"] == drawn["edges"]
+
+
+def _sim(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "mantaray.cli", "sim", *args], capture_output=True, text=True, timeout=300
+    )
+
+
+def test_sim_run_and_heatmap_run_a_sheet_of_threads_when_set(tmp_path):
+    run = _sim("run", "--json", "--duration", "0.5", "--set", "fabric.stretch=threads", "--out", str(tmp_path / "run"))
+    assert run.returncode in (0, 1), run.stderr
+    assert json.loads(run.stdout)["plant_set"] == {"fabric.stretch": "threads"}
+    heat = _sim(
+        "heatmap", "--cells", "2", "--only-cells", "0", "--trials", "1", "--duration", "0.5", "--jobs", "1",
+        "--set", "fabric.stretch=threads", "--out", str(tmp_path / "heat"),
+    )  # fmt: skip
+    assert heat.returncode == 0, heat.stderr
+    results = R.ResultsFile.load(tmp_path / "heat" / "results.jsonl")
+    assert results.protocol.plant_set == (("fabric.stretch", "threads"),) and len(results.records) == 1
+    assert results.plant_values["fabric.stretch"] == "threads"
+
+
+@pytest.mark.parametrize("command", ["run", "heatmap", "fidelity", "calibrate"])
+def test_a_setting_that_is_not_one_is_refused_in_one_line_by_every_command_that_takes_it(command):
+    done = _sim(command, "--set", "fabric.stretch=wool")
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert done.stderr.strip().splitlines()[-1].endswith("fabric.stretch must be one of edges, threads, got 'wool'")
