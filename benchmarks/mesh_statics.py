@@ -1,9 +1,10 @@
 """Benchmark: what the bare sheet settles to on each mesh (its sag and its edges' stretch), to tell mesh from plant.
 
 Run: python3 benchmarks/mesh_statics.py [--plants polyester,paper] [--meshes 11:0.001,15:0.001,21:0.001]
-     [--clamps plant,0] [--stretch edges,threads]
+     [--clamps plant,0] [--stretch edges,threads] [--set KEY=VALUE ...]
 For each plant, corner clamp (the plant's own, or a length in metres), stretch model (sim/plant.toml,
-fabric.stretch) and mesh (RESOLUTION:TIMESTEP, or a named fidelity) it loads the model, lets the bare sheet settle as
+fabric.stretch) and mesh (RESOLUTION:TIMESTEP, or a named fidelity), with any other --set value fixed over the
+plant, it loads the model, lets the bare sheet settle as
 every trial does (sim/model.py, load), and prints the lowest vertex's depth below the corners and the sheet's mean
 depth [mm], the edges' (or threads') least, mean and largest strain [%] (a thread pulls only when stretched: one
 shorter than its rest length is slack), and the time constant MuJoCo is given for the edges or threads on that mesh (sim/rig.py,
@@ -22,7 +23,8 @@ import numpy as np
 
 from mantaray.sim import model as M
 from mantaray.sim.fidelity import parse_fidelity
-from mantaray.sim.plant import Plant
+from mantaray.sim.parameters import ParameterError
+from mantaray.sim.plant import Plant, parse_setting
 from mantaray.sim.rig import MIN_STEPS_PER_TIMECONST, STRETCH_MODELS, Fidelity
 
 
@@ -57,7 +59,12 @@ def main() -> int:
     parser.add_argument("--meshes", default="11:0.001,15:0.001,21:0.001", help="RESOLUTION:TIMESTEP, comma-separated")
     parser.add_argument("--clamps", default="plant,0", help="comma-separated: plant (the plant's own) or metres")
     parser.add_argument("--stretch", default="edges", help=f"comma-separated: {', '.join(STRETCH_MODELS)}")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a plant value; repeatable")
     args = parser.parse_args()
+    try:
+        fixed = dict(parse_setting(text) for text in args.set)
+    except ParameterError as exc:
+        parser.error(str(exc))
     try:
         meshes = [parse_fidelity(m) for m in args.meshes.split(",")]
         clamps = [None if c == "plant" else float(c) for c in args.clamps.split(",")]
@@ -74,7 +81,7 @@ def main() -> int:
         own = Plant(name).values["fabric.corner_clamp_m"]
         for stretch in stretches:
             for clamp in dict.fromkeys(own if c is None else c for c in clamps):  # each length once
-                plant = Plant(name).set({"fabric.corner_clamp_m": clamp, "fabric.stretch": stretch})
+                plant = Plant(name).set({**fixed, "fabric.corner_clamp_m": clamp, "fabric.stretch": stretch})
                 for mesh in meshes:
                     head = f"{name:>10s} {stretch:>8s} {clamp * 100:7.2f} cm {mesh.label:>16s}"
                     try:
