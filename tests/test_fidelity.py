@@ -240,18 +240,26 @@ def test_results_files_written_before_the_start_shift_existed_read_as_unshifted(
 
 
 # ------------------------------------------------------------------------------------------- model identity
-def test_a_results_file_of_another_model_is_not_continued_and_says_how_to_start_again(tmp_path):
+def _written(tmp_path) -> tuple[E.Experiment, Path, dict]:
+    """A new results file's protocol, path and header, to be edited and written back with _rewrite."""
     protocol = E.Experiment(cells=2, trials_per_cell=1, duration_s=0.5)
     path = tmp_path / "results.jsonl"
     R.ResultsFile.open(path, protocol)
-    header, rest = path.read_text().split("\n", 1)
-    stored = json.loads(header)
+    return protocol, path, json.loads(path.read_text().split("\n", 1)[0])
+
+
+def _rewrite(path: Path, header: dict) -> None:
+    path.write_text(json.dumps(header) + "\n" + path.read_text().split("\n", 1)[1])
+
+
+def test_a_results_file_of_another_model_is_not_continued_and_says_how_to_start_again(tmp_path):
+    protocol, path, stored = _written(tmp_path)
     stored["model"]["mjcf_sha1"] = "0" * 16  # as if the generator had changed since
-    path.write_text(json.dumps(stored) + "\n" + rest)
+    _rewrite(path, stored)
     with pytest.raises(E.ExperimentMismatch, match="Start it again"):
         R.ResultsFile.open(path, protocol)
     del stored["model"]  # written before files recorded their model
-    path.write_text(json.dumps(stored) + "\n" + rest)
+    _rewrite(path, stored)
     with pytest.raises(E.ExperimentMismatch, match="before results files recorded"):
         R.ResultsFile.open(path, protocol)
     assert R.ResultsFile.load(path).protocol == protocol  # still read for figures and comparisons
@@ -259,16 +267,12 @@ def test_a_results_file_of_another_model_is_not_continued_and_says_how_to_start_
 
 def test_a_results_file_written_before_a_parameter_was_declared_continues_as_run_at_its_value(tmp_path):
     """sim/plant.toml: a parameter is added with the value that reproduces the model before it."""
-    protocol = E.Experiment(cells=2, trials_per_cell=1, duration_s=0.5)
-    path = tmp_path / "results.jsonl"
-    R.ResultsFile.open(path, protocol)
-    header, rest = path.read_text().split("\n", 1)
-    stored = json.loads(header)
+    protocol, path, stored = _written(tmp_path)
     del stored["plant_values"]["fabric.stretch"]  # as a file written before it was declared
-    path.write_text(json.dumps(stored) + "\n" + rest)
+    _rewrite(path, stored)
     assert R.ResultsFile.open(path, protocol).plant_values["fabric.stretch"] == "edges"
     stored["plant_values"]["fabric.stretch"] = "threads"  # but a value it did record is held to
-    path.write_text(json.dumps(stored) + "\n" + rest)
+    _rewrite(path, stored)
     with pytest.raises(E.ExperimentMismatch, match="fabric.stretch differ"):
         R.ResultsFile.open(path, protocol)
 
