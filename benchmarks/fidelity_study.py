@@ -47,10 +47,16 @@ GATES = {  # name: (plant, candidate, finer[, values fixed over the plant]), in 
 }
 
 
-def command(name: str, jobs: int | None) -> list[str]:
+def gate(name: str) -> tuple[str, str, str, tuple[tuple[str, str], ...]]:
+    """A gate's plant, candidate, finer fidelity and the values it fixes over the plant (none for most)."""
     plant, candidate, finer, *fixed = GATES[name]
+    return plant, candidate, finer, fixed[0] if fixed else ()
+
+
+def command(name: str, jobs: int | None) -> list[str]:
+    plant, candidate, finer, fixed = gate(name)
     arms = [a for arm in ARMS[plant] for a in ("--controller", arm)]
-    sets = [a for key, value in (fixed[0] if fixed else ()) for a in ("--set", f"{key}={value}")]
+    sets = [a for key, value in fixed for a in ("--set", f"{key}={value}")]
     return [
         "mantaray",
         "sim",
@@ -107,7 +113,8 @@ def table() -> str:
         "flips fell | flips within ε | verdict |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for name, (plant, _, _, *fixed) in GATES.items():
+    for name in GATES:
+        plant, _, _, fixed = gate(name)
         path = COMMITTED / name / "report.json"
         if not path.exists():
             continue
@@ -121,7 +128,7 @@ def table() -> str:
             return f"{o[key]['candidate_vs_finer']['flips']} / {o[key]['floor_vs_finer']['flips']}"
 
         verdict = r["verdict"] or f"incomplete ({r['pairs']} of {r['expected_pairs']})"
-        label = plant + "".join(f", {v}" for _, v in (fixed[0] if fixed else ()))
+        label = plant + "".join(f", {v}" for _, v in fixed)
         rows.append(
             f"| {label} | {r['candidate']} | {r['finer']} | {r['pairs']} | {rates('reached')} | "
             f"{rates('fell_off')} | {rates('success')} | {flips('reached')} | {flips('fell_off')} | "

@@ -137,9 +137,7 @@ def main() -> int:
             plant_set=() if stretch is None else (("fabric.stretch", stretch),),
         )
         named = f"{args.object}_{args.controller}_alpha{args.alpha:g}_{args.plant}_{fidelity.slug}"
-        results = R.ResultsFile.open(
-            Path(args.out) / f"{named}{'' if stretch is None else '_' + stretch}.jsonl", protocol
-        )
+        results = R.ResultsFile.open(Path(args.out) / f"{named}{G.fixed_slug(protocol.plant_set)}.jsonl", protocol)
         todo = results.missing()
         t0 = time.perf_counter()
         X.run(results, X.run_local(protocol, todo, args.jobs))

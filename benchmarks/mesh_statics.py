@@ -4,13 +4,13 @@ Run: python3 benchmarks/mesh_statics.py [--plants polyester,paper] [--meshes 11:
      [--clamps plant,0] [--stretch edges,threads] [--set KEY=VALUE ...]
 For each plant, corner clamp (the plant's own, or a length in metres), stretch model (sim/plant.toml,
 fabric.stretch) and mesh (RESOLUTION:TIMESTEP, or a named fidelity), with any other --set value fixed over the
-plant, it loads the model, lets the bare sheet settle as
-every trial does (sim/model.py, load), and prints the lowest vertex's depth below the corners and the sheet's mean
-depth [mm], the edges' (or threads') least, mean and largest strain [%] (a thread pulls only when stretched: one
-shorter than its rest length is slack), and the time constant MuJoCo is given for the edges or threads on that mesh (sim/rig.py,
-Fabric.edge_timeconst_s), marking one it runs longer than given (refsafe: two steps at least), and the wall time
-of compiling the model and settling it (2 s simulated; compare rows of one run). A mesh whose physics
-diverges (threads under Euler need a smaller step on a finer mesh: the bending is explicit) is reported as such.
+plant, it loads the model, lets the bare sheet settle as every trial does (sim/model.py, load), and prints the
+lowest vertex's depth below the corners and the sheet's mean depth [mm], the edges' (or threads') least, mean and
+largest strain [%] (a thread pulls only when stretched: one shorter than its rest length is slack), the wall time
+of compiling the model and settling it (2 s simulated; compare rows of one run), and the time constant MuJoCo is
+given for the edges or threads on that mesh (sim/rig.py, Fabric.edge_timeconst_s), marking one it runs longer
+than given (refsafe: two steps at least). A mesh whose physics diverges (threads under Euler need a smaller step on
+a finer mesh: the bending is explicit) is reported as such.
 """
 
 from __future__ import annotations

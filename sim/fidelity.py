@@ -119,11 +119,6 @@ class GateSample:
         return F.stratified_sample(Experiment.cells, self.cells_per_stratum, self.seed)
 
     @property
-    def fixed_slug(self) -> str:
-        """The values fixed over the plant as a file name puts them: _fabric.stretch=threads, or nothing."""
-        return fixed_slug(self.plant_set)
-
-    @property
     def plant_label(self) -> str:
         """The plant as named, with the values fixed over it: polyester, or polyester with fabric.stretch=threads."""
         fixed = ", ".join(f"{k}={v}" for k, v in self.plant_set)
@@ -150,7 +145,8 @@ class GateSample:
         """Where one arm's run at one fidelity keeps its trials: shared by every gate that needs that run."""
         shift = f"_moved{shift_m * 1000:g}mm" if shift_m else ""
         return (
-            Path(trials_dir) / f"{self.object_name}_{arm.label}_alpha{self.alpha_m:g}_{self.plant}{self.fixed_slug}"
+            Path(trials_dir)
+            / f"{self.object_name}_{arm.label}_alpha{self.alpha_m:g}_{self.plant}{fixed_slug(self.plant_set)}"
             f"_seed{self.seed}_{fidelity.slug}{shift}.jsonl"
         )
 

@@ -28,9 +28,7 @@ class Parameter:
     value: float | str  # the default: the polyester plant
     low: float | None  # inclusive range; None for a parameter with choices
     high: float | None
-    choices: tuple[
-        str, ...
-    ]  # the choices of a string (a reading, or a structure such as fabric.stretch); () for a number
+    choices: tuple[str, ...]  # a string's choices (a reading's, or fabric.stretch's); () for a number
     scale: str
     unit: str
     kind: str
@@ -138,7 +136,7 @@ def default(key: str) -> float | str:
 def recorded_values(values: dict[str, float | str]) -> dict[str, float | str]:
     """A plant's values as a results file recorded them, with every parameter declared since at its value: a new
     parameter's value reproduces the model as it was before it (sim/plant.toml)."""
-    return {key: values.get(key, p.value) for key, p in parameters().items()} | values
+    return {key: p.value for key, p in parameters().items()} | values
 
 
 def plant_values(name: str) -> dict[str, float | str]:

@@ -79,9 +79,9 @@ class Fidelity:
 # project's answers hold at, and what every command runs by default: 15 x 15 at 0.5 ms, the largest step whose
 # outcomes a finer one keeps (the fidelity gate, sim/fidelity.py: 0.25 ms keeps 0.5 ms's, 0.5 ms changes 1 ms's;
 # docs/results/fidelity/convergence.md). It is not converged in the mesh (21 x 21 changes its outcomes): it stays
-# the default until a finer mesh is shown to be, since every answer must be re-run there anyway. The fast mode is the one the committed maps, the fitted `paper` plant and
-# the tuned settings of docs/results.md were made in, which the gate finds changes the outcomes: kept by name to
-# read them.
+# the default until a finer mesh is shown to be, since every answer must be re-run there anyway. The fast mode is
+# the one the committed maps, the fitted `paper` plant and the tuned settings of docs/results.md were made in, which
+# the gate finds changes the outcomes: kept by name to read them.
 FIDELITIES = {"fast": Fidelity(11, 0.002), "reference": Fidelity(15, 0.0005)}
 DEFAULT_FIDELITY = FIDELITIES["reference"]
 
@@ -114,9 +114,8 @@ class Fabric:
         _d("fabric.corner_weld_solref[0]"),
         1.0,
     )  # [s, -] corner-to-carriage welds
-    stretch: str = _d(
-        "fabric.stretch"
-    )  # what holds the sheet's length: "edges" (two-sided) or "threads" (tension only)
+    # what holds the sheet's length: "edges" (two-sided) or "threads" (tension only)
+    stretch: str = _d("fabric.stretch")
     corner_clamp_m: float = _d("fabric.corner_clamp_m")  # [m] length of each edge, from its corner, the corner's clamp
     # holds straight at the carriage (0: a point attachment)
 
