@@ -64,7 +64,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         bar = Progress(total, initial=total - left, unit="trial", label="fidelity")
         interruptible()
         try:
-            G.run_missing(runs, workers(args.jobs), on_record=lambda record: bar.update(1))
+            G.run_missing(sample, runs, workers(args.jobs), on_record=lambda record: bar.update(1))
         except KeyboardInterrupt:
             bar.close()
             print(

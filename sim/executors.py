@@ -133,6 +133,11 @@ def _run_in_worker(job: tuple[dict, Trial]) -> dict:
     return _worker.run(trial, Experiment.from_json(protocol_json))
 
 
+def _run_tagged_in_worker(job: tuple[object, dict, Trial]) -> tuple[object, dict]:
+    tag, protocol_json, trial = job
+    return tag, _worker.run(trial, Experiment.from_json(protocol_json))
+
+
 def _call_in_worker(job: tuple[Callable, object]) -> object:
     fn, arg = job
     return _worker.call(fn, arg)
@@ -163,12 +168,22 @@ class LocalPool:
 
     def imap(self, jobs: list[tuple[Experiment, Trial]], ordered: bool = False) -> Iterator[dict]:
         """Records as the jobs finish (in any order), or in the jobs' order."""
-        if self._pool is None:
-            for protocol, trial in jobs:
-                yield self._runner.run(trial, protocol)
+        if ordered and self._pool is not None:
+            yield from self._pool.imap(_run_in_worker, [(p.to_json(), t) for p, t in jobs], chunksize=1)
             return
-        mapper = self._pool.imap if ordered else self._pool.imap_unordered
-        yield from mapper(_run_in_worker, [(p.to_json(), t) for p, t in jobs], chunksize=1)
+        for _, record in self.imap_tagged([(None, p, t) for p, t in jobs]):
+            yield record
+
+    def imap_tagged(self, jobs: list[tuple[object, Experiment, Trial]]) -> Iterator[tuple[object, dict]]:
+        """(tag, record) as the jobs finish, in any order: the tag (picklable) says where a record belongs when the
+        jobs are of several protocols."""
+        if self._pool is None:
+            for tag, protocol, trial in jobs:
+                yield tag, self._runner.run(trial, protocol)
+            return
+        yield from self._pool.imap_unordered(
+            _run_tagged_in_worker, [(tag, p.to_json(), t) for tag, p, t in jobs], chunksize=1
+        )
 
     def map(self, jobs: list[tuple[Experiment, Trial]]) -> list[dict]:
         """The jobs' records, in the jobs' order."""

@@ -118,6 +118,13 @@ class GateSample:
     def cells(self) -> tuple[int, ...]:
         return F.stratified_sample(Experiment.cells, self.cells_per_stratum, self.seed)
 
+    def run_order(self) -> dict[int, tuple[int, int]]:
+        """Each cell's place in the order the gate runs its trials: (j, s) for the j-th cell drawn from stratum s
+        (findings.stratified_draw). Trial number first, then this: every prefix of the order is a stratified
+        sample, the first trial of the cells each stratum drew first."""
+        drawn = F.stratified_draw(Experiment.cells, self.cells_per_stratum, self.seed)
+        return {cell: (j, s) for s, cells in enumerate(drawn.values()) for j, cell in enumerate(cells)}
+
     @property
     def plant_label(self) -> str:
         """The plant as named, with the values fixed over it: polyester, or polyester with fabric.stretch=threads."""
@@ -415,17 +422,23 @@ def missing_trials(runs: list[Runs]) -> int:
     return sum(len(getattr(r, name).missing()) for r in runs for name in ("candidate", "finer", "floor"))
 
 
-def run_missing(runs: list[Runs], jobs: int, on_record=None) -> None:
-    """Run what each run lacks on `jobs` local workers, appending every trial to its file as it finishes."""
+def run_missing(sample: GateSample, runs: list[Runs], jobs: int, on_record=None) -> None:
+    """Run what each run lacks on `jobs` local workers, appending every trial to its file as it finishes. The
+    trials go round every arm's three runs in the sample's run order (GateSample.run_order), so that a gate
+    stopped part way holds the same trials in each run: a smaller stratified sample, already paired."""
     from . import executors as X
 
+    place = sample.run_order()
+    files = [getattr(r, name) for r in runs for name in ("finer", "candidate", "floor")]
+    todo = sorted(
+        ((i, t) for i, results in enumerate(files) for t in results.missing()),
+        key=lambda job: (job[1].k, *place[job[1].cell], job[0]),
+    )
     with X.LocalPool(jobs) as pool:
-        for r in runs:
-            for name in ("finer", "candidate", "floor"):
-                results = getattr(r, name)
-                todo = results.missing()
-                if todo:
-                    X.run(results, pool.imap([(results.protocol, t) for t in todo]), on_record)
+        for i, record in pool.imap_tagged([(i, files[i].protocol, t) for i, t in todo]):
+            files[i].append(record)
+            if on_record is not None:
+                on_record(record)
 
 
 def load_runs(candidate: str | Path, finer: str | Path, floor: str | Path) -> list[Runs]:

@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 
 from mantaray.sim import experiment as E
 from mantaray.sim import fidelity as G
+from mantaray.sim import findings as F
 from mantaray.sim import paired as P
 from mantaray.sim import results_file as R
 
@@ -350,3 +351,31 @@ def test_values_fixed_over_the_plant_go_into_every_run_and_name_its_trials_apart
     assert sample.results_path(tmp_path, arm, fidelity) != plain.results_path(tmp_path, arm, fidelity)
     assert "fabric.stretch=threads" in sample.results_path(tmp_path, arm, fidelity).name
     assert sample.plant_label == "polyester with fabric.stretch=threads"
+
+
+class _Stop(Exception):
+    pass
+
+
+def test_a_gate_stopped_part_way_holds_the_same_stratified_trials_in_each_run(tmp_path):
+    sample = G.GateSample(
+        arms=(G.Arm("manhattan", "manhattan"),), cells_per_stratum=2, trials_per_cell=2, duration_s=0.2
+    )
+    runs = G.open_runs(sample, G.parse_fidelity("5:0.002"), G.parse_fidelity("7:0.002"), tmp_path, 1e-4)
+    seen = []
+
+    def stop_after_two_positions(record):
+        seen.append(record)
+        if len(seen) == 6:
+            raise _Stop
+
+    with pytest.raises(_Stop):
+        G.run_missing(sample, runs, 1, on_record=stop_after_two_positions)
+    files = [
+        R.ResultsFile.open(getattr(runs[0], n).path, getattr(runs[0], n).protocol)
+        for n in ("finer", "candidate", "floor")
+    ]
+    keys = [set(f.records) for f in files]
+    assert keys[0] == keys[1] == keys[2] and len(keys[0]) == 2  # the same two trials in each run
+    drawn = list(F.stratified_draw(E.Experiment.cells, 2, sample.seed).values())
+    assert keys[0] == {f"{drawn[0][0]}:0", f"{drawn[1][0]}:0"}  # the first drawn cell of two strata, first trial
