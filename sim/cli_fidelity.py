@@ -58,6 +58,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     except (ValueError, ResultsFileBusy) as exc:
         print(f"mantaray sim fidelity: {exc}", file=sys.stderr)
         return 2
+    interrupted = False
     if not args.runs:
         left = G.missing_trials(runs)
         total = 3 * sum(len(r.finer.protocol.cell_ids()) * r.finer.protocol.trials_per_cell for r in runs)
@@ -65,13 +66,8 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         interruptible()
         try:
             G.run_missing(sample, runs, workers(args.jobs), on_record=lambda record: bar.update(1))
-        except KeyboardInterrupt:
-            bar.close()
-            print(
-                f"\ninterrupted: the finished trials are in {args.trials_dir}; the same command continues",
-                file=sys.stderr,
-            )
-            return 130
+        except KeyboardInterrupt:  # the trials paired so far still get their report, without a verdict
+            interrupted = True
         except SimulationUnstable as exc:
             bar.close()
             print(f"mantaray sim fidelity: {exc}; the finished trials are kept in {args.trials_dir}", file=sys.stderr)
@@ -98,6 +94,13 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         f"_{candidate.slug}_vs_{finer.slug}",
     )
     paths = G.write_report(report, out)
+    if interrupted:
+        print(
+            f"\ninterrupted: the finished trials are in {args.trials_dir}, the report of the {report['pairs']} "
+            f"paired so far in {paths[1]}; the same command continues",
+            file=sys.stderr,
+        )
+        return 130
     if args.json:
         print(json.dumps(report))
     elif report["verdict"] is None:
