@@ -3,12 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import hashlib
 import json
 import os
-import sys
-from pathlib import Path
 
 from mantaray.arguments import controller_settings, reporter, start_live
 from mantaray.outputs import writable_dir
@@ -18,19 +15,42 @@ from .cli_common import output, plant_for_settings
 
 
 def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
-    """`sim run`: one trial set up from the arguments, run, and reported."""
-    from mantaray.host.link import Link
-    from mantaray.host.ports import check_port
-    from mantaray.host.transport import SerialTransport
-    from mantaray.host.view import RunView
-    from mantaray.host.vmcu import VirtualMcu
-    from mantaray.plots import path_phase_figure
+    """`sim run`: one trial set up from the arguments, run (sim/trial_run.py), and reported."""
+    from .trial_run import run_trial
 
-    from .bridge import Bridge, TrialSpec
+    rig, tracking, spec, outputs = _trial(args, parser)
+    bar, progress = _progress(args)
+    try:
+        result, paths = run_trial(
+            rig, tracking, spec, outputs, _report, port=args.port, realtime=args.realtime, progress=progress
+        )
+    except ValueError as exc:  # model.fabric_height: the sheet sags inside its corners there
+        if "not over the fabric" not in str(exc):
+            raise
+        parser.error(
+            f"--start {args.start[0]:g},{args.start[1]:g} is not over the hanging sheet (it sags in from the frame "
+            "at its corners): start further in"
+        )
+    finally:
+        if outputs.live is not None:
+            outputs.live.close()
+        if bar is not None:
+            bar.close()
+    _warnings(args, result)
+    summary = {**result.summary(), "plant": args.plant, "plant_set": dict(args.set), "recording": None, **paths}
+    print(json.dumps(summary) if args.json else _summary_line(args, result, paths))
+    return 0 if result.success else 1
+
+
+def _trial(args: argparse.Namespace, parser: argparse.ArgumentParser):
+    """The rig, camera model, trial and outputs the arguments ask for; a usage error for any that cannot be."""
+    from mantaray.host.ports import check_port
+
+    from .bridge import TrialSpec
     from .experiment import controller_gains
-    from .mjcf import N_ACTUATORS
     from .plant import Plant
-    from .trial_view import TrialView
+    from .trial_run import TrialOutputs
+    from .video import FPS_RANGE
 
     settings = controller_settings(parser, args)
     args.plant = plant_for_settings(parser, settings, args.plant)
@@ -41,6 +61,12 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     half = (rig.frame.size_x_m / 2, rig.frame.size_y_m / 2)
     _inside(parser, "--start", args.start, half)
     _inside(parser, "--target", args.target, half)
+    if args.video and not FPS_RANGE[0] <= args.video_fps <= FPS_RANGE[1]:
+        parser.error(
+            f"--video-fps must be {FPS_RANGE[0]:g}..{FPS_RANGE[1]:g} frames per second, got {args.video_fps:g}"
+        )
+    if args.viewer and not os.environ.get("DISPLAY"):
+        parser.error("--viewer needs a display (DISPLAY is not set); use --video to record one instead")
     try:
         check_port(args.port)
         tracking = plant.tracking(
@@ -59,131 +85,66 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         )
     except ValueError as exc:
         parser.error(str(exc))
-
-    from .video import FPS_RANGE
-
-    if args.video and not FPS_RANGE[0] <= args.video_fps <= FPS_RANGE[1]:
-        parser.error(
-            f"--video-fps must be {FPS_RANGE[0]:g}..{FPS_RANGE[1]:g} frames per second, got {args.video_fps:g}"
-        )
-    out = output(parser, writable_dir, args.out)
-    stem = _trial_stem(args)
-    progress = None
-    if not args.json:
-        from .progress import Progress
-
-        bar = Progress(float(args.duration), unit="sim s", units="simulated s", label="sim run", line_every_s=5.0)
-
-        def progress(t_s: float) -> None:
-            bar.update(t_s - bar.done)
-
-    if args.viewer and not os.environ.get("DISPLAY"):
-        parser.error("--viewer needs a display (DISPLAY is not set); use --video to record one instead")
-    live = start_live(parser, args, _report)
-    with contextlib.ExitStack() as stack:
-        if live is not None:
-            stack.callback(live.close)
-            _report(f"live view at {live.options.page_url}")
-        port = args.port or stack.enter_context(VirtualMcu(clock="wall" if args.realtime else "sim")).path
-        link = Link(SerialTransport(port))
-        stack.callback(link.close)
-        bridge = Bridge(link, rig, tracking, lockstep=not args.realtime)
-        view = RunView(
-            "mantaray_sim_run",
-            out / f"{stem}.rrd",
-            None if live is None else live.options.grpc_url,
-            {**_settings(args), "plant": args.plant, "object": rig.object.name},
-            N_ACTUATORS,
-            (rig.frame.size_x_m, rig.frame.size_y_m),
-            _report,
-            world=True,
-        )
-        trial_view = bridge.view = TrialView(view, bridge.model, bridge.data, rig, link, lockstep=not args.realtime)
-        viewer = None
-        if args.viewer:
-            import mujoco.viewer
-
-            viewer = bridge.viewer = mujoco.viewer.launch_passive(bridge.model, bridge.data)
-        if args.video:
-            from .video import Recorder
-
-            bridge.recorder = Recorder(bridge.model, fps=args.video_fps)
-        try:
-            result = bridge.run(spec, progress=progress)
-        except ValueError as exc:  # model.fabric_height: the sheet sags inside its corners there
-            if "not over the fabric" not in str(exc):
-                raise
-            parser.error(
-                f"--start {args.start[0]:g},{args.start[1]:g} is not over the hanging sheet (it sags in from "
-                f"the frame at its corners): start further in"
-            )
-        finally:
-            recording = trial_view.close()
-        if viewer is not None:
-            viewer.close()
-        if live is not None:
-            live.linger(args.linger, _report)
-    if progress is not None:
-        bar.close()
-
-    summary = {**result.summary(), "plant": args.plant, "plant_set": dict(args.set)}
-    spec = result.spec
-    outcome = "fell off" if result.fell_off else ("success" if result.success else "not within ε at T")
-    summary["figure"] = str(
-        path_phase_figure(
-            result.true_xy_m,
-            result.tilt_deg,
-            spec.start_m,
-            [spec.target_m],
-            spec.tolerance_m,
-            f"{result.object_name}, {spec.controller}, α = {spec.alpha_m:g} m: {outcome}\n"
-            f"final error {result.final_error_m * 100:.1f} cm (ε = {spec.tolerance_m * 100:g} cm)",
-            (rig.frame.size_x_m, rig.frame.size_y_m),
-            settings.configure(m.Configure()).tilt_limit,
-            out / f"{stem}.png",
-            t_s=result.t_s,
-            command_m=result.command_m,
-            range_m=rig.actuators.range_m,
-        )
+    outputs = TrialOutputs(
+        out=output(parser, writable_dir, args.out),
+        stem=_trial_stem(args),
+        metadata={**_settings(args), "plant": args.plant, "object": rig.object.name},
+        tilt_limit_deg=settings.configure(m.Configure()).tilt_limit,
+        video_fps=args.video_fps if args.video else None,
+        viewer=args.viewer,
+        live=start_live(parser, args, _report),
+        linger_s=args.linger,
     )
-    summary["trajectory"] = str(save_trajectory(result, out / f"{stem}.npz"))
-    summary["recording"] = None if recording is None else str(recording)
-    if args.video:
-        summary["video"] = str(bridge.recorder.save(out / f"{stem}.mp4"))
+    if outputs.live is not None:
+        _report(f"live view at {outputs.live.options.page_url}")
+    return rig, tracking, spec, outputs
+
+
+def _progress(args: argparse.Namespace):
+    """A bar over simulated time and the callback that moves it (none with --json)."""
+    if args.json:
+        return None, None
+    from .progress import Progress
+
+    bar = Progress(float(args.duration), unit="sim s", units="simulated s", label="sim run", line_every_s=5.0)
+    return bar, lambda t_s: bar.update(t_s - bar.done)
+
+
+def _warnings(args: argparse.Namespace, result) -> None:
+    """What the link and the tracker noticed, on stderr."""
     for message in result.watch.messages:
-        print(f"mantaray sim run: link: {message}", file=sys.stderr)
+        _report(f"link: {message}")
     if result.watch.unseen_frames:
-        print(
-            f"mantaray sim run: warning: the tracker ({args.vision}) saw no object in {result.watch.unseen_frames} "
-            f"of {len(result.t_s)} camera frames; the firmware got those as not visible (NaN in the trajectory's "
-            f"measured_xy_m)"
+        _report(
+            f"warning: the tracker ({args.vision}) saw no object in {result.watch.unseen_frames} of "
+            f"{len(result.t_s)} camera frames; the firmware got those as not visible (NaN in the trajectory's "
+            "measured_xy_m)"
             + (
                 " — a marker on a rolling object turns away from the camera: track it with --vision blob"
                 if args.vision == "aruco"
                 else ""
-            ),
-            file=sys.stderr,
+            )
         )
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        # one word per meaning: SUCCESS is within ε at T (the exit status); "reached" is within ε at some frame
-        outcome = "FELL OFF" if result.fell_off else ("SUCCESS" if result.success else "NOT WITHIN ε AT T")
-        reach = (
-            "never reached ε"
-            if result.time_to_reach_s is None
-            else f"reached ε first at {result.time_to_reach_s:.2f} s"
-        )
-        print(
-            f"{outcome}: {args.object}, {args.controller}, {args.plant} plant"
-            + "".join(f", {k}={v}" for k, v in args.set)
-            + f", start {args.start[0]:+.3f},{args.start[1]:+.3f} -> "
-            f"target {args.target[0]:+.3f},{args.target[1]:+.3f} m; final error {result.final_error_m * 100:.1f} cm "
-            f"(ε {args.tolerance * 100:g} cm), {reach}; {result.sim_time_s:.1f} sim s in {result.wall_time_s:.1f} wall s "
-            f"({result.sim_time_s / result.wall_time_s:.2f}x, physics {result.physics_share:.0%}); "
-            f"figure {summary['figure']}" + (f", video {summary['video']}" if args.video else "")
-        )
-    return 0 if result.success else 1
+
+
+HEADLINE = {"fell off": "FELL OFF", "success": "SUCCESS", "not within ε at T": "NOT WITHIN ε AT T"}  # the line's start
+
+
+def _summary_line(args: argparse.Namespace, result, paths: dict[str, str]) -> str:
+    from .trial_run import outcome_words
+
+    reach = (
+        "never reached ε" if result.time_to_reach_s is None else f"reached ε first at {result.time_to_reach_s:.2f} s"
+    )
+    return (
+        f"{HEADLINE[outcome_words(result)]}: {args.object}, {args.controller}, {args.plant} plant"
+        + "".join(f", {k}={v}" for k, v in args.set)
+        + f", start {args.start[0]:+.3f},{args.start[1]:+.3f} -> target {args.target[0]:+.3f},{args.target[1]:+.3f} "
+        f"m; final error {result.final_error_m * 100:.1f} cm (ε {args.tolerance * 100:g} cm), {reach}; "
+        f"{result.sim_time_s:.1f} sim s in {result.wall_time_s:.1f} wall s "
+        f"({result.sim_time_s / result.wall_time_s:.2f}x, physics {result.physics_share:.0%}); "
+        f"figure {paths['figure']}" + (f", video {paths['video']}" if "video" in paths else "")
+    )
 
 
 def _inside(parser: argparse.ArgumentParser, name: str, xy: tuple[float, float], half: tuple[float, float]) -> None:
@@ -206,22 +167,3 @@ def _trial_stem(args: argparse.Namespace) -> str:
     digest = hashlib.sha1(repr(_settings(args)).encode()).hexdigest()[:6]
     (sx, sy), (tx, ty) = args.start, args.target
     return f"{args.object}_{args.controller}_{sx:+.3f},{sy:+.3f}_to_{tx:+.3f},{ty:+.3f}_seed{args.seed}_{digest}"
-
-
-def save_trajectory(result, path: Path) -> Path:
-    import numpy as np
-
-    path.parent.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(
-        path,
-        t_s=result.t_s,
-        true_xy_m=result.true_xy_m,
-        measured_xy_m=result.measured_xy_m,
-        tilt_deg=result.tilt_deg,
-        command_m=result.command_m,
-        measured_m=result.measured_m,
-        state=result.state,
-        start_m=result.spec.start_m,
-        target_m=result.spec.target_m,
-    )
-    return path

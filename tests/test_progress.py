@@ -61,3 +61,4 @@ def test_sim_run_prints_progress_lines_when_its_output_goes_to_a_log(tmp_path):
     )
     assert run.returncode == 1, run.stderr  # 0.5 s is too short to get there: a result
     assert re.search(r"^\d\d:\d\d:\d\d sim run: 0\.5/0\.5 simulated s", run.stderr, re.MULTILINE), run.stderr
+    assert run.stdout.startswith("NOT WITHIN ε AT T: sphere, manhattan, polyester plant"), run.stdout  # the result
