@@ -1,8 +1,11 @@
-"""An experiment's map from its results file: success rate per cell, the paper's totals and its regions."""
+"""An experiment's map from its results file: success rate per cell, the paper's totals and its regions, and the
+files `sim heatmap` writes of them (cells.csv, summary.json, the figures)."""
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -74,3 +77,43 @@ def summarize(results: ResultsFile) -> Summary:
         region_cells=regions,
         cell_area_m2=f.size_x_m * f.size_y_m / n**2,
     )
+
+
+def heatmap_outputs(results, out: Path, title: str) -> dict:
+    """Write per-cell rates (CSV), the summary (JSON) and the figure beside the results file; return the summary."""
+    from mantaray.plots import heatmap_figure
+
+    from .experiment import cell_bounds
+
+    s = summarize(results)
+    p = results.protocol
+    f = p.rig().frame
+    rows = ["cell,ix,iy,x_lo_m,y_lo_m,trials,success_rate,reach_rate,fell_rate"]
+    for cell in p.cell_ids():
+        ix, iy = cell % p.cells, cell // p.cells
+        x_lo, _, y_lo, _ = cell_bounds(p, (f.size_x_m, f.size_y_m), cell)
+        rows.append(
+            f"{cell},{ix},{iy},{x_lo:.4f},{y_lo:.4f},{s.trials_per_cell[iy, ix]},{s.rates[iy, ix]:.3f},"
+            f"{s.reach_rates[iy, ix]:.3f},{s.fell_rates[iy, ix]:.3f}"
+        )
+    (out / "cells.csv").write_text("\n".join(rows) + "\n")
+    summary = {"protocol": p.to_json(), **s.to_json()}
+    size = (f.size_x_m, f.size_y_m)
+    summary["figure"] = str(
+        heatmap_figure(
+            s.rates,
+            size,
+            f"{title}\nscore {s.score:.1f} of {len(p.cell_ids())} (within ε at any frame: {s.reach_score:.1f})",
+            out / "heatmap.png",
+        )
+    )
+    summary["reach_figure"] = str(
+        heatmap_figure(
+            s.reach_rates,
+            size,
+            f"{title}\nwithin ε at any frame (where the paper's loop stops): score {s.reach_score:.1f}",
+            out / "heatmap_reach.png",
+        )
+    )
+    (out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
+    return summary

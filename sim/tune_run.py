@@ -91,8 +91,8 @@ def _noted(progress: Progress) -> Callable[[int, int, dict], None]:
 def _final_heatmaps(path: Path, title: str) -> list[str]:
     """The final check's heatmaps under both rules (and cells.csv, summary.json) beside its trials, as sim heatmap
     draws them; {trials} in the title is the check's trials per cell."""
-    from .cli_heatmap import heatmap_outputs
     from .results_file import ResultsFile
+    from .summary import heatmap_outputs
 
     results = ResultsFile.load(path)
     summary = heatmap_outputs(results, path.parent, title.format(trials=results.protocol.trials_per_cell))
