@@ -19,65 +19,22 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from . import fidelity as G
     from .experiment import ExperimentMismatch
     from .model import SimulationUnstable
-    from .progress import Progress
     from .results_file import ResultsFileBusy
 
     try:
-        if args.runs:
-            runs = G.load_runs(*args.runs)
-            candidate, finer = (G.run_fidelity(getattr(runs[0], n)) for n in ("candidate", "finer"))
-            shift_m, sample_text = runs[0].floor.protocol.start_shift_m, f"the runs {', '.join(args.runs)}"
-        else:
-            candidate, finer = G.parse_fidelity(args.candidate), G.parse_fidelity(args.finer)
-            arms = tuple(G.Arm.parse(c) for c in (args.controller or ("manhattan", "euclidean")))
-            sample = G.GateSample(
-                object_name=args.object,
-                plant=args.plant,
-                plant_set=tuple(sorted(args.set)),  # the same values given in any order name the same runs
-                alpha_m=args.alpha,
-                arms=arms,
-                cells_per_stratum=args.cells_per_stratum,
-                trials_per_cell=args.trials_per_cell,
-                seed=args.seed,
-                duration_s=args.duration,
-            )
-            shift_m = args.shift
-            sample.protocol(arms[0], candidate, shift_m)  # the protocol's own checks, before any work
-            runs = G.open_runs(sample, candidate, finer, Path(args.trials_dir), shift_m)
-            sample_text = (
-                f"{args.object} on the {sample.plant_label} plant, α = {args.alpha:g} m, "
-                f"{', '.join(a.label for a in arms)}: {len(sample.cells())} cells "
-                f"({args.cells_per_stratum} from each stratum) x {args.trials_per_cell} trials, seed "
-                f"{args.seed}, T = {args.duration:g} s"
-            )
+        sample, runs, candidate, finer, shift_m, sample_text = _gate(args)
     except ExperimentMismatch as exc:
-        print(
-            f"mantaray sim fidelity: {exc} (the gate keeps its runs in --trials-dir {args.trials_dir})", file=sys.stderr
-        )
-        return 2
+        return _refused(f"{exc} (the gate keeps its runs in --trials-dir {args.trials_dir})")
     except (ValueError, ResultsFileBusy) as exc:
-        print(f"mantaray sim fidelity: {exc}", file=sys.stderr)
-        return 2
-    interrupted = False
-    if not args.runs:
-        left = G.missing_trials(runs)
-        total = 3 * sum(len(r.finer.protocol.cell_ids()) * r.finer.protocol.trials_per_cell for r in runs)
-        bar = Progress(total, initial=total - left, unit="trial", label="fidelity")
-        interruptible()
-        try:
-            G.run_missing(sample, runs, workers(args.jobs), on_record=lambda record: bar.update(1))
-        except KeyboardInterrupt:  # the trials paired so far still get their report, without a verdict
-            interrupted = True
-        except SimulationUnstable as exc:
-            bar.close()
-            print(f"mantaray sim fidelity: {exc}; the finished trials are kept in {args.trials_dir}", file=sys.stderr)
-            return 3
-        bar.close()
+        return _refused(str(exc))
+    try:
+        interrupted = sample is not None and not _run_missing(sample, runs, args.jobs)
+    except SimulationUnstable as exc:
+        return _refused(f"{exc}; the finished trials are kept in {args.trials_dir}", 3)
     try:
         report = G.compare(runs)
     except G.GateMismatch as exc:
-        print(f"mantaray sim fidelity: {exc}", file=sys.stderr)
-        return 2
+        return _refused(str(exc))
     report.update(
         candidate=candidate.label,
         finer=finer.label,
@@ -101,17 +58,74 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             file=sys.stderr,
         )
         return 130
-    if args.json:
-        print(json.dumps(report))
-    elif report["verdict"] is None:
-        print(
-            f"{candidate.label} against {finer.label}: incomplete ({report['pairs']} of {report['expected_pairs']} "
-            f"paired trials); {paths[1]}"
-        )
-    else:
-        print(
-            f"{candidate.label} {report['verdict']} of {finer.label} ({report['pairs']} paired trials)"
-            + "".join(f"\n  {c}" for c in report["changed"])
-            + f"\n{paths[1]}"
-        )
+    print(json.dumps(report) if args.json else _verdict_line(report, candidate, finer, paths[1]))
     return {G.KEEPS: 0, G.CHANGES: 1}.get(report["verdict"], 3)
+
+
+def _gate(args: argparse.Namespace):
+    """(sample, runs, candidate, finer, shift [m], the sample in words) from the arguments: the three runs of each arm
+    opened, or with --runs the three files loaded (sample None: nothing to run). ValueError for a bad argument."""
+    from . import fidelity as G
+
+    if args.runs:
+        runs = G.load_runs(*args.runs)
+        candidate, finer = (G.run_fidelity(getattr(runs[0], n)) for n in ("candidate", "finer"))
+        return None, runs, candidate, finer, runs[0].floor.protocol.start_shift_m, f"the runs {', '.join(args.runs)}"
+    candidate, finer = G.parse_fidelity(args.candidate), G.parse_fidelity(args.finer)
+    arms = tuple(G.Arm.parse(c) for c in (args.controller or ("manhattan", "euclidean")))
+    sample = G.GateSample(
+        object_name=args.object,
+        plant=args.plant,
+        plant_set=tuple(sorted(args.set)),  # the same values given in any order name the same runs
+        alpha_m=args.alpha,
+        arms=arms,
+        cells_per_stratum=args.cells_per_stratum,
+        trials_per_cell=args.trials_per_cell,
+        seed=args.seed,
+        duration_s=args.duration,
+    )
+    sample.protocol(arms[0], candidate, args.shift)  # the protocol's own checks, before any work
+    runs = G.open_runs(sample, candidate, finer, Path(args.trials_dir), args.shift)
+    text = (
+        f"{args.object} on the {sample.plant_label} plant, α = {args.alpha:g} m, "
+        f"{', '.join(a.label for a in arms)}: {len(sample.cells())} cells "
+        f"({args.cells_per_stratum} from each stratum) x {args.trials_per_cell} trials, seed "
+        f"{args.seed}, T = {args.duration:g} s"
+    )
+    return sample, runs, candidate, finer, args.shift, text
+
+
+def _run_missing(sample, runs: list, jobs: int | None) -> bool:
+    """Every arm's missing trials run, with progress; False if interrupted (what finished is kept)."""
+    from . import fidelity as G
+    from .progress import Progress
+
+    left = G.missing_trials(runs)
+    total = 3 * sum(len(r.finer.protocol.cell_ids()) * r.finer.protocol.trials_per_cell for r in runs)
+    bar = Progress(total, initial=total - left, unit="trial", label="fidelity")
+    interruptible()
+    try:
+        G.run_missing(sample, runs, workers(jobs), on_record=lambda record: bar.update(1))
+    except KeyboardInterrupt:  # the trials paired so far still get their report, without a verdict
+        return False
+    finally:
+        bar.close()
+    return True
+
+
+def _refused(why: str, status: int = 2) -> int:
+    print(f"mantaray sim fidelity: {why}", file=sys.stderr)
+    return status
+
+
+def _verdict_line(report: dict, candidate, finer, path) -> str:
+    if report["verdict"] is None:
+        return (
+            f"{candidate.label} against {finer.label}: incomplete ({report['pairs']} of {report['expected_pairs']} "
+            f"paired trials); {path}"
+        )
+    return (
+        f"{candidate.label} {report['verdict']} of {finer.label} ({report['pairs']} paired trials)"
+        + "".join(f"\n  {c}" for c in report["changed"])
+        + f"\n{path}"
+    )
