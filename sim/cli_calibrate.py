@@ -17,8 +17,55 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from mantaray.host.runlog import RunLogError
 
     from . import calibrate as C
-    from . import parameters as P
     from . import study as S
+
+    evidence, keys, fixed = _evidence(args, parser)
+    check_ray(parser, args)
+    out = output(parser, writable_dir, args.out or f"out/calibration/{'log' if args.log else 'findings'}")
+    try:
+        study = S.open_study(out / "study.db", evidence, keys, fixed)
+    except S.StudyMismatch as exc:
+        return _refused(str(exc))
+    progress = candidates(study, out, args.candidates, "calibrate")
+    fig3 = None
+    interruptible()
+    try:
+        with worker_pool(parser, args) as pool:
+            S.run_study(study, evidence, keys, fixed, args.candidates, pool, _noted(progress, evidence.kind))
+            best = S.best_trial(study)
+            if args.fig3 and best is not None and evidence.kind == "findings":
+                fig3 = C.fig3_for(best, args.plant, pool, out / "fig3.png", args.resolution, args.timestep)
+    except RunLogError as exc:  # a log the simulation cannot start (say, off the fabric's corner)
+        return _refused(str(exc))
+    except KeyboardInterrupt:
+        C.write_report(study, evidence, out)
+        print(
+            f"\ninterrupted: {len(S.completed(study))} candidates are in {out / 'study.db'}; the same command "
+            f"continues the search (report so far in {out / 'report.md'})",
+            file=sys.stderr,
+        )
+        return 130
+    finally:
+        progress.close()
+    report = C.write_report(study, evidence, out, fig3)
+    best = report["best"]
+    print(
+        json.dumps(report)
+        if args.json
+        else f"{report['candidates']} candidates; best #{best['number']}: objectives {best['objectives']}; "
+        f"report {out / 'report.md'}"
+        if best
+        else f"no candidate evaluated; {out / 'report.md'}"
+    )
+    return 0
+
+
+def _evidence(args: argparse.Namespace, parser: argparse.ArgumentParser):
+    """(evidence, the keys searched, the values fixed) from the arguments; a usage error for what cannot be."""
+    from mantaray.host.runlog import RunLogError
+
+    from . import calibrate as C
+    from . import parameters as P
     from .logfit import LogEvidence, check_logs
     from .plant import Plant
 
@@ -52,55 +99,23 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         parser.error(str(exc))
     if not keys:
         parser.error("nothing to search: every parameter named is fixed by --set")
-    check_ray(parser, args)
-    out = output(parser, writable_dir, args.out or f"out/calibration/{'log' if args.log else 'findings'}")
-    try:
-        study = S.open_study(out / "study.db", evidence, keys, fixed)
-    except S.StudyMismatch as exc:
-        print(f"mantaray sim calibrate: {exc}", file=sys.stderr)
-        return 2
-    progress = candidates(study, out, args.candidates, "calibrate")
+    return evidence, keys, fixed
+
+
+def _noted(progress, kind: str):
+    """The search's progress, each candidate with what it scored."""
 
     def report_candidate(n: int, total: int, info: dict) -> None:
         if "unstable" in info:
             note = "the physics diverged: scored the worst of every objective"
         else:
             note = "objectives " + " ".join(f"{v:.3f}" for v in info["objectives"])
-            note += f", {info['passed']} findings hold" if evidence.kind == "findings" else ""
+            note += f", {info['passed']} findings hold" if kind == "findings" else ""
         progress.update(1, note=note)
 
-    pool = worker_pool(parser, args)
-    fig3 = None
-    interruptible()
-    try:
-        with pool:
-            S.run_study(study, evidence, keys, fixed, args.candidates, pool, report_candidate)
-            best = S.best_trial(study)
-            if args.fig3 and best is not None and evidence.kind == "findings":
-                fig3 = C.fig3_for(best, args.plant, pool, out / "fig3.png", args.resolution, args.timestep)
-    except RunLogError as exc:  # a log the simulation cannot start (say, off the fabric's corner)
-        progress.close()
-        print(f"mantaray sim calibrate: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        progress.close()
-        C.write_report(study, evidence, out)
-        print(
-            f"\ninterrupted: {len(S.completed(study))} candidates are in {out / 'study.db'}; the same command "
-            f"continues the search (report so far in {out / 'report.md'})",
-            file=sys.stderr,
-        )
-        return 130
-    progress.close()
-    report = C.write_report(study, evidence, out, fig3)
-    if args.json:
-        print(json.dumps(report))
-    else:
-        best = report["best"]
-        print(
-            f"{report['candidates']} candidates; best #{best['number']}: objectives {best['objectives']}; "
-            f"report {out / 'report.md'}"
-            if best
-            else f"no candidate evaluated; {out / 'report.md'}"
-        )
-    return 0
+    return report_candidate
+
+
+def _refused(why: str) -> int:
+    print(f"mantaray sim calibrate: {why}", file=sys.stderr)
+    return 2
