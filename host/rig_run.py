@@ -17,7 +17,7 @@ from .keys import Keys
 from .link import LinkError
 from .loop import STOPPED_REACHED, ClosedLoop, Frame, Tolerance
 from .runlog import RunLog
-from .session import BoardLost, RigSession, Setup
+from .session import BoardLost, EmergencyStopLatched, RigSession, Setup
 from .tracker import FrameSource, Observation, Tracker
 from .view import RunView
 
@@ -140,6 +140,9 @@ class RigRun:
                 self.outcome = "interrupted"
         except KeyboardInterrupt:  # while connecting, or a second Ctrl-C
             self.outcome = "interrupted"
+        except EmergencyStopLatched as exc:  # the board was found in it: only the user clears it
+            self.report(f"the run did not start: {exc}")
+            self.outcome = EMERGENCY_STOP
         except LinkError as exc:  # what the session's retries could not absorb: the run ends
             self.report(f"the run ended: {exc}")
             self.outcome = "board lost" if isinstance(exc, BoardLost) else "refused"

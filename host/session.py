@@ -11,6 +11,7 @@ jog, zero, stop, estop) reconnects the same way and sends nothing again: it set 
 from __future__ import annotations
 
 import os
+import shlex
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -207,6 +208,15 @@ class RigSession:
             for text in self._live.rig_differences:
                 self.report(f"warning: {text}")
 
+    def _keep_board_estop(self) -> None:
+        """A board met in its emergency stop (another host's, or one its reset kept) stays in it: latched here too."""
+        if not self.estopped and m.State(self.probe().state) == m.State.ESTOP:
+            self.estopped = True
+            self.report(
+                f"{self.port}: the board is in its emergency stop, which this host did not send: it stays latched "
+                f"until `mantaray stop --port {shlex.quote(self.port)}`"
+            )
+
     def _apply(self) -> None:
         if self.estopped:  # latched across resets and replugs: nothing is powered until stop() clears it
             self._live.command(m.EmergencyStop())
@@ -225,6 +235,7 @@ class RigSession:
         does not come back within reconnect_timeout_s, or a setup lost every time, raises BoardLost."""
 
         def apply() -> None:
+            self._keep_board_estop()
             self._apply()
             self._resets_seen = self._live.resets
 
@@ -287,7 +298,10 @@ class RigSession:
 
     def start(self) -> None:
         if self.estopped:
-            raise EmergencyStopLatched("the emergency stop is latched: stop() clears it before a start")
+            raise EmergencyStopLatched(
+                f"the emergency stop is latched: `mantaray stop --port {shlex.quote(self.port)}` (stop()) clears it "
+                "before a start"
+            )
         self.command(m.Start())
         self.running = True
 

@@ -203,6 +203,31 @@ def test_an_emergency_stop_another_host_sent_is_latched_in_the_session_too():
     assert m.State(session.probe().state) == m.State.IDLE
 
 
+def test_a_session_that_finds_the_board_in_its_emergency_stop_keeps_it_latched():
+    """Another host's emergency stop, met on opening (or a reset kept it): the setup must not clear it."""
+    from mantaray.host.session import EmergencyStopLatched
+    from mantaray.host.transport import InProcessTransport
+
+    board, events = InProcessTransport(simulated_clock=False), []
+    other = RigSession("in-process", Setup(m.Configure()), reset_wait_s=0.0, open_transport=lambda port: board)
+    other.attach().emergency_stop()
+    session = RigSession(
+        "in-process",
+        Setup(m.Configure(telemetry_period=0), target=(0.1, 0.0)),
+        reset_wait_s=0.0,
+        report=events.append,
+        open_transport=lambda port: board,
+    ).open()
+    assert session.estopped and m.State(session.probe().state) == m.State.ESTOP
+    assert any("did not send" in e for e in events), events
+    with pytest.raises(EmergencyStopLatched, match="mantaray stop --port in-process"):
+        session.start()
+    session.stop()  # the user clears it: the setup goes to the board
+    session.start()
+    t = session.position(m.ObjectPosition(frame=1, capture_time=1000, x=0.0, y=0.0))
+    assert m.State(t.state) == m.State.RUNNING
+
+
 def test_an_attached_session_reconnects_and_sends_nothing_again():
     """What monitor, jog, zero, stop and estop use: a reconnection identifies the board and leaves it as it is."""
     from mantaray.host.transport import InProcessTransport
@@ -469,7 +494,8 @@ def test_a_session_rides_out_a_link_that_loses_every_other_round_trip():
         session.stop()
         session.close()
     assert 30 < answered < 140, answered  # the faults bit, and the run went on through them
-    assert session.reconnects > 0 and session.restores == session.reconnects
+    # every recovery ends restored; one may take several reconnects when its setup's round trips are lost too
+    assert session.reconnects > 0 and 0 < session.restores <= session.reconnects
     assert any("sent again" in text for text in events)
 
 

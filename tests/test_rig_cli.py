@@ -445,6 +445,20 @@ def test_estop_latches_the_emergency_stop_and_stop_clears_it():
     assert m.State(t.state) == m.State.IDLE and t.faults == 0
 
 
+def test_a_run_on_a_board_in_its_emergency_stop_does_not_start_and_leaves_it_latched(still_video, tmp_path):
+    """Only the user clears an emergency stop (`mantaray stop`): a run that finds one must not set the board up."""
+    with VirtualMcu(clock="wall") as vmcu:
+        assert _mantaray("estop", "--port", vmcu.path).returncode == 0
+        rig = _mantaray(
+            "rig", "--port", vmcu.path, "--camera", still_video, "--target=-0.1,0.1", "--timeout", "2",
+            "--out", str(tmp_path),
+        )  # fmt: skip
+        t = _board_state(vmcu.path)
+    assert rig.returncode == 1 and rig.stdout.startswith("emergency stop"), rig.stderr
+    assert f"`mantaray stop --port {vmcu.path}`" in rig.stderr and "Traceback" not in rig.stderr, rig.stderr
+    assert m.State(t.state) == m.State.ESTOP and t.command == (0.0,) * 4
+
+
 def _faulted(port: str) -> None:
     """A deadman fault: the board started, and no camera frame after it for longer than the deadman (0.5 s)."""
     link = Link(SerialTransport(port))
