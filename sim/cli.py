@@ -4,16 +4,14 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import math
 
-from mantaray.arguments import add_controller_arguments, add_view_arguments, number, parse_gains
+from mantaray.arguments import add_view_arguments, number
 from mantaray.protocol import messages as m
-from mantaray.protocol.codec import bounds_text, choices
+from mantaray.protocol.codec import choices
 
-from .objects import OBJECTS
-from .parameters import ParameterError, plant_names
-from .plant import DEFAULT_PLANT, parse_setting
-from .rig import DEFAULT_FIDELITY, FIDELITIES, VISION_MODES
+from . import cli_options as O
+from .plant import DEFAULT_PLANT
+from .rig import VISION_MODES
 
 RUN = """One target-reaching trial: the native firmware on a pty drives the simulated rig in lock-step.
 
@@ -60,139 +58,6 @@ sample is incomplete, or the physics diverged)."""
 COMPARE = "The difference map of two heatmap runs (first minus second), like the paper's Euclidean - Manhattan."
 
 
-def _point(text: str) -> tuple[float, float]:
-    parts = text.replace(",", " ").split()
-    try:
-        x, y = (float(p) for p in parts)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected two numbers X,Y in metres, got {text!r}") from None
-    if not (math.isfinite(x) and math.isfinite(y)):
-        raise argparse.ArgumentTypeError(f"coordinates must be finite, got {text!r}")
-    return x, y
-
-
-def _cells(text: str) -> tuple[int, ...]:
-    try:
-        return tuple(int(v) for v in text.replace(",", " ").split())
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected cell indices like 0,21,210, got {text!r}") from None
-
-
-# ------------------------------------------------------------------------------------------- shared options
-def _options(*parents: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    """A parent parser: options that several commands take alike."""
-    return argparse.ArgumentParser(add_help=False, parents=list(parents))
-
-
-def _shared() -> dict[str, argparse.ArgumentParser]:
-    """The options several commands share, each defined here once, by name."""
-    jobs = _options()
-    jobs.add_argument("--jobs", type=number(1, integer=True), help="parallel workers (default: every core)")
-    pool = _options(jobs)
-    pool.add_argument(
-        "--executor",
-        choices=["local", "ray"],
-        default="local",
-        help="local processes, or Ray actors (a local Ray instance, or --ray-address; without --jobs, a worker for "
-        "every CPU of the cluster)",
-    )
-    pool.add_argument("--ray-address", help="address of a running Ray cluster (e.g. ray://head:10001)")
-    fidelity = _options()
-    named = ", ".join(f"{name} {f.label}" for name, f in FIDELITIES.items())
-    fidelity.add_argument(
-        "--resolution",
-        type=int,
-        default=DEFAULT_FIDELITY.resolution,
-        help=f"fabric vertices per side (odd); the named fidelities: {named}",
-    )
-    fidelity.add_argument("--timestep", type=float, default=DEFAULT_FIDELITY.timestep_s, help="physics step [s]")
-    trial = _options()
-    trial.add_argument("--object", choices=sorted(OBJECTS), default="sphere", help="the paper's object (Table I)")
-    trial.add_argument("--duration", type=float, default=10.0, help="runtime T [s] (paper: 10)")
-    alpha = _options()
-    alpha.add_argument(
-        "--alpha",
-        type=float,
-        default=0.0,
-        help=f"noise amplitude α [m], {bounds_text(m.Configure, 'noise_amplitude')} (paper: 0.1 cube, 0.05 bunny)",
-    )
-    controller = _options()
-    add_controller_arguments(controller)
-    controller.add_argument(
-        "--gains",
-        type=parse_gains,
-        metavar="KP,KI,KD[,ILIM]",
-        help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's",
-    )
-    controller.add_argument(
-        "--tolerance", type=float, default=0.02, help=f"ε [m], {bounds_text(m.Configure, 'tolerance')}"
-    )
-    controller.add_argument(
-        "--plant",
-        choices=plant_names(),
-        help=f"the simulated plant (sim/plant.toml) (default: the one --settings was tuned for, else {DEFAULT_PLANT})",
-    )
-    report = _options()
-    report.add_argument(
-        "--json", action="store_true", help="print the result as JSON on stdout (progress stays on stderr)"
-    )
-    return {
-        "jobs": jobs,
-        "pool": pool,
-        "fidelity": fidelity,
-        "trial": trial,
-        "alpha": alpha,
-        "closed_loop": controller,
-        "json": report,
-    }
-
-
-def _plant(default: str) -> argparse.ArgumentParser:
-    """--plant with a default of its own: for a command that runs no --settings."""
-    plant = _options()
-    plant.add_argument("--plant", choices=plant_names(), default=default, help="the simulated plant (sim/plant.toml)")
-    return plant
-
-
-def _setting(text: str) -> tuple[str, float | str]:
-    try:
-        return parse_setting(text)
-    except ParameterError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-
-
-def _plant_set() -> argparse.ArgumentParser:
-    """--set KEY=VALUE: a value of the plant fixed for this command, checked against its declared range."""
-    fixed = _options()
-    fixed.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        type=_setting,
-        metavar="KEY=VALUE",
-        help="fix a value of the plant (a key of sim/plant.toml, within its declared range); repeatable",
-    )
-    return fixed
-
-
-def _out(what: str, default: str | None = None) -> argparse.ArgumentParser:
-    """--out: the folder a command writes into (its default named in `what` where it depends on other options)."""
-    out = _options()
-    out.add_argument("--out", default=default, metavar="DIR", help=f"directory for {what}")
-    return out
-
-
-def _sample(parser: argparse.ArgumentParser, cells_per_stratum: int, trials_per_cell: int) -> None:
-    """--cells-per-stratum and --trials-per-cell: the stratified sample a search or a gate draws."""
-    parser.add_argument(
-        "--cells-per-stratum",
-        type=number(1, integer=True),
-        default=cells_per_stratum,
-        help="cells drawn from each of centre, axes, diagonals, edges and corners",
-    )
-    parser.add_argument("--trials-per-cell", type=number(1, integer=True), default=trials_per_cell)
-
-
 def _handler(module: str, parser: argparse.ArgumentParser):
     """The command's handler, `run` of sim/<module>.py, imported only when it runs: parsing loads no simulation."""
     return lambda args: importlib.import_module(f".{module}", __package__).run(args, parser)
@@ -207,7 +72,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "over a virtual serial port, through the same protocol as the hardware.",
     )
     sim_sub = sim.add_subparsers(dest="sim_command", metavar="SUBCOMMAND")
-    shared = _shared()
+    shared = O.shared()
     fmt = argparse.ArgumentDefaultsHelpFormatter
     _add_run(sim_sub, shared, fmt)
     _add_heatmap(sim_sub, shared, fmt)
@@ -243,12 +108,12 @@ def _add_run(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None:
             shared["trial"],
             shared["alpha"],
             shared["closed_loop"],
-            _plant_set(),
-            _out("the figure, trajectory and video", "out/sim"),
+            O.plant_set(),
+            O.out("the figure, trajectory and video", "out/sim"),
         ],
     )
-    run.add_argument("--start", type=_point, default=(0.05, -0.05), metavar="X,Y", help="object start [m]")
-    run.add_argument("--target", type=_point, default=(-0.05, 0.05), metavar="X,Y", help="target p_d [m]")
+    run.add_argument("--start", type=O.point, default=(0.05, -0.05), metavar="X,Y", help="object start [m]")
+    run.add_argument("--target", type=O.point, default=(-0.05, 0.05), metavar="X,Y", help="target p_d [m]")
     run.add_argument("--seed", type=int, default=1, help="seed of the actuator noise and the camera model")
     run.add_argument("--rate", type=float, help="camera rate [Hz] (default the plant's: the paper's 12)")
     run.add_argument("--latency", type=float, help="camera latency [s], below one frame period (default the plant's)")
@@ -289,7 +154,7 @@ def _add_replay(sim_sub: argparse._SubParsersAction, fmt) -> None:
         "again exactly as it ran (trials are deterministic) and written as a recording (.rrd) for the Rerun viewer "
         "(`rerun FILE`); it says whether the outcome matches the results file's.",
         formatter_class=fmt,
-        parents=[_out("the recording (default: beside the results file)")],
+        parents=[O.out("the recording (default: beside the results file)")],
     )
     replay.add_argument("results", help="results.jsonl (or .jsonl.gz) of a run, or its folder")
     replay.add_argument("--cell", type=number(0, integer=True), required=True, help="the trial's cell index")
@@ -299,7 +164,7 @@ def _add_replay(sim_sub: argparse._SubParsersAction, fmt) -> None:
 
 
 def _add_heatmap(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None:
-    out = _out(
+    out = O.out(
         "results.jsonl, cells.csv, summary.json, heatmap.png and heatmap_reach.png (the paper's stopping rule) "
         "(default out/heatmap/OBJECT_CONTROLLER_alphaA, with _PLANT for a plant other than polyester and _KEY=VALUE "
         "for each --set)"
@@ -310,7 +175,7 @@ def _add_heatmap(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None
         description=HEATMAP,
         formatter_class=fmt,
         parents=[shared[k] for k in ("trial", "alpha", "closed_loop", "fidelity", "pool", "json")]
-        + [_plant_set(), out],
+        + [O.plant_set(), out],
     )
     heat.add_argument("--cells", type=int, default=20, help="cells per side of the workspace (paper: 20)")
     heat.add_argument("--trials", type=int, default=10, help="trials per cell, N (paper: 10)")
@@ -321,13 +186,15 @@ def _add_heatmap(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None
         help="end each trial at its first frame within ε, as the paper's loop does: faster, and the map "
         "under the paper's stopping rule is the same, but 'ends within ε at T' is then not measured",
     )
-    heat.add_argument("--only-cells", type=_cells, metavar="I,J,...", help="run only these cells (index ix + iy*cells)")
+    heat.add_argument(
+        "--only-cells", type=O.cells, metavar="I,J,...", help="run only these cells (index ix + iy*cells)"
+    )
     add_view_arguments(heat)
     heat.set_defaults(func=_handler("cli_heatmap", heat))
 
 
 def _add_calibrate(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None:
-    out = _out(
+    out = O.out(
         "study.db, report.md, report.json, pareto.png "
         "(default out/calibration/findings, or out/calibration/log with --log)"
     )
@@ -336,7 +203,8 @@ def _add_calibrate(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> No
         help="fit the plant to the paper's findings or to rig logs (Optuna, resumable)",
         description=CALIBRATE,
         formatter_class=fmt,
-        parents=[shared[k] for k in ("trial", "fidelity", "pool", "json")] + [_plant(DEFAULT_PLANT), _plant_set(), out],
+        parents=[shared[k] for k in ("trial", "fidelity", "pool", "json")]
+        + [O.plant(DEFAULT_PLANT), O.plant_set(), out],
     )
     cal.add_argument(
         "--candidates",
@@ -374,7 +242,7 @@ def _add_calibrate(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> No
 
 
 def _add_tune(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None:
-    out = _out(
+    out = O.out(
         "study.db, settings.toml, report.json, history.png and final/ (default out/tune/OBJECT_CONTROLLER_alphaA_PLANT)"
     )
     tune = sim_sub.add_parser(
@@ -382,7 +250,7 @@ def _add_tune(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None:
         help="tune a controller's settings for a plant (Optuna, resumable)",
         description=TUNE,
         formatter_class=fmt,
-        parents=[shared[k] for k in ("trial", "alpha", "fidelity", "pool", "json")] + [_plant("paper"), out],
+        parents=[shared[k] for k in ("trial", "alpha", "fidelity", "pool", "json")] + [O.plant("paper"), out],
     )
     tune.add_argument(
         "--controller",
@@ -408,7 +276,7 @@ def _add_tune(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None:
         default=60,
         help="candidates the study should hold when done (a resumed search goes on to this total)",
     )
-    _sample(tune, cells_per_stratum=4, trials_per_cell=3)
+    O.sample(tune, cells_per_stratum=4, trials_per_cell=3)
     tune.add_argument(
         "--confirm",
         type=number(0, integer=True),
@@ -462,9 +330,11 @@ def _add_fidelity(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> Non
         formatter_class=fmt,
         parents=[shared[k] for k in ("trial", "alpha", "jobs", "json")]
         + [
-            _plant(DEFAULT_PLANT),
-            _plant_set(),
-            _out("report.json and report.md (default out/fidelity/OBJECT_PLANT[_KEY=VALUE]_alphaA_CANDIDATE_vs_FINER)"),
+            O.plant(DEFAULT_PLANT),
+            O.plant_set(),
+            O.out(
+                "report.json and report.md (default out/fidelity/OBJECT_PLANT[_KEY=VALUE]_alphaA_CANDIDATE_vs_FINER)"
+            ),
         ],
     )
     gate.add_argument(
@@ -481,7 +351,7 @@ def _add_fidelity(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> Non
         help="a controller with its boot values, or a settings file (TOML, as mantaray sim tune writes); "
         "repeatable (default: manhattan and euclidean)",
     )
-    _sample(gate, cells_per_stratum=8, trials_per_cell=5)
+    O.sample(gate, cells_per_stratum=8, trials_per_cell=5)
     gate.add_argument("--seed", type=number(0, integer=True), default=77, help="seed of the sample's cells and trials")
     gate.add_argument("--shift", type=float, default=1e-4, help="[m] how far the noise floor's run moves every start")
     gate.add_argument(
