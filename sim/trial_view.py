@@ -20,7 +20,7 @@ from .rig import Rig
 
 # [px] Side of the rendered camera image the view shows (square, as the overhead camera's field). It and what the
 # camera leaves out (on a machine without a GPU, llvmpipe, shadows and reflections are three quarters of a frame's
-# rendering) keep the view within 10 % of a run's wall time: docs/viewer.md, benchmarks/view_overhead.py.
+# rendering) keep the view within 10 % of a run's wall time: docs/viewer.md, benchmarks/speed/view_overhead.py.
 CAMERA_PX = 240
 PLAIN = (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION, mujoco.mjtRndFlag.mjRND_SKYBOX)
 

@@ -81,7 +81,7 @@ def test_a_settled_sheet_of_threads_is_taut_where_it_pulls_and_slack_where_it_wo
 
 def test_the_sheets_lowest_point_is_the_same_on_two_meshes_with_threads_and_not_with_edges():
     """sim/README.md, Convergence, item 7: threads sag 92.9 and 93.2 mm on 11 and 15 vertices a side; edges 83.9
-    and 82.2, and 87.8 on 21 (benchmarks/mesh_statics.py)."""
+    and 82.2, and 87.8 on 21 (benchmarks/experiments/mesh_statics.py)."""
     sag = {}
     for stretch in ("threads", "edges"):
         for n in (11, 15):

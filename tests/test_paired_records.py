@@ -1,5 +1,5 @@
 """The paired comparison of a tuned controller's trials with the paper's (McNemar's counts and z, the outer band's
-falls: sim/paired.py, what benchmarks/beyond_paper.py publishes), and the committed trials a run starts from
+falls: sim/paired.py, what benchmarks/experiments/beyond_paper.py publishes), and the committed trials a run starts from
 (sim/committed.py)."""
 
 import gzip

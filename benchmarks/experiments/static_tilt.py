@@ -1,6 +1,6 @@
 """Benchmark: how an object answers a held tilt on each plant, open loop: when it starts to slide, and how far it goes.
 
-Run: python3 benchmarks/static_tilt.py [--plants paper,polyester] [--object cube] [--starts 0,0.1]
+Run: python3 benchmarks/experiments/static_tilt.py [--plants paper,polyester] [--object cube] [--starts 0,0.1]
      [--tilts 10,20,26.565,35] [--hold 6] [--resolution 11] [--timestep 0.002] [--integrator discrete]
      [--set KEY=VALUE]
 For each plant, start x [m] (y = 0) and tilt θ [deg]: the object is placed and left to settle, then the four

@@ -1,6 +1,6 @@
 """Benchmark: what the bare sheet settles to on each mesh (its sag and its edges' stretch), to tell mesh from plant.
 
-Run: python3 benchmarks/mesh_statics.py [--plants polyester,paper] [--meshes 11:0.001,15:0.001,21:0.001]
+Run: python3 benchmarks/experiments/mesh_statics.py [--plants polyester,paper] [--meshes 11:0.001,15:0.001,21:0.001]
      [--clamps plant,0] [--stretch edges,threads] [--set KEY=VALUE ...]
 For each plant, corner clamp (the plant's own, or a length in metres), stretch model (sim/plant.toml,
 fabric.stretch) and mesh (RESOLUTION:TIMESTEP, or a named fidelity), with any other --set value fixed over the

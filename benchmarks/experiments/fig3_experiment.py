@@ -1,6 +1,6 @@
 """The paper's hardware experiment (Fig. 3) on named plants: seven objects, five random targets each, 60 s.
 
-Run: python3 benchmarks/fig3_experiment.py [--plants polyester,paper] [--jobs 2] [--seed 3] [--settings FILE]
+Run: python3 benchmarks/experiments/fig3_experiment.py [--plants polyester,paper] [--jobs 2] [--seed 3] [--settings FILE]
 With --settings (a controller's settings, as mantaray sim tune writes them) the same targets run with that
 controller instead of the paper's Manhattan, on the plant the file was tuned for, and the outputs' names end in
 _<controller>.
@@ -29,7 +29,7 @@ from mantaray.sim.findings import MODULE_M, fig3_finding
 from mantaray.sim.parameters import plant_names
 from mantaray.sim.plant import plant_for
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 
 def main() -> int:

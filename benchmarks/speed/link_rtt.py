@@ -1,6 +1,6 @@
 """Benchmark: round-trip time from an object_position frame to the telemetry that answers it, over the pty.
 
-Run: python3 benchmarks/link_rtt.py [--frames N] [--view-frames N]
+Run: python3 benchmarks/speed/link_rtt.py [--frames N] [--view-frames N]
 Prints the frame sizes, the telemetry rate 115200 baud allows, and RTT percentiles for the virtual MCU
 on both clocks; then, paced as a 30 Hz camera, the rig's frame-to-command time without and with the run's view
 (host/view.py: a recording and the live server, fed a 1280 x 720 frame each time as `mantaray rig --live` does).

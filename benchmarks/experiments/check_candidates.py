@@ -1,6 +1,6 @@
 """Benchmark: the calibration's best candidates on a larger sample drawn from another seed (a hold-out check).
 
-Run: python3 benchmarks/check_candidates.py [--study out/calibration/paper/study.db] [--top 3]
+Run: python3 benchmarks/experiments/check_candidates.py [--study out/calibration/paper/study.db] [--top 3]
      [--plants polyester,paper] [--cells-per-stratum 8] [--trials-per-cell 4] [--seed 77] [--jobs 2]
 A search scores candidates on a small sample (12-15 trials a stratum), so the best of many is partly the luckiest.
 This takes the --top candidates of a findings study (most findings holding, then the smallest sum of objectives)

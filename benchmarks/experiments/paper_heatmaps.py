@@ -1,6 +1,6 @@
 """The paper's full simulation protocol (Fig. 2) with our stack: five heatmap runs, their difference map, the figures.
 
-Run: python3 benchmarks/paper_heatmaps.py [--runs sphere_manhattan,sphere_euclidean] [--jobs 2] [--plant paper]
+Run: python3 benchmarks/experiments/paper_heatmaps.py [--runs sphere_manhattan,sphere_euclidean] [--jobs 2] [--plant paper]
      [--fidelity reference]
 Each run is `mantaray sim heatmap` with the paper's protocol (20 x 20 cells, 10 trials, T = 10 s,
 eps = 0.02 m) on the named plant (sim/plant.toml) at the named fidelity (sim/rig.py, FIDELITIES; default the
@@ -37,7 +37,7 @@ from mantaray.sim.findings import CENTRAL_HALF_M, CORNER_FROM_M
 from mantaray.sim.plant import DEFAULT_PLANT, Plant
 from mantaray.sim.rig import FIDELITIES
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 COMMITTED = REPO / "docs" / "results"  # every trial of each run, <run>.jsonl.gz
 RUNS = {  # name: (object, controller, alpha [m]) as in the paper's Fig. 2
     "sphere_manhattan": ("sphere", "manhattan", 0.0),

@@ -1,6 +1,6 @@
 """Benchmark: how many trials a pruned, or a screened, tuning search spends to find what an unpruned one finds.
 
-Run: python3 benchmarks/search_budget.py [--controller cascade] [--plant paper] [--candidates 60] [--ratio 3]
+Run: python3 benchmarks/speed/search_budget.py [--controller cascade] [--plant paper] [--candidates 60] [--ratio 3]
      [--screen-at fast] [--jobs 2] [--out out/bench/search_budget]
 One unpruned `sim tune` search at the reference fidelity (sim/rig.py, FIDELITIES) with Optuna's random sampler,
 seeded, so that its candidates do not depend on their scores; every candidate keeps its misses per cell. Resumable:

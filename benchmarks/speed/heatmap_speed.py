@@ -1,6 +1,6 @@
 """Benchmark: heatmap trials per wall second at each physics fidelity, side by side in one run on the same trials.
 
-Run: python3 benchmarks/heatmap_speed.py [--configs reference,15:0.001,15:0.002,fast] [--jobs 2] [--plant paper]
+Run: python3 benchmarks/speed/heatmap_speed.py [--configs reference,15:0.001,15:0.002,fast] [--jobs 2] [--plant paper]
      [--stretch edges,threads]
 Each config (a named fidelity of sim/rig.py, or RESOLUTION:TIMESTEP [vertices per side : s]), under each stretch
 model of the sheet (sim/plant.toml, fabric.stretch; the plant's own unless --stretch names them), runs the same

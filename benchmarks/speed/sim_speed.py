@@ -1,6 +1,6 @@
 """Benchmark: simulated seconds per wall second for each object, firmware in the loop over the pty, in lock-step.
 
-Run: python3 benchmarks/sim_speed.py [--duration 10] [--objects sphere,cube]
+Run: python3 benchmarks/speed/sim_speed.py [--duration 10] [--objects sphere,cube]
 One process, one core: each object runs one trial of the paper's kind (Manhattan, alpha as in the paper
 for the irregular objects) and prints its speed and how the wall time splits between MuJoCo stepping,
 the protocol exchange with the firmware, and the rest (Python bookkeeping, fall checks). Figures move

@@ -1,10 +1,10 @@
 """Beyond the paper: the controllers tuned for the fitted plant, checked on the paper's protocol beside its Manhattan.
 
-Run: python3 benchmarks/beyond_paper.py [--runs sphere_scheduled,sphere_cascade] [--jobs 2] [--collect]
+Run: python3 benchmarks/experiments/beyond_paper.py [--runs sphere_scheduled,sphere_cascade] [--jobs 2] [--collect]
 Each run is `mantaray sim tune` (sim/tune.py) for one object and controller on the `paper` plant into
 out/tune/<run>/: the search on its own sample, then the full protocol (20 x 20 cells, N = 10, T = 10 s, seed 2026,
 to the end of T) with the best settings. The baseline is the paper's Manhattan on the same trials, run by
-`python3 benchmarks/paper_heatmaps.py --plant paper --to-end --runs <object run>` (same seed: trial for trial
+`python3 benchmarks/experiments/paper_heatmaps.py --plant paper --to-end --runs <object run>` (same seed: trial for trial
 the same starts, targets and noise seeds, so the comparison is paired). Both are resumable, and a run starts
 from what docs/results/tune/<run>/ holds (the study, the final check's trials, the settings), where every session
 writes it back; --collect only writes back what out/ holds (say, from a run still going). With both done, the
@@ -31,7 +31,7 @@ from mantaray.sim import committed
 from mantaray.sim.paired import edge_falls, mcnemar
 from mantaray.sim.results_file import write_whole
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 COMMITTED = REPO / "docs" / "results" / "tune"
 BASELINES = REPO / "out" / "heatmap"  # where paper_heatmaps.py --plant paper --to-end puts them
 SPHERE_CASCADE = COMMITTED / "sphere_cascade" / "settings.toml"
@@ -95,8 +95,8 @@ def compare(run: str) -> dict | None:
 
     tuned_path, base_path = out_dir(run) / "final" / "results.jsonl", baseline(run)
     runs_it = {
-        tuned_path: f"python3 benchmarks/beyond_paper.py --runs {run}",
-        base_path: "python3 benchmarks/paper_heatmaps.py --plant paper --to-end --runs "
+        tuned_path: f"python3 benchmarks/experiments/beyond_paper.py --runs {run}",
+        base_path: "python3 benchmarks/experiments/paper_heatmaps.py --plant paper --to-end --runs "
         + RUNS[run][3].removesuffix("_paper_to_end"),
     }
     loaded = {}

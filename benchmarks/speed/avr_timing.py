@@ -1,6 +1,6 @@
 """Benchmark: the Uno firmware's timing in simavr (cycle-accurate, 16 MHz), from its probe pins and stack paint.
 
-Run: python3 benchmarks/avr_timing.py [--seconds 60] [--controller NAME | --settings FILE] [--plant NAME]
+Run: python3 benchmarks/speed/avr_timing.py [--seconds 60] [--controller NAME | --settings FILE] [--plant NAME]
 Two runs of the same ELF, each for --seconds of simulated time:
   - bench side, in lock-step with the MuJoCo rig of --plant: a trial of the controller (Manhattan with the paper's
     gains as that plant reads them, or the one --settings sets up, as mantaray sim tune writes them for a plant),

@@ -1,6 +1,6 @@
 """Benchmark: does the log fit recover a plant's hidden parameters from logs the simulation wrote with them?
 
-Run: python3 benchmarks/log_fit_recovery.py [--runs 1,3,5] [--candidates 60] [--horizon 3] [--jobs 2]
+Run: python3 benchmarks/experiments/log_fit_recovery.py [--runs 1,3,5] [--candidates 60] [--horizon 3] [--jobs 2]
 A hidden plant (the polyester plant with other rolling damping and actuator speed) drives the sphere with the
 Manhattan controller in closed loop (firmware in-process) through --max-runs random central runs; each is
 written as `mantaray rig` writes a run. Then, for each count of logs in --runs, `mantaray sim calibrate --log`'s

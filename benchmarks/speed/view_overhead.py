@@ -1,6 +1,6 @@
 """Benchmark: what the run's view costs a `sim run` in wall time: no view, the recording only, and the live view.
 
-Run: python3 benchmarks/view_overhead.py [--duration 10] [--repeats 3] [--live-port 9190]
+Run: python3 benchmarks/speed/view_overhead.py [--duration 10] [--repeats 3] [--live-port 9190]
 One process, one Bridge at the reference fidelity (sphere, Manhattan, the paper's 12 Hz camera), the same trial run
 round-robin under the three set-ups, repeats times each; it prints each one's median wall time, its ratio to no view,
 the live view's ratio to the recording alone (what a `sim run` without --live does: the issue's budget is 1.10 on that

@@ -1,6 +1,6 @@
 """Benchmark: which of a plant's values hold an object back, by setting them one group at a time on a small sample.
 
-Run: python3 benchmarks/plant_probe.py [--plant paper] [--object cube] [--alpha 0.1] [--cells 4] [--trials 4]
+Run: python3 benchmarks/experiments/plant_probe.py [--plant paper] [--object cube] [--alpha 0.1] [--cells 4] [--trials 4]
      [--seed 77] [--jobs 2] --probe "KEY=VALUE[,KEY=VALUE...]" [--probe ...]
 Runs the Manhattan controller on --cells x --cells cells, --trials trials each (trials end at the first frame within
 eps), once on the plant as it is and once per --probe with those values set over it (checked against their

@@ -1,6 +1,6 @@
 """Benchmark: the tracker's frames per second at 1280 x 720 on one core, frame-to-position latency, accuracy table.
 
-Run: python3 benchmarks/tracker_speed.py [--frames 100]
+Run: python3 benchmarks/speed/tracker_speed.py [--frames 100]
 - Speed: the tracker (ArUco detection with sub-pixel corners, homography, parallax) on synthetic 1280 x 720
   frames, OpenCV restricted to one thread; the colour-blob mode likewise.
 - Latency: from a frame in memory to its object_position frame written to the virtual MCU's pty
@@ -21,7 +21,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the tests' synthetic camera
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))  # the tests' synthetic camera
 
 from synthetic_camera import camera, intrinsics, render  # noqa: E402
 

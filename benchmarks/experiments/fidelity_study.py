@@ -1,6 +1,6 @@
 """The convergence study: the fidelity gate on each mesh and step against a finer one, for two plants; its table.
 
-Run: python3 benchmarks/fidelity_study.py [--gates paper_15x15_2ms,...] [--jobs 2] [--collect]
+Run: python3 benchmarks/experiments/fidelity_study.py [--gates paper_15x15_2ms,...] [--jobs 2] [--collect]
 Each gate is `mantaray sim fidelity` (sim/fidelity.py) on the sphere, to the end of T, with its default sample
 (40 cells, 8 from each stratum, 5 trials each, seed 77) for two controllers: on the `paper` plant the paper's
 Manhattan and the cascade tuned for it (docs/results/tune/sphere_cascade/settings.toml), on the polyester plant
@@ -23,7 +23,7 @@ from pathlib import Path
 from mantaray.sim.committed import keep
 from mantaray.sim.results_file import write_whole
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 COMMITTED = REPO / "docs" / "results" / "fidelity"
 TRIALS = REPO / "out" / "fidelity" / "trials"
 CASCADE = "docs/results/tune/sphere_cascade/settings.toml"
@@ -105,7 +105,7 @@ def table() -> str:
     rows = [
         "# The fidelity gate on each mesh and step (the sphere, to the end of T)",
         "",
-        "Written by `python3 benchmarks/fidelity_study.py`; each gate's report, with the command that reproduces "
+        "Written by `python3 benchmarks/experiments/fidelity_study.py`; each gate's report, with the command that reproduces "
         "it, is in its folder here. Rates over the pooled sample of both controllers: candidate / finer. Flips: "
         "trials whose outcome differs from the finer run's, for the candidate / for the finer run with every start "
         "moved 0.1 mm (the noise floor).",
