@@ -40,7 +40,7 @@ class Tolerance:
 
 
 @dataclass
-class Frame:
+class CameraFrame:
     """One camera frame, as a source gives it to ClosedLoop.run."""
 
     capture_s: float  # [s] trial time it was taken
@@ -93,11 +93,11 @@ class ClosedLoop:
 
     def run(
         self,
-        frames: Iterable[Frame],
+        frames: Iterable[CameraFrame],
         judge: Tolerance,
         *,
         stop_when_reached: bool,
-        on_frame: Callable[[Frame, m.Telemetry | None], None] | None = None,
+        on_frame: Callable[[CameraFrame, m.Telemetry | None], None] | None = None,
     ) -> str:
         """Drive the loop with a source's frames until a stop rule ends it; returns why (STOPPED_*).
 

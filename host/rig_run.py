@@ -15,7 +15,7 @@ from mantaray.protocol import messages as m
 
 from .keys import Keys
 from .link import LinkError
-from .loop import STOPPED_REACHED, ClosedLoop, Frame, Tolerance
+from .loop import STOPPED_REACHED, CameraFrame, ClosedLoop, Tolerance
 from .runlog import RunLog
 from .session import BoardLost, EmergencyStopLatched, RigSession, Setup
 from .tracker import FrameSource, Observation, Tracker
@@ -187,7 +187,7 @@ class RigRun:
                 return
             target = self.course.at(run_s)
             judged = obs.xy_m if not self.course.moving and obs.visible else None  # what the camera sees: the rig
-            yield Frame(
+            yield CameraFrame(
                 run_s,
                 obs.xy_m if obs.visible else None,
                 target,
@@ -260,7 +260,7 @@ class RigRun:
         self.session.set_target(*target)
         return True
 
-    def _record(self, frame: Frame, telemetry: m.Telemetry | None) -> None:
+    def _record(self, frame: CameraFrame, telemetry: m.Telemetry | None) -> None:
         obs = self._seen
         assert obs is not None  # a frame is recorded after it was observed
         self.log.write(
@@ -285,7 +285,7 @@ class RigRun:
         if self.view is not None:
             self._show(frame, telemetry, obs)
 
-    def _show(self, frame: Frame, telemetry: m.Telemetry | None, obs: Observation) -> None:
+    def _show(self, frame: CameraFrame, telemetry: m.Telemetry | None, obs: Observation) -> None:
         """The frame in the view: the loop's values, the link's counters and the camera image with the target."""
         view, t = self.view, frame.capture_s
         assert view is not None

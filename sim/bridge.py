@@ -20,7 +20,7 @@ import numpy as np
 
 from mantaray.host.controller_settings import ControllerSettings
 from mantaray.host.link import Link, LinkError
-from mantaray.host.loop import U32, US_PER_S, ClosedLoop, Frame, Tolerance
+from mantaray.host.loop import U32, US_PER_S, CameraFrame, ClosedLoop, Tolerance
 from mantaray.host.session import Setup
 from mantaray.protocol import messages as m
 from mantaray.protocol import rig as rig_description
@@ -246,7 +246,7 @@ class Bridge:
     def _configure(self, spec: TrialSpec) -> None:
         self.link.command(m.Stop())
         setup = spec.setup(
-            (self.rig.frame.size_x_m, self.rig.frame.size_y_m), telemetry_period_ms=0 if self.lockstep else 100
+            (self.rig.module.size_x_m, self.rig.module.size_y_m), telemetry_period_ms=0 if self.lockstep else 100
         )
         for command in setup.commands():
             self.link.command(command)
@@ -271,7 +271,7 @@ class Bridge:
         judge = Tolerance(spec.tolerance_m)  # on the true position: where the object really is
         true_xy_rows = []
 
-        def record(frame: Frame, telemetry) -> None:
+        def record(frame: CameraFrame, telemetry) -> None:
             true_xy_rows.append(frame.judged_xy_m)
             if self.view is not None:
                 self.view.frame(frame, telemetry)
@@ -296,11 +296,11 @@ class Bridge:
             if self._advance(trial, capture_s):
                 trial.fell = True
                 return
-            frame = Frame(capture_s, None, spec.target_m, judged_xy_m=M.object_xy(self.model, self.data))
+            frame = CameraFrame(capture_s, None, spec.target_m, judged_xy_m=M.object_xy(self.model, self.data))
             frame.deliver = lambda frame=frame: self._deliver(frame, trial, rng)
             yield frame
 
-    def _deliver(self, frame: Frame, trial: _Trial, rng: np.random.Generator) -> bool:
+    def _deliver(self, frame: CameraFrame, trial: _Trial, rng: np.random.Generator) -> bool:
         """What the camera makes of a frame by the time it reaches the firmware; False if the object fell meanwhile."""
         tracking = self.tracking
         frame.dropped = rng.random() < tracking.drop_rate
@@ -326,7 +326,7 @@ class Bridge:
         trial = _Trial(wall0_s=t, t0_sim_s=self.data.time, base_us=base_us, wall_start_s=time.perf_counter())
         trial.link_s = trial.wall_start_s - t
         if self.recorder is not None:
-            self.recorder.mark_target(spec.target_m, spec.tolerance_m, self.rig.frame.z0_m, trial.t0_sim_s)
+            self.recorder.mark_target(spec.target_m, spec.tolerance_m, self.rig.module.z0_m, trial.t0_sim_s)
         return trial
 
     def _advance(self, trial: _Trial, to_trial_s: float) -> bool:

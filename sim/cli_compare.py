@@ -44,7 +44,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
                 f"{left + len(results.records)} trials not run); its rates are over the trials that ran",
                 file=sys.stderr,
             )
-    f = pa.rig().frame
+    f = pa.rig().module
     label = [f"{p.object_name} {p.controller} α={p.alpha_m:g}" for p in (pa, pb)]
     rule = "within ε at any frame" if args.reached else "within ε at T"
     (rates_a, score_a), (rates_b, score_b) = [

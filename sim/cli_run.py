@@ -58,7 +58,7 @@ def _trial(args: argparse.Namespace, parser: argparse.ArgumentParser):
     rig = plant.rig(args.object)
     if args.vision:
         rig = rig.with_vision(args.vision)
-    half = (rig.frame.size_x_m / 2, rig.frame.size_y_m / 2)
+    half = (rig.module.size_x_m / 2, rig.module.size_y_m / 2)
     _inside(parser, "--start", args.start, half)
     _inside(parser, "--target", args.target, half)
     if args.video and not FPS_RANGE[0] <= args.video_fps <= FPS_RANGE[1]:

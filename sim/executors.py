@@ -84,7 +84,7 @@ class TrialRunner:
         from .trial_view import TrialView
 
         assert self.watch is not None
-        frame = bridge.rig.frame
+        frame = bridge.rig.module
         view = RunView(
             "mantaray_sim_trials",
             self.watch.recording,

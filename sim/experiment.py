@@ -146,7 +146,7 @@ def make_trial(protocol: Experiment, module_m: tuple[float, float], cell: int, k
 
 def trials(protocol: Experiment) -> list[Trial]:
     """Every trial of the protocol, cell by cell."""
-    f = protocol.rig().frame
+    f = protocol.rig().module
     module = (f.size_x_m, f.size_y_m)
     return [make_trial(protocol, module, c, k) for c in protocol.cell_ids() for k in range(protocol.trials_per_cell)]
 

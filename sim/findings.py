@@ -24,10 +24,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .rig import Frame
+from .rig import Module
 from .summary import FAILURE_REGION_AT
 
-MODULE_M = (Frame().size_x_m, Frame().size_y_m)  # [m] the paper's module; the findings' zones are drawn on it
+MODULE_M = (Module().size_x_m, Module().size_y_m)  # [m] the paper's module; the findings' zones are drawn on it
 PAPER_CELLS = 20  # per side: the paper's grid, over which its totals are summed
 CENTRAL_HALF_M = 0.10  # [m] F1: central targets have |x|, |y| below this
 CENTRAL_AT = 0.9  # [-] F1: central success rate at least this

@@ -50,7 +50,7 @@ def load(rig: Rig, fabric_settle_s: float = 2.0) -> tuple[mujoco.MjModel, mujoco
         model = mujoco.MjModel.from_xml_path(str(write_model(rig, tmp)))
     data = mujoco.MjData(model)
     qadr = _object_qpos_adr(model)
-    park_x_m = rig.frame.size_x_m / 2 + PARK_OFFSET_M
+    park_x_m = rig.module.size_x_m / 2 + PARK_OFFSET_M
     data.qpos[qadr : qadr + 7] = [park_x_m, 0.0, rig.object.half_height_m + 0.01, 1, 0, 0, 0]  # dropped 1 cm
     diverged = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]  # a live view of MuJoCo's counter
     for _ in range(round(fabric_settle_s / model.opt.timestep)):

@@ -19,7 +19,7 @@ from .parameters import lookup
 
 
 @dataclass(frozen=True)
-class Frame:
+class Module:
     """The module: actuators at its corners (±size_x/2, ±size_y/2), fabric frame origin at its centre."""
 
     size_x_m: float = _rig.MODULE_SIZE_X_M  # [m] the paper's m (frame and actuator spacing along x)
@@ -205,7 +205,7 @@ MIN_STEPS_PER_TIMECONST = 2  # MuJoCo runs a constraint's time constant at no le
 class Rig:
     """Everything the model is generated from. Change a field with dataclasses.replace or with_object."""
 
-    frame: Frame = field(default_factory=Frame)
+    module: Module = field(default_factory=Module)
     actuators: Actuators = field(default_factory=Actuators)
     fabric: Fabric = field(default_factory=Fabric)
     contact: Contact = field(default_factory=Contact)

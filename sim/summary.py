@@ -66,7 +66,7 @@ def summarize(results: ResultsFile) -> Summary:
         "failure": int((rates[0][done] <= FAILURE_REGION_AT).sum()),
     }
     regions["uncertain"] = int(done.sum()) - regions["success"] - regions["failure"]
-    f = p.rig().frame
+    f = p.rig().module
     return Summary(
         rates=rates[0],
         reach_rates=rates[1],
@@ -87,7 +87,7 @@ def heatmap_outputs(results, out: Path, title: str) -> dict:
 
     s = summarize(results)
     p = results.protocol
-    f = p.rig().frame
+    f = p.rig().module
     rows = ["cell,ix,iy,x_lo_m,y_lo_m,trials,success_rate,reach_rate,fell_rate"]
     for cell in p.cell_ids():
         ix, iy = cell % p.cells, cell // p.cells

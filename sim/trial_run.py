@@ -52,7 +52,7 @@ def run_trial(
     from .trial_view import TrialView
 
     live = outputs.live
-    module_m = (rig.frame.size_x_m, rig.frame.size_y_m)
+    module_m = (rig.module.size_x_m, rig.module.size_y_m)
     with contextlib.ExitStack() as stack:
         port = port or stack.enter_context(VirtualMcu(clock="wall" if realtime else "sim")).path
         link = Link(SerialTransport(port))
@@ -111,7 +111,7 @@ def _figure(result: TrialResult, rig: Rig, outputs: TrialOutputs) -> Path:
         spec.tolerance_m,
         f"{result.object_name}, {spec.controller}, α = {spec.alpha_m:g} m: {outcome_words(result)}\n"
         f"final error {result.final_error_m * 100:.1f} cm (ε = {spec.tolerance_m * 100:g} cm)",
-        (rig.frame.size_x_m, rig.frame.size_y_m),
+        (rig.module.size_x_m, rig.module.size_y_m),
         outputs.tilt_limit_deg,
         outputs.out / f"{outputs.stem}.png",
         t_s=result.t_s,

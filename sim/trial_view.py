@@ -10,7 +10,7 @@ import mujoco
 import numpy as np
 
 from mantaray.host.link import Link
-from mantaray.host.loop import Frame
+from mantaray.host.loop import CameraFrame
 from mantaray.host.view import QUEUE_FRAMES, RunView
 from mantaray.protocol import messages as m
 
@@ -49,7 +49,7 @@ class TrialView:
         """A trial begins, with its epsilon [m]."""
         self.tolerance_m = tolerance_m
 
-    def frame(self, frame: Frame, telemetry: m.Telemetry | None) -> None:
+    def frame(self, frame: CameraFrame, telemetry: m.Telemetry | None) -> None:
         """The loop's values now; the camera, the mesh and the object drawn on the view's thread from a copy of the
         physics state."""
         seen = None if frame.dropped else frame.measured_xy_m

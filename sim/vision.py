@@ -51,9 +51,9 @@ class CameraVision:
         self.renderer = mujoco.Renderer(model, FRAME_PX[1], FRAME_PX[0])
         M.place_object(model, data, 0.0, 0.0, rule=rig.fall)
         if mode == "aruco":
-            height = data.site(J.MARKER).xpos[2] + 2 * J.MARKER_PLATE_M - rig.frame.z0_m  # the plate's top
+            height = data.site(J.MARKER).xpos[2] + 2 * J.MARKER_PLATE_M - rig.module.z0_m  # the plate's top
         else:
-            height = data.body(J.OBJECT).xpos[2] - rig.frame.z0_m  # the silhouette's centre
+            height = data.body(J.OBJECT).xpos[2] - rig.module.z0_m  # the silhouette's centre
         self.tracker = Tracker(
             marker_height_m=float(height),
             camera_height_m=rig.camera.height_above_z0_m,

@@ -86,7 +86,7 @@ def test_the_sheets_lowest_point_is_the_same_on_two_meshes_with_threads_and_not_
     for stretch in ("threads", "edges"):
         for n in (11, 15):
             rig, model, data = _loaded(stretch, n)
-            sag[stretch, n] = rig.frame.z0_m - M.fabric_vertices(model, data)[:, 2].min()
+            sag[stretch, n] = rig.module.z0_m - M.fabric_vertices(model, data)[:, 2].min()
     assert sag["threads", 11] == pytest.approx(sag["threads", 15], abs=0.001)
     assert abs(sag["edges", 11] - sag["edges", 15]) > 0.001
 

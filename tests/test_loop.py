@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from mantaray.host.link import Link
-from mantaray.host.loop import STOPPED_BY_SOURCE, STOPPED_REACHED, ClosedLoop, Frame, Tolerance
+from mantaray.host.loop import STOPPED_BY_SOURCE, STOPPED_REACHED, CameraFrame, ClosedLoop, Tolerance
 from mantaray.host.session import Setup
 from mantaray.host.transport import InProcessTransport
 from mantaray.protocol import messages as m
@@ -80,7 +80,7 @@ def test_a_setup_is_sent_in_the_order_the_firmware_takes_it():
 
 
 def _frames(xs, target=(0.0, 0.0), **fields):
-    return [Frame(0.1 * k, (x, 0.0), target, judged_xy_m=(x, 0.0), **fields) for k, x in enumerate(xs)]
+    return [CameraFrame(0.1 * k, (x, 0.0), target, judged_xy_m=(x, 0.0), **fields) for k, x in enumerate(xs)]
 
 
 @given(st.lists(st.floats(-0.3, 0.3), min_size=1, max_size=30), st.booleans())

@@ -79,7 +79,7 @@ def test_the_bridge_refuses_a_simulated_rig_whose_travel_is_not_the_firmwares():
 
 
 def test_the_simulation_and_the_references_take_the_rig_from_the_description():
-    assert Rig().frame.size_x_m == rig.MODULE_SIZE_X_M and Rig().frame.size_y_m == rig.MODULE_SIZE_Y_M
+    assert Rig().module.size_x_m == rig.MODULE_SIZE_X_M and Rig().module.size_y_m == rig.MODULE_SIZE_Y_M
     assert Actuators().range_m == rig.ACTUATOR_RANGE_M == ref.ACTUATOR_RANGE  # the paper's ±0.25 m
     assert Actuators().motor_speed_rpm == rig.MOTOR_SPEED_RPM
     pulley = P.lookup("actuators.pulley_circumference_m")

@@ -48,7 +48,8 @@ def test_written_scene_compiles_as_plain_xml(tmp_path, name):
     assert np.allclose(data.cam("overhead").xmat.reshape(3, 3)[:, 2], [0, 0, 1])  # looks straight down (-z)
     for i, (sx, sy) in enumerate(J.CORNERS):
         assert np.allclose(
-            data.body(f"carriage{i}").xpos, [sx * RIG.frame.size_x_m / 2, sy * RIG.frame.size_y_m / 2, RIG.frame.z0_m]
+            data.body(f"carriage{i}").xpos,
+            [sx * RIG.module.size_x_m / 2, sy * RIG.module.size_y_m / 2, RIG.module.z0_m],
         )
 
 
@@ -153,7 +154,7 @@ def test_lowering_a_corner_rolls_the_sphere_toward_it(corner, sphere_scene):
     while data.time < start_s + ROLL_S:
         mujoco.mj_step(model, data)
     carriage = data.body(f"carriage{corner}").xpos
-    assert carriage[2] == pytest.approx(RIG.frame.z0_m - CORNER_DROP_M, abs=2e-3)  # + command lowers
+    assert carriage[2] == pytest.approx(RIG.module.z0_m - CORNER_DROP_M, abs=2e-3)  # + command lowers
     vertex = data.flexvert_xpos[J.corner_vertex(RIG.fabric.resolution, corner)]
     assert np.linalg.norm(vertex - carriage) < 2e-3  # corner stays welded
     toward = np.array(J.CORNERS[corner], dtype=float) / np.sqrt(2)

@@ -29,7 +29,7 @@ def marker_truth(model, data, rig) -> tuple[np.ndarray, float]:
     """Where the object's marker really is: its plate's top centre, (x, y) [m] and height above z0 [m]."""
     plate = data.geom("object_marker")
     top = plate.xpos + plate.xmat.reshape(3, 3)[:, 2] * J.MARKER_PLATE_M
-    return top[:2].copy(), float(top[2] - rig.frame.z0_m)
+    return top[:2].copy(), float(top[2] - rig.module.z0_m)
 
 
 def test_rendered_frames_are_tracked_within_2_mm_rms_at_1280x720(cube_scene):

@@ -32,7 +32,7 @@ def test_frames_show_the_target_disk_where_the_target_is_and_the_time(scene):
     model, data = scene
     plain, marked = Recorder(model, fps=10), Recorder(model, fps=10)
     target, tolerance = (0.1, -0.05), 0.02
-    marked.mark_target(target, tolerance, RIG.frame.z0_m, data.time)
+    marked.mark_target(target, tolerance, RIG.module.z0_m, data.time)
     plain.capture(data)
     marked.capture(data)
     changed = np.abs(plain.frames[0].astype(int) - marked.frames[0].astype(int)).sum(axis=2) > 30

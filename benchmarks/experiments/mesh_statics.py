@@ -44,8 +44,8 @@ def statics(plant: Plant, fidelity: Fidelity) -> dict:
         rest = model.flexedge_length0[adr : adr + num]
         strain = (length - rest) / rest
     return {
-        "sag_mm": (rig.frame.z0_m - v[:, 2].min()) * 1000,
-        "mean_depth_mm": (rig.frame.z0_m - v[:, 2].mean()) * 1000,
+        "sag_mm": (rig.module.z0_m - v[:, 2].min()) * 1000,
+        "mean_depth_mm": (rig.module.z0_m - v[:, 2].mean()) * 1000,
         "strain_pct": (strain.min() * 100, strain.mean() * 100, strain.max() * 100),
         "edge_tau_ms": rig.fabric.edge_timeconst_s * 1000,
         "lengthened": rig.fabric.edge_timeconst_s < MIN_STEPS_PER_TIMECONST * fidelity.timestep_s,

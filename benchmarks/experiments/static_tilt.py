@@ -49,7 +49,7 @@ def hold_tilt(model, data, rig, x0_m: float, tilt_deg: float, hold_s: float) -> 
     """Place the object at (x0, 0), command the x-tilt and hold it; what the carriages and the object did."""
     M.place_object(model, data, x0_m, 0.0, rule=rig.fall)
     t0_s = data.time
-    half_x_m = rig.frame.size_x_m / 2
+    half_x_m = rig.module.size_x_m / 2
     M.set_commands(
         model, data, [math.tan(math.radians(tilt_deg)) * (half_x_m if i & 1 else -half_x_m) for i in range(4)]
     )
@@ -63,7 +63,7 @@ def hold_tilt(model, data, rig, x0_m: float, tilt_deg: float, hold_s: float) -> 
     while data.time < t0_s + hold_s:
         M.step_until(model, data, data.time + STEP_S)
         t_s = data.time - t0_s
-        off_deg = abs(carriage_tilt_deg(model, data, rig.frame.size_x_m) - tilt_deg)
+        off_deg = abs(carriage_tilt_deg(model, data, rig.module.size_x_m) - tilt_deg)
         if out["at_tilt_s"] is None and off_deg < AT_TILT_DEG:
             out["at_tilt_s"] = t_s
         if out["slid_s"] is None and offset_x_m() - start_m > SLID_M:
@@ -71,7 +71,7 @@ def hold_tilt(model, data, rig, x0_m: float, tilt_deg: float, hold_s: float) -> 
         if M.fell_off(model, data, rig.fall):
             out["fell_s"] = t_s
             break
-    return {**out, "tilt_deg": carriage_tilt_deg(model, data, rig.frame.size_x_m), "slid_m": offset_x_m() - start_m}
+    return {**out, "tilt_deg": carriage_tilt_deg(model, data, rig.module.size_x_m), "slid_m": offset_x_m() - start_m}
 
 
 def floats(text: str) -> list[float]:
@@ -118,7 +118,7 @@ def main() -> int:
     if unknown:
         parser.error(f"unknown plant(s) {', '.join(unknown)}; known: {', '.join(plant_names())}")
     rig = Rig()
-    steepest_deg = math.degrees(math.atan(rig.actuators.range_m / (rig.frame.size_x_m / 2)))
+    steepest_deg = math.degrees(math.atan(rig.actuators.range_m / (rig.module.size_x_m / 2)))
     if not all(abs(x) <= 0.2 for x in args.starts):
         parser.error("--starts must be within ±0.2 m, where the object rests on the sheet")
     if not all(0.0 <= t <= steepest_deg for t in args.tilts):

@@ -128,7 +128,7 @@ def main() -> int:
             mujoco.mj_step(model, data)
         plate = data.geom("object_marker")
         top = plate.xpos + plate.xmat.reshape(3, 3)[:, 2] * J.MARKER_PLATE_M
-        vision.tracker.marker_height_m = float(top[2] - rig.frame.z0_m)
+        vision.tracker.marker_height_m = float(top[2] - rig.module.z0_m)
         errors.append(np.hypot(*(vision.measure(data, data.time) - top[:2])))
     print(f"  MuJoCo frames, the cube's marker, its true height: {rms_mm(errors):.2f} (20 frames)")
     for name, obj, mode, alpha in (

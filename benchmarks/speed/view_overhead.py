@@ -57,7 +57,7 @@ def main() -> int:
                             live.options.grpc_url if setup == "live view" else None,
                             {"setup": setup},
                             N_ACTUATORS,
-                            (rig.frame.size_x_m, rig.frame.size_y_m),
+                            (rig.module.size_x_m, rig.module.size_y_m),
                             print,
                         )
                         bridge.view = _Timed(TrialView(view, bridge.model, bridge.data, rig, link), parts)
