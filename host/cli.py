@@ -227,7 +227,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         default=1.0,
         help="camera above that plane [m], without --calibration",
     )
-    rig.add_argument("--calibration", help="camera calibration (.npz from mantaray calibrate): full pose")
+    rig.add_argument("--calibration", help="camera calibration (.npz from mantaray calibrate-camera): full pose")
     rig.add_argument(
         "--blob",
         type=_hsv_range,

@@ -1,4 +1,4 @@
-"""The camera's commands: `mantaray markers` (the printable marker sheet) and `calibrate` (ChArUco intrinsics)."""
+"""The camera's commands: `mantaray markers` (the printable marker sheet) and `calibrate-camera` (ChArUco intrinsics)."""
 
 from __future__ import annotations
 
@@ -40,7 +40,7 @@ def _squares(text: str) -> tuple[int, int]:
     return nx, ny
 
 
-def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+def cmd_calibrate_camera(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """Calibrate the camera with a ChArUco board: --board-out writes the board to print; then show it to the
     camera from several angles (or give a video of that) and the intrinsics go to --out (.npz)."""
     from .charuco import calibrate_from_frames, charuco_board
@@ -55,7 +55,7 @@ def cmd_calibrate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> 
     try:
         calibration, rms, used = calibrate_from_frames(board, frames)
     except ValueError as exc:
-        print(f"mantaray calibrate: {exc}", file=sys.stderr)
+        print(f"mantaray calibrate-camera: {exc}", file=sys.stderr)
         return 1
     calibration.save(args.out)
     k = calibration.camera_matrix
@@ -116,9 +116,9 @@ def add_parsers(sub: argparse._SubParsersAction, fmt: type[argparse.HelpFormatte
     markers.set_defaults(func=lambda args: cmd_markers(args, markers))
 
     calibrate = sub.add_parser(
-        "calibrate",
+        "calibrate-camera",
         help="camera calibration with a ChArUco board",
-        description=cmd_calibrate.__doc__,
+        description=cmd_calibrate_camera.__doc__,
         formatter_class=fmt,
     )
     calibrate.add_argument("--camera", help="camera index or video file showing the board")
@@ -130,4 +130,4 @@ def add_parsers(sub: argparse._SubParsersAction, fmt: type[argparse.HelpFormatte
     calibrate.add_argument("--square-mm", type=number(0, above=True), default=30.0, help="square side [mm]")
     calibrate.add_argument("--marker-mm", type=number(0, above=True), default=22.0, help="marker side [mm]")
     calibrate.add_argument("--frames", type=number(1, integer=True), default=200, help="read at most this many frames")
-    calibrate.set_defaults(func=lambda args: cmd_calibrate(args, calibrate))
+    calibrate.set_defaults(func=lambda args: cmd_calibrate_camera(args, calibrate))

@@ -290,11 +290,14 @@ def test_a_port_that_is_no_serial_device_is_refused_at_once_in_one_line(still_vi
         (("markers", "--dpi", "0"), "--dpi must be 72..2400"),
         (("markers", "--out", "sheet.svg"), "the file type must be one of .pdf, .png"),
         (("markers", "--out", "/proc/version/sheet.pdf"), "cannot write into /proc/version"),
-        (("calibrate", "--board-out", "board.svg"), "the file type must be one of .png"),
-        (("calibrate", "--board-out", "board.png", "--squares", "1x1"), "at least 2 x 2 squares"),
-        (("calibrate", "--board-out", "board.png", "--squares", "seven"), "expected squares like 7x5"),
-        (("calibrate", "--board-out", "board.png", "--marker-mm", "40", "--square-mm", "30"), "must be smaller than"),
-        (("calibrate", "--camera", "0", "--out", "camera.txt"), "the file type must be one of .npz"),
+        (("calibrate-camera", "--board-out", "board.svg"), "the file type must be one of .png"),
+        (("calibrate-camera", "--board-out", "board.png", "--squares", "1x1"), "at least 2 x 2 squares"),
+        (("calibrate-camera", "--board-out", "board.png", "--squares", "seven"), "expected squares like 7x5"),
+        (
+            ("calibrate-camera", "--board-out", "board.png", "--marker-mm", "40", "--square-mm", "30"),
+            "must be smaller than",
+        ),
+        (("calibrate-camera", "--camera", "0", "--out", "camera.txt"), "the file type must be one of .npz"),
         (
             ("rig", "--port", "/dev/null", "--camera", "0", "--target", "0,0", "--alpha", "1"),
             "noise_amplitude: 1 m is outside 0..0.25 m",
@@ -335,7 +338,10 @@ def test_a_port_that_is_no_serial_device_is_refused_at_once_in_one_line(still_vi
             ("rig", "--port", "/dev/null", "--camera", "/nonexistent/video.avi", "--target", "0,0"),
             "cannot open video file '/nonexistent/video.avi'",
         ),
-        (("calibrate", "--board-out", "board.png", "--square-mm", "0"), "argument --square-mm: must be > 0, got 0"),
+        (
+            ("calibrate-camera", "--board-out", "board.png", "--square-mm", "0"),
+            "argument --square-mm: must be > 0, got 0",
+        ),
         (("zero", "--port", "/dev/null", "--actuators", "0,9"), "actuators are 0..3"),
         (("zero", "--port", "/dev/null", "--actuators", "one"), "expected actuator indices"),
     ],
@@ -413,7 +419,7 @@ def test_calibrate_recovers_a_cameras_intrinsics_from_charuco_views(tmp_path):
         writer.write(cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR))
     writer.release()
     out = tmp_path / "camera.npz"
-    proc = _mantaray("calibrate", "--camera", str(tmp_path / "board.avi"), "--out", str(out))
+    proc = _mantaray("calibrate-camera", "--camera", str(tmp_path / "board.avi"), "--out", str(out))
     assert proc.returncode == 0, proc.stderr + proc.stdout
     found = np.load(out)["camera_matrix"]
     assert found[0, 0] == pytest.approx(k[0, 0], rel=0.03) and found[1, 1] == pytest.approx(k[1, 1], rel=0.03)

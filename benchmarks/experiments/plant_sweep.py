@@ -1,10 +1,10 @@
-"""Calibration sweep: the central-region trials for the sphere, over a grid of rig parameters, firmware in the loop.
+"""The plant sweep: the central-region trials for the sphere over a grid of plant parameters, firmware in the loop.
 
 The acceptance protocol of the model (sim/README.md, Calibration): N trials whose starts and targets
 are drawn uniformly within RADIUS of the centre; success = within the tolerance at the end of T.
 Each grid point runs those same trials (same seeds) with each controller, over the pty, in lock-step.
 
-Run:  python3 benchmarks/experiments/calibrate.py --set fabric.size_m=0.5,0.55,0.6 --set 'contact.friction[2]=0.0001,0.001'
+Run:  python3 benchmarks/experiments/plant_sweep.py --set fabric.size_m=0.5,0.55,0.6 --set 'contact.friction[2]=0.0001,0.001'
       (keys and ranges of sim/plant.toml; several --set make the Cartesian product; --jobs splits grid points
       over cores). `mantaray sim calibrate` searches the whole space; this sweeps a grid of a few parameters.
 Prints one line per grid point and controller, and writes them as JSON lines to --out.
