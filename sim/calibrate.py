@@ -55,7 +55,7 @@ class FindingsEvidence:
     )
     penalty: tuple[float, ...] = F.WORST_OBJECTIVES  # what a plant that cannot be simulated scores
 
-    def protocols(self, values: dict[str, float | str]) -> dict[str, Experiment]:
+    def experiments(self, values: dict[str, float | str]) -> dict[str, Experiment]:
         rule = Plant(self.plant).set(values).success_rule
         sample = F.stratified_sample(CELLS, self.cells_per_stratum, self.seed)
         return {
@@ -75,13 +75,13 @@ class FindingsEvidence:
         }
 
     def evaluate(self, values: dict[str, float | str], pool) -> tuple[tuple[float, ...], dict]:
-        protocols = self.protocols(values)
-        jobs = [(p, t) for p in protocols.values() for t in trials(p)]
-        records = {c: [] for c in protocols}
-        for record, (protocol, _) in zip(pool.map(jobs), jobs, strict=True):
-            records[protocol.controller].append(record)
+        experiments = self.experiments(values)
+        jobs = [(p, t) for p in experiments.values() for t in trials(p)]
+        records = {c: [] for c in experiments}
+        for record, (experiment, _) in zip(pool.map(jobs), jobs, strict=True):
+            records[experiment.controller].append(record)
         rule = Plant(self.plant).set(values).success_rule
-        stats = {c: F.map_stats(records[c], CELLS, rule) for c in protocols}
+        stats = {c: F.map_stats(records[c], CELLS, rule) for c in experiments}
         found = F.heatmap_findings(stats["manhattan"], stats["euclidean"])
         details = {
             "rule": rule,

@@ -94,7 +94,7 @@ def _evidence(args: argparse.Namespace, parser: argparse.ArgumentParser):
                 resolution=args.resolution,
                 timestep_s=args.timestep,
             )
-            evidence.protocols(fixed)  # refuses bad sizes and durations before anything runs
+            evidence.experiments(fixed)  # refuses bad sizes and durations before anything runs
     except (P.ParameterError, RunLogError, ValueError) as exc:
         parser.error(str(exc))
     if not keys:

@@ -18,7 +18,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
     output(parser, writable_file, args.out, FIGURE_SUFFIXES)
     runs = [load_results(parser, given, "compare") for given in (args.first, args.second)]
-    (a, b), (pa, pb) = [summarize(r) for r in runs], [r.protocol for r in runs]
+    (a, b), (pa, pb) = [summarize(r) for r in runs], [r.experiment for r in runs]
     # what success means, and where it is measured, must be the same in both runs; object, controller, alpha,
     # gains and plant are what a comparison is for
     differ = [name for name in ("cells", "tolerance_m", "duration_s") if getattr(pa, name) != getattr(pb, name)]

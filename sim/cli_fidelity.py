@@ -42,7 +42,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         sample_text=sample_text,
         command=shlex.join(["mantaray", *sys.argv[1:]]),
     )
-    p = runs[0].finer.protocol
+    p = runs[0].finer.experiment
     out = output(
         parser,
         writable_dir,
@@ -70,7 +70,7 @@ def _gate(args: argparse.Namespace):
     if args.runs:
         runs = G.load_runs(*args.runs)
         candidate, finer = (G.run_fidelity(getattr(runs[0], n)) for n in ("candidate", "finer"))
-        return None, runs, candidate, finer, runs[0].floor.protocol.start_shift_m, f"the runs {', '.join(args.runs)}"
+        return None, runs, candidate, finer, runs[0].floor.experiment.start_shift_m, f"the runs {', '.join(args.runs)}"
     candidate, finer = G.parse_fidelity(args.candidate), G.parse_fidelity(args.finer)
     arms = tuple(G.Arm.parse(c) for c in (args.controller or ("manhattan", "euclidean")))
     sample = G.GateSample(
@@ -84,7 +84,7 @@ def _gate(args: argparse.Namespace):
         seed=args.seed,
         duration_s=args.duration,
     )
-    sample.protocol(arms[0], candidate, args.shift)  # the protocol's own checks, before any work
+    sample.experiment(arms[0], candidate, args.shift)  # the protocol's own checks, before any work
     runs = G.open_runs(sample, candidate, finer, Path(args.trials_dir), args.shift)
     text = (
         f"{args.object} on the {sample.plant_label} plant, α = {args.alpha:g} m, "
@@ -101,7 +101,7 @@ def _run_missing(sample, runs: list, jobs: int | None) -> bool:
     from .progress import Progress
 
     left = G.missing_trials(runs)
-    total = 3 * sum(len(r.finer.protocol.cell_ids()) * r.finer.protocol.trials_per_cell for r in runs)
+    total = 3 * sum(len(r.finer.experiment.cell_ids()) * r.finer.experiment.trials_per_cell for r in runs)
     bar = Progress(total, initial=total - left, unit="trial", label="fidelity")
     interruptible()
     try:

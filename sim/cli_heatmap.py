@@ -23,19 +23,19 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from .results_file import ResultsFile, ResultsFileBusy
     from .summary import heatmap_outputs
 
-    protocol = _protocol(args, parser)
+    experiment = _protocol(args, parser)
     check_ray(parser, args)
     if args.live and args.executor == "ray":
         parser.error("--live shows the trial of a worker of this machine: use it with --executor local")
-    out = output(parser, writable_dir, args.out or _default_out(args, protocol))
+    out = output(parser, writable_dir, args.out or _default_out(args, experiment))
     try:
-        results = ResultsFile.open(out / "results.jsonl", protocol)
+        results = ResultsFile.open(out / "results.jsonl", experiment)
     except (ExperimentMismatch, ValueError, ResultsFileBusy) as exc:
         _report(str(exc))
         return 2
     for warning in results.warnings():
         _report(f"warning: {warning}")
-    todo, total = results.missing(), len(protocol.cell_ids()) * protocol.trials_per_cell
+    todo, total = results.missing(), len(experiment.cell_ids()) * experiment.trials_per_cell
     if len(todo) < total:
         print(
             f"continuing {out / 'results.jsonl'}: {total - len(todo)} of {total} trials already done", file=sys.stderr
@@ -44,7 +44,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     bar = Progress(total, initial=total - len(todo), unit="trial", label="heatmap")  # on stderr, beside --json
     interruptible()
     try:
-        run(results, _records(args, protocol, todo, live), progress=lambda record: bar.update(1))
+        run(results, _records(args, experiment, todo, live), progress=lambda record: bar.update(1))
         if live is not None:
             live.linger(args.linger, _report)
     except KeyboardInterrupt:
@@ -66,10 +66,10 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             live.close()
     title = (
         f"{args.object}, {args.controller}, α = {args.alpha:g} m, ε = {args.tolerance:g} m, T = {args.duration:g} s, "
-        f"{protocol.trials_per_cell} trials/cell"
+        f"{experiment.trials_per_cell} trials/cell"
     )
     summary = heatmap_outputs(results, out, title)
-    print(json.dumps(summary) if args.json else _summary_line(args, summary, len(protocol.cell_ids()), out))
+    print(json.dumps(summary) if args.json else _summary_line(args, summary, len(experiment.cell_ids()), out))
     return 0
 
 
@@ -102,24 +102,24 @@ def _protocol(args: argparse.Namespace, parser: argparse.ArgumentParser):
         parser.error(str(exc))
 
 
-def _default_out(args: argparse.Namespace, protocol) -> str:
+def _default_out(args: argparse.Namespace, experiment) -> str:
     """out/heatmap/ and a name for what the map is of: object, controller (or settings file), α and plant."""
     from .fidelity import fixed_slug
 
-    plant = ("" if args.plant == DEFAULT_PLANT else f"_{args.plant}") + fixed_slug(protocol.plant_set)
+    plant = ("" if args.plant == DEFAULT_PLANT else f"_{args.plant}") + fixed_slug(experiment.plant_set)
     tuned = f"_{Path(args.settings).stem}" if args.settings else ""
     return f"out/heatmap/{args.object}_{args.controller}{tuned}_alpha{args.alpha:g}{plant}"
 
 
-def _records(args: argparse.Namespace, protocol, todo: list, live):
+def _records(args: argparse.Namespace, experiment, todo: list, live):
     """The missing trials' records as they finish, on this machine's workers (one of them shown live) or on Ray."""
     from .executors import Watch, run_local, run_ray
 
     if args.executor == "ray":
-        return run_ray(protocol, todo, args.jobs, args.ray_address)
+        return run_ray(experiment, todo, args.jobs, args.ray_address)
     if live is not None:
         _report(f"live view of one worker's trials at {live.options.page_url}")
-    return run_local(protocol, todo, workers(args.jobs), None if live is None else Watch(live.options.grpc_url))
+    return run_local(experiment, todo, workers(args.jobs), None if live is None else Watch(live.options.grpc_url))
 
 
 def _summary_line(args: argparse.Namespace, summary: dict, cells: int, out: Path) -> str:

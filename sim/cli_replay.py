@@ -21,18 +21,18 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from .model import SimulationUnstable
 
     results = load_results(parser, args.results, "replay")
-    protocol = results.protocol
-    cells = protocol.cell_ids()
+    experiment = results.experiment
+    cells = experiment.cell_ids()
     if args.cell not in cells:
         parser.error(f"--cell {args.cell} is not a cell of this run (it has cells {cells[0]}..{cells[-1]})")
-    if args.trial >= protocol.trials_per_cell:
-        parser.error(f"--trial {args.trial}: this run has trials 0..{protocol.trials_per_cell - 1} in each cell")
-    if results.model is not None and results.model != model_identity(protocol.rig()):
+    if args.trial >= experiment.trials_per_cell:
+        parser.error(f"--trial {args.trial}: this run has trials 0..{experiment.trials_per_cell - 1} in each cell")
+    if results.model is not None and results.model != model_identity(experiment.rig()):
         parser.error(
             f"{results.path} was run on another model ({results.model}); this checkout's would not replay its "
             f"trials the same: check out the version that ran it"
         )
-    (trial,) = [t for t in trials(protocol) if (t.cell, t.k) == (args.cell, args.trial)]
+    (trial,) = [t for t in trials(experiment) if (t.cell, t.k) == (args.cell, args.trial)]
     out = output(parser, writable_dir, args.out or str(results.path.parent))
     stem = results.path.name.removesuffix(".gz").removesuffix(".jsonl")
     recording = Path(out) / f"{stem}_cell{trial.cell}_trial{trial.k}.rrd"
@@ -40,7 +40,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     try:
         if live is not None:
             _report(f"live view at {live.options.page_url}")
-        runner = TrialRunner(protocol, Watch(None if live is None else live.options.grpc_url, recording))
+        runner = TrialRunner(experiment, Watch(None if live is None else live.options.grpc_url, recording))
         try:
             record = runner.run(trial)
         except SimulationUnstable as exc:

@@ -34,40 +34,46 @@ class TrialRunner:
     is streamed to the view as a recording of its own, named by its cell and trial number.
     """
 
-    def __init__(self, protocol: Experiment | None = None, watch: Watch | None = None) -> None:
+    def __init__(self, experiment: Experiment | None = None, watch: Watch | None = None) -> None:
         from mantaray.host.link import Link
         from mantaray.host.transport import InProcessTransport
 
-        self.protocol, self.watch = protocol, watch
+        self.experiment, self.watch = experiment, watch
         self._link = Link(InProcessTransport(simulated_clock=True))
         self._rig_key: str | None = None
         self._bridge_now = None
         self._unstable: tuple[str, SimulationUnstable] | None = None  # the last rig that would not load
 
-    def _bridge(self, protocol: Experiment):
+    def _bridge(self, experiment: Experiment):
         from .bridge import Bridge
 
         key = json.dumps(
-            [protocol.object_name, protocol.plant, protocol.plant_set, protocol.resolution, protocol.timestep_s]
+            [
+                experiment.object_name,
+                experiment.plant,
+                experiment.plant_set,
+                experiment.resolution,
+                experiment.timestep_s,
+            ]
         )
         if self._unstable is not None and self._unstable[0] == key:
             raise self._unstable[1]  # the same rig diverges the same way: do not load it again
         if key != self._rig_key:
             try:
-                self._bridge_now = Bridge(self._link, protocol.rig(), protocol.plant_model().tracking())
+                self._bridge_now = Bridge(self._link, experiment.rig(), experiment.plant_model().tracking())
             except SimulationUnstable as exc:
                 self._unstable = (key, exc)
                 raise
             self._rig_key = key
         return self._bridge_now
 
-    def result(self, trial: Trial, protocol: Experiment | None = None):
+    def result(self, trial: Trial, experiment: Experiment | None = None):
         """The bridge.TrialResult of one trial of protocol (default: the runner's own)."""
-        protocol = protocol or self.protocol
-        bridge = self._bridge(protocol)
-        view = self._show(bridge, protocol, trial) if self.watch is not None else None
+        experiment = experiment or self.experiment
+        bridge = self._bridge(experiment)
+        view = self._show(bridge, experiment, trial) if self.watch is not None else None
         try:
-            return bridge.run(trial_spec(protocol, trial))
+            return bridge.run(trial_spec(experiment, trial))
         except SimulationUnstable as exc:  # this rig diverges: its other trials are refused without running
             self._unstable = (self._rig_key, exc)
             raise
@@ -76,7 +82,7 @@ class TrialRunner:
                 bridge.view = None
                 view.close()
 
-    def _show(self, bridge, protocol: Experiment, trial: Trial):
+    def _show(self, bridge, experiment: Experiment, trial: Trial):
         """The trial's view, attached to the bridge: a TrialView the caller closes."""
         from mantaray.host.view import RunView
 
@@ -89,7 +95,13 @@ class TrialRunner:
             "mantaray_sim_trials",
             self.watch.recording,
             self.watch.live_url,
-            {**protocol.to_json(), "cell": trial.cell, "trial": trial.k, "start_m": trial.start_m, "seed": trial.seed},
+            {
+                **experiment.to_json(),
+                "cell": trial.cell,
+                "trial": trial.k,
+                "start_m": trial.start_m,
+                "seed": trial.seed,
+            },
             N_ACTUATORS,
             (frame.size_x_m, frame.size_y_m),
             lambda text: print(f"mantaray sim: {text}", file=sys.stderr),
@@ -99,10 +111,10 @@ class TrialRunner:
         bridge.view = TrialView(view, bridge.model, bridge.data, bridge.rig, self._link)
         return bridge.view
 
-    def run(self, trial: Trial, protocol: Experiment | None = None) -> dict:
+    def run(self, trial: Trial, experiment: Experiment | None = None) -> dict:
         """The record of one trial of protocol (default: the runner's own)."""
         try:
-            result = self.result(trial, protocol)
+            result = self.result(trial, experiment)
         except ValueError as exc:  # model.fabric_height: the start is not over the fabric
             if "not over the fabric" not in str(exc):
                 raise
@@ -178,8 +190,8 @@ class LocalPool:
         """(tag, record) as the jobs finish, in any order: the tag (picklable) says where a record belongs when the
         jobs are of several protocols."""
         if self._pool is None:
-            for tag, protocol, trial in jobs:
-                yield tag, self._runner.run(trial, protocol)
+            for tag, experiment, trial in jobs:
+                yield tag, self._runner.run(trial, experiment)
             return
         yield from self._pool.imap_unordered(
             _run_tagged_in_worker, [(tag, p.to_json(), t) for tag, p, t in jobs], chunksize=1
@@ -290,17 +302,17 @@ class RayPool:
         return list(self._pool.map(lambda actor, a: actor.call.remote(fn, a), args))
 
 
-def run_local(protocol: Experiment, todo: list[Trial], jobs: int, watch: Watch | None = None) -> Iterator[dict]:
+def run_local(experiment: Experiment, todo: list[Trial], jobs: int, watch: Watch | None = None) -> Iterator[dict]:
     """Records of the trials as they finish, on `jobs` processes of this machine (1: this process), one of them
     shown in the watch (if any)."""
     with LocalPool(jobs, watch) as pool:
-        yield from pool.imap([(protocol, t) for t in todo])
+        yield from pool.imap([(experiment, t) for t in todo])
 
 
-def run_ray(protocol: Experiment, todo: list[Trial], jobs: int | None, address: str | None) -> Iterator[dict]:
+def run_ray(experiment: Experiment, todo: list[Trial], jobs: int | None, address: str | None) -> Iterator[dict]:
     """Records of the trials as they finish, on Ray actors (a cluster at address, or a local Ray instance)."""
     with RayPool(jobs, address) as pool:
-        yield from pool.imap([(protocol, t) for t in todo])
+        yield from pool.imap([(experiment, t) for t in todo])
 
 
 def run(results: ResultsFile, records: Iterable[dict], progress: Callable[[dict], None] | None = None) -> None:

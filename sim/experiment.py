@@ -118,51 +118,53 @@ class Trial:
         return f"{self.cell}:{self.k}"
 
 
-def cell_bounds(protocol: Experiment, module_m: tuple[float, float], cell: int) -> tuple[float, float, float, float]:
+def cell_bounds(experiment: Experiment, module_m: tuple[float, float], cell: int) -> tuple[float, float, float, float]:
     """(x_lo, x_hi, y_lo, y_hi) [m] of a cell in the fabric frame."""
-    ix, iy = cell % protocol.cells, cell // protocol.cells
-    wx, wy = module_m[0] / protocol.cells, module_m[1] / protocol.cells
+    ix, iy = cell % experiment.cells, cell // experiment.cells
+    wx, wy = module_m[0] / experiment.cells, module_m[1] / experiment.cells
     x0, y0 = -module_m[0] / 2, -module_m[1] / 2
     return x0 + ix * wx, x0 + (ix + 1) * wx, y0 + iy * wy, y0 + (iy + 1) * wy
 
 
-def make_trial(protocol: Experiment, module_m: tuple[float, float], cell: int, k: int) -> Trial:
+def make_trial(experiment: Experiment, module_m: tuple[float, float], cell: int, k: int) -> Trial:
     """Trial k of a cell: target uniform in the cell, start uniform over the workspace, from (seed, cell, k) alone;
     the start moved by protocol.start_shift_m (kept on the workspace) in a direction drawn from them too."""
-    rng = np.random.default_rng([protocol.seed, cell, k])
-    x_lo, x_hi, y_lo, y_hi = cell_bounds(protocol, module_m, cell)
+    rng = np.random.default_rng([experiment.seed, cell, k])
+    x_lo, x_hi, y_lo, y_hi = cell_bounds(experiment, module_m, cell)
     target = (float(rng.uniform(x_lo, x_hi)), float(rng.uniform(y_lo, y_hi)))
     hx, hy = module_m[0] / 2, module_m[1] / 2
     start = (float(rng.uniform(-hx, hx)), float(rng.uniform(-hy, hy)))
     seed = int(rng.integers(1, 2**31))
-    if protocol.start_shift_m:  # its own draw, so that every other number of the trial stays as it was
-        angle = np.random.default_rng([protocol.seed, cell, k, 1]).uniform(0.0, 2 * np.pi)
+    if experiment.start_shift_m:  # its own draw, so that every other number of the trial stays as it was
+        angle = np.random.default_rng([experiment.seed, cell, k, 1]).uniform(0.0, 2 * np.pi)
         start = (
-            float(np.clip(start[0] + protocol.start_shift_m * np.cos(angle), -hx, hx)),
-            float(np.clip(start[1] + protocol.start_shift_m * np.sin(angle), -hy, hy)),
+            float(np.clip(start[0] + experiment.start_shift_m * np.cos(angle), -hx, hx)),
+            float(np.clip(start[1] + experiment.start_shift_m * np.sin(angle), -hy, hy)),
         )
     return Trial(cell, k, start, target, seed)
 
 
-def trials(protocol: Experiment) -> list[Trial]:
+def trials(experiment: Experiment) -> list[Trial]:
     """Every trial of the protocol, cell by cell."""
-    f = protocol.rig().module
+    f = experiment.rig().module
     module = (f.size_x_m, f.size_y_m)
-    return [make_trial(protocol, module, c, k) for c in protocol.cell_ids() for k in range(protocol.trials_per_cell)]
+    return [
+        make_trial(experiment, module, c, k) for c in experiment.cell_ids() for k in range(experiment.trials_per_cell)
+    ]
 
 
-def trial_spec(protocol: Experiment, trial: Trial) -> TrialSpec:
+def trial_spec(experiment: Experiment, trial: Trial) -> TrialSpec:
     return TrialSpec(
         trial.start_m,
         trial.target_m,
-        controller=protocol.controller,
-        duration_s=protocol.duration_s,
-        alpha_m=protocol.alpha_m,
-        tolerance_m=protocol.tolerance_m,
+        controller=experiment.controller,
+        duration_s=experiment.duration_s,
+        alpha_m=experiment.alpha_m,
+        tolerance_m=experiment.tolerance_m,
         seed=trial.seed,
-        gains=controller_gains(protocol.controller, protocol.gains, protocol.plant_model().gain_scale),
-        stop_when_reached=protocol.stop_when_reached,
-        settings=protocol.settings,
+        gains=controller_gains(experiment.controller, experiment.gains, experiment.plant_model().gain_scale),
+        stop_when_reached=experiment.stop_when_reached,
+        settings=experiment.settings,
     )
 
 

@@ -131,7 +131,7 @@ class GateSample:
         fixed = ", ".join(f"{k}={v}" for k, v in self.plant_set)
         return f"{self.plant} with {fixed}" if fixed else self.plant
 
-    def protocol(self, arm: Arm, fidelity: Fidelity, shift_m: float = 0.0) -> Experiment:
+    def experiment(self, arm: Arm, fidelity: Fidelity, shift_m: float = 0.0) -> Experiment:
         return Experiment(
             object_name=self.object_name,
             controller=arm.controller,
@@ -170,9 +170,9 @@ class Runs:
 
 def check_paired(runs: Runs) -> None:
     """Refuse runs that are not the same trials (GateMismatch, naming the field), or a floor that moved nothing."""
-    base = runs.finer.protocol.to_json()
+    base = runs.finer.experiment.to_json()
     for name in ("candidate", "floor"):
-        other = getattr(runs, name).protocol.to_json()
+        other = getattr(runs, name).experiment.to_json()
         differ = sorted(k for k in set(base) | set(other) if k not in APART[name] and base.get(k) != other.get(k))
         if differ:
             raise GateMismatch(
@@ -197,7 +197,7 @@ def check_paired(runs: Runs) -> None:
                 f"{runs.label}: the {name} run and the finer run were run on the plant's values of "
                 f"different days (sim/plant.toml changed between them): not the same plant"
             )
-    if runs.floor.protocol.start_shift_m <= 0:
+    if runs.floor.experiment.start_shift_m <= 0:
         raise GateMismatch(
             f"{runs.label}: the floor run ({runs.floor.path}) moves no start (start_shift_m 0): it "
             f"measures no noise floor"
@@ -280,7 +280,7 @@ def compare(runs: list[Runs]) -> dict:
                 f"|perturbed - finer| by {scatter.mean:.4g} on average, at least {scatter.low:.4g})"
             )
     pairs = len(pooled["finer"])
-    expected = sum(len(r.finer.protocol.cell_ids()) * r.finer.protocol.trials_per_cell for r in runs)
+    expected = sum(len(r.finer.experiment.cell_ids()) * r.finer.experiment.trials_per_cell for r in runs)
     return {
         "pairs": pairs,
         "expected_pairs": expected,
@@ -408,13 +408,13 @@ def open_runs(
     fidelity = {"candidate": candidate, "finer": finer, "floor": finer}
     opened: dict[str, dict[str, ResultsFile]] = {}
     for arm in sample.arms:
-        for name, protocol in (
-            ("candidate", sample.protocol(arm, candidate)),
-            ("finer", sample.protocol(arm, finer)),
-            ("floor", sample.protocol(arm, finer, shift_m)),
+        for name, experiment in (
+            ("candidate", sample.experiment(arm, candidate)),
+            ("finer", sample.experiment(arm, finer)),
+            ("floor", sample.experiment(arm, finer, shift_m)),
         ):
-            path = sample.results_path(trials_dir, arm, fidelity[name], protocol.start_shift_m)
-            opened.setdefault(arm.label, {})[name] = ResultsFile.open(path, protocol)
+            path = sample.results_path(trials_dir, arm, fidelity[name], experiment.start_shift_m)
+            opened.setdefault(arm.label, {})[name] = ResultsFile.open(path, experiment)
     return [Runs(label, **files) for label, files in opened.items()]
 
 
@@ -435,7 +435,7 @@ def run_missing(sample: GateSample, runs: list[Runs], jobs: int, on_record=None)
         key=lambda job: (job[1].k, *place[job[1].cell], job[0]),
     )
     with X.LocalPool(jobs) as pool:
-        for i, record in pool.imap_tagged([(i, files[i].protocol, t) for i, t in todo]):
+        for i, record in pool.imap_tagged([(i, files[i].experiment, t) for i, t in todo]):
             files[i].append(record)
             if on_record is not None:
                 on_record(record)
@@ -444,8 +444,8 @@ def run_missing(sample: GateSample, runs: list[Runs], jobs: int, on_record=None)
 def load_runs(candidate: str | Path, finer: str | Path, floor: str | Path) -> list[Runs]:
     """Three existing results files (heatmap runs, say) as one arm's runs, for compare()."""
     files = [ResultsFile.load(p) for p in (candidate, finer, floor)]
-    return [Runs(files[1].protocol.controller, *files)]
+    return [Runs(files[1].experiment.controller, *files)]
 
 
 def run_fidelity(results: ResultsFile) -> Fidelity:
-    return Fidelity(results.protocol.resolution, results.protocol.timestep_s)
+    return Fidelity(results.experiment.resolution, results.experiment.timestep_s)

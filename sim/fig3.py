@@ -32,7 +32,7 @@ def fig3_jobs(
     settings = settings or ControllerSettings("manhattan")
     jobs = []
     for name, alpha_m in F.FIG3_ALPHA_M.items():
-        protocol = Experiment(
+        experiment = Experiment(
             object_name=name,
             controller=settings.controller,
             cells=1,
@@ -50,16 +50,21 @@ def fig3_jobs(
         for k in range(F.FIG3_TRIALS):
             rng = np.random.default_rng([seed, sum(map(ord, name)), k])
             target = tuple(float(v) for v in rng.uniform(-F.FIG3_TARGET_HALF_M, F.FIG3_TARGET_HALF_M, 2))
-            jobs.append((protocol, Trial(0, k, (0.0, 0.0), target, int(rng.integers(1, 2**31)))))
+            jobs.append((experiment, Trial(0, k, (0.0, 0.0), target, int(rng.integers(1, 2**31)))))
     return jobs
 
 
 def run_fig3_trial(runner, job: tuple) -> dict:
     """One Fig. 3 trial on the process's runner: its outcome, path and tilts (a diverging plant: fell off, said so)."""
-    protocol, trial = job
-    row = {"object": protocol.object_name, "k": trial.k, "target_m": list(trial.target_m), "alpha_m": protocol.alpha_m}
+    experiment, trial = job
+    row = {
+        "object": experiment.object_name,
+        "k": trial.k,
+        "target_m": list(trial.target_m),
+        "alpha_m": experiment.alpha_m,
+    }
     try:
-        result = runner.result(trial, protocol)
+        result = runner.result(trial, experiment)
     except SimulationUnstable as exc:
         return {
             **row,

@@ -93,20 +93,22 @@ class ResultsFile:
     line cut off by an interruption is dropped quietly: its trial runs again too."""
 
     path: Path
-    protocol: Experiment
+    experiment: Experiment
     records: dict[str, dict] = field(default_factory=dict)  # trial key -> record
     rejected: list[tuple[int, str]] = field(default_factory=list)  # (line number from 1, why) of refused lines
     model: dict | None = None  # the model_identity() it ran on (None: written before files recorded it)
     plant_values: dict | None = None  # the plant's values it ran with (None: written before files recorded them)
 
     @classmethod
-    def open(cls, path: str | Path, protocol: Experiment) -> ResultsFile:
+    def open(cls, path: str | Path, experiment: Experiment) -> ResultsFile:
         """Open for this protocol: create the file, or read what an earlier run of the same protocol left. The
         process holds the file from here on (ResultsFileBusy when another one does)."""
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         _lock(path)
-        results = cls(path, protocol, model=model_identity(protocol.rig()), plant_values=protocol.plant_model().values)
+        results = cls(
+            path, experiment, model=model_identity(experiment.rig()), plant_values=experiment.plant_model().values
+        )
         if not path.exists() or _cut_header(path.read_bytes()):  # new, or its header was cut off as it was written
             write_whole(path, json.dumps(_header(results)).encode() + b"\n")
             return results
@@ -122,11 +124,11 @@ class ResultsFile:
         if stored.plant_values is not None and stored.plant_values != now:
             changed = sorted(k for k in now if stored.plant_values.get(k) != now[k])
             raise ExperimentMismatch(
-                f"{path} was run on the plant {protocol.plant!r} when its values were others "
+                f"{path} was run on the plant {experiment.plant!r} when its values were others "
                 f"({', '.join(changed)} differ in sim/plant.toml since); use another --out"
             )
-        if stored.protocol != protocol and not _extends(stored.protocol, protocol):
-            changed = sorted(k for k, v in protocol.to_json().items() if stored.protocol.to_json().get(k) != v)
+        if stored.experiment != experiment and not _extends(stored.experiment, experiment):
+            changed = sorted(k for k, v in experiment.to_json().items() if stored.experiment.to_json().get(k) != v)
             raise ExperimentMismatch(
                 f"{path} holds a run with other options ({', '.join(changed)} differ); "
                 f"use another --out, the same options to continue it, or more trials or "
@@ -137,7 +139,7 @@ class ResultsFile:
         if stored.bad_lines:  # kept aside, never lost
             with open(path.with_name(path.name + ".rejected"), "ab") as f:
                 f.write(b"".join(line + b"\n" for line in stored.bad_lines))
-        if stored.protocol != protocol or stored.bad_lines or stored.cut:
+        if stored.experiment != experiment or stored.bad_lines or stored.cut:
             # the header names the (possibly grown) run; only the good lines stay
             write_whole(
                 path,
@@ -150,7 +152,7 @@ class ResultsFile:
     def load(cls, path: str | Path) -> ResultsFile:
         """Read a results file whatever its protocol (for figures and comparisons)."""
         stored = _read(Path(path))
-        return cls(Path(path), stored.protocol, stored.records, stored.rejected, stored.model, stored.plant_values)
+        return cls(Path(path), stored.experiment, stored.records, stored.rejected, stored.model, stored.plant_values)
 
     def append(self, record: dict) -> None:
         with open(self.path, "a") as f:
@@ -158,7 +160,7 @@ class ResultsFile:
         self.records[record["key"]] = record
 
     def missing(self) -> list[Trial]:
-        return [t for t in trials(self.protocol) if t.key not in self.records]
+        return [t for t in trials(self.experiment) if t.key not in self.records]
 
     def warnings(self) -> list[str]:
         """One line per refused line of the file, for the user."""
@@ -214,7 +216,7 @@ def _header(results: ResultsFile) -> dict:
     model that stepped it (the generated MJCF's digest and MuJoCo's version)."""
     return {
         "format": RESULTS_FORMAT,
-        "protocol": results.protocol.to_json(),
+        "protocol": results.experiment.to_json(),
         "plant_values": results.plant_values,
         "model": results.model,
     }
@@ -232,7 +234,7 @@ RECORD_TYPES = {
 TYPE_NAMES = {str: "a string", int: "a whole number", bool: "true or false", list: "a list"}
 
 
-def record_problem(record, protocol: Experiment) -> str | None:
+def record_problem(record, experiment: Experiment) -> str | None:
     """Why a parsed line is not a trial record of this protocol, or None when it is one."""
     if not isinstance(record, dict):
         return f"not a trial record (a JSON {type(record).__name__})"
@@ -242,7 +244,7 @@ def record_problem(record, protocol: Experiment) -> str | None:
         value = record[name]
         if type(value) is not kind:  # exact: a bool is not a count, 7 is not a success
             return f"{name} must be {TYPE_NAMES[kind]}, got {value!r}"
-    if record["cell"] not in set(protocol.cell_ids()) or not 0 <= record["k"] < protocol.trials_per_cell:
+    if record["cell"] not in set(experiment.cell_ids()) or not 0 <= record["k"] < experiment.trials_per_cell:
         return f"trial {record['cell']}:{record['k']} is not one of this run's"
     if record["key"] != f"{record['cell']}:{record['k']}":
         return f"key {record['key']!r} does not match cell {record['cell']}, trial {record['k']}"
@@ -253,7 +255,7 @@ def record_problem(record, protocol: Experiment) -> str | None:
 class _Contents:
     """What a results file holds, line by line."""
 
-    protocol: Experiment
+    experiment: Experiment
     plant_values: dict | None
     model: dict | None  # model_identity() of the run; None in files written before it was recorded
     records: dict[str, dict] = field(default_factory=dict)
@@ -291,12 +293,12 @@ def _read(path: Path) -> _Contents:
             f"trials cannot be placed; was it edited by hand?"
         )
     try:
-        protocol = Experiment.from_json(header["protocol"])
+        experiment = Experiment.from_json(header["protocol"])
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"{path}: its header's protocol is not valid ({exc})") from None
     recorded = header.get("plant_values")
     plant_values = None if recorded is None else P.recorded_values(recorded)
-    out = _Contents(protocol, plant_values, header.get("model"), cut=lines[-1] != b"")
+    out = _Contents(experiment, plant_values, header.get("model"), cut=lines[-1] != b"")
     for number, line in enumerate(lines[1:-1], start=2):  # the last element follows the final newline
         if not line.strip():
             continue
@@ -305,7 +307,7 @@ def _read(path: Path) -> _Contents:
         except json.JSONDecodeError:
             problem = "not JSON"
         else:
-            problem = record_problem(record, protocol)
+            problem = record_problem(record, experiment)
             if problem is None and record["key"] in out.records:
                 problem = f"repeats trial {record['key']}"
         if problem is None:

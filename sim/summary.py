@@ -51,7 +51,7 @@ class Summary:
 
 
 def summarize(results: ResultsFile) -> Summary:
-    p = results.protocol
+    p = results.experiment
     n = p.cells
     counts = np.zeros((3, n * n))  # successes, reaches, falls
     totals = np.zeros(n * n)
@@ -86,7 +86,7 @@ def heatmap_outputs(results, out: Path, title: str) -> dict:
     from .experiment import cell_bounds
 
     s = summarize(results)
-    p = results.protocol
+    p = results.experiment
     f = p.rig().module
     rows = ["cell,ix,iy,x_lo_m,y_lo_m,trials,success_rate,reach_rate,fell_rate"]
     for cell in p.cell_ids():

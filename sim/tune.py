@@ -280,13 +280,13 @@ def final_check(
     from .results_file import ResultsFile
     from .summary import summarize
 
-    protocol = evidence.final_experiment(settings, trials_per_cell, seed, cells)
-    results = ResultsFile.open(path, protocol)
+    experiment = evidence.final_experiment(settings, trials_per_cell, seed, cells)
+    results = ResultsFile.open(path, experiment)
     todo = results.missing()
     total = cells**2 * trials_per_cell
     progress = Progress(total, initial=total - len(todo), unit="trial", label="tune: final check")
     try:
-        run(results, pool.imap([(protocol, t) for t in todo]), lambda record: progress.update(1))
+        run(results, pool.imap([(experiment, t) for t in todo]), lambda record: progress.update(1))
     finally:
         progress.close()
     summary = summarize(results)

@@ -95,5 +95,5 @@ def _final_heatmaps(path: Path, title: str) -> list[str]:
     from .summary import heatmap_outputs
 
     results = ResultsFile.load(path)
-    summary = heatmap_outputs(results, path.parent, title.format(trials=results.protocol.trials_per_cell))
+    summary = heatmap_outputs(results, path.parent, title.format(trials=results.experiment.trials_per_cell))
     return [summary["figure"], summary["reach_figure"]]

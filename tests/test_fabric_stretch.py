@@ -125,7 +125,7 @@ def test_sim_run_and_heatmap_run_a_sheet_of_threads_when_set(tmp_path):
     )  # fmt: skip
     assert heat.returncode == 0, heat.stderr
     results = R.ResultsFile.load(tmp_path / "heat" / "results.jsonl")
-    assert results.protocol.plant_set == (("fabric.stretch", "threads"),) and len(results.records) == 1
+    assert results.experiment.plant_set == (("fabric.stretch", "threads"),) and len(results.records) == 1
     assert results.plant_values["fabric.stretch"] == "threads"
 
 

@@ -75,13 +75,13 @@ def test_bootstrap_of_nothing_is_nan_and_a_bad_level_is_refused():
 
 # ------------------------------------------------------------------------------------------- the gate's verdict
 def _results(
-    tmp_path: Path, name: str, protocol: E.Experiment, outcomes: list[tuple[bool, bool, bool]], later_s: float = 0.0
+    tmp_path: Path, name: str, experiment: E.Experiment, outcomes: list[tuple[bool, bool, bool]], later_s: float = 0.0
 ):
     """A results file of protocol whose trials have the given (success, reached, fell_off), in trial order, and a
     time to reach and a final error drawn from the trial's seed (the same trial, the same draw), later_s later."""
-    results = R.ResultsFile(tmp_path / f"{name}.jsonl", protocol)
+    results = R.ResultsFile(tmp_path / f"{name}.jsonl", experiment)
     for trial, (success, reached, fell) in zip(
-        E.trials(protocol), outcomes, strict=False
+        E.trials(experiment), outcomes, strict=False
     ):  # fewer outcomes: an unfinished run
         draw = np.random.default_rng(trial.seed).random(2)
         results.records[trial.key] = {
@@ -101,9 +101,9 @@ def _results(
 def _sample_runs(tmp_path, finer_outcomes, candidate_outcomes, floor_outcomes, later_s=0.0, **changes):
     sample = G.GateSample(cells_per_stratum=8, trials_per_cell=5, arms=(G.Arm("manhattan", "manhattan"),))
     arm = sample.arms[0]
-    finer = sample.protocol(arm, G.FIDELITIES["reference"])
-    candidate = dataclasses.replace(sample.protocol(arm, G.FIDELITIES["fast"]), **changes)
-    floor = sample.protocol(arm, G.FIDELITIES["reference"], G.PERTURBATION_M)
+    finer = sample.experiment(arm, G.FIDELITIES["reference"])
+    candidate = dataclasses.replace(sample.experiment(arm, G.FIDELITIES["fast"]), **changes)
+    floor = sample.experiment(arm, G.FIDELITIES["reference"], G.PERTURBATION_M)
     return [
         G.Runs(
             "manhattan",
@@ -194,7 +194,7 @@ def test_the_gate_refuses_runs_of_other_trials_and_names_the_field(tmp_path, fie
 def test_the_gate_refuses_a_floor_that_moved_nothing(tmp_path):
     finer = _draw(np.random.default_rng(0), 200, 0.5)
     run = _sample_runs(tmp_path, finer, finer, finer)[0]
-    same = R.ResultsFile(tmp_path / "same.jsonl", run.finer.protocol, dict(run.finer.records))
+    same = R.ResultsFile(tmp_path / "same.jsonl", run.finer.experiment, dict(run.finer.records))
     with pytest.raises(G.GateMismatch, match="moves no start"):
         G.compare([dataclasses.replace(run, floor=same)])
 
@@ -243,10 +243,10 @@ def test_results_files_written_before_the_start_shift_existed_read_as_unshifted(
 # ------------------------------------------------------------------------------------------- model identity
 def _written(tmp_path) -> tuple[E.Experiment, Path, dict]:
     """A new results file's protocol, path and header, to be edited and written back with _rewrite."""
-    protocol = E.Experiment(cells=2, trials_per_cell=1, duration_s=0.5)
+    experiment = E.Experiment(cells=2, trials_per_cell=1, duration_s=0.5)
     path = tmp_path / "results.jsonl"
-    R.ResultsFile.open(path, protocol)
-    return protocol, path, json.loads(path.read_text().split("\n", 1)[0])
+    R.ResultsFile.open(path, experiment)
+    return experiment, path, json.loads(path.read_text().split("\n", 1)[0])
 
 
 def _rewrite(path: Path, header: dict) -> None:
@@ -254,28 +254,28 @@ def _rewrite(path: Path, header: dict) -> None:
 
 
 def test_a_results_file_of_another_model_is_not_continued_and_says_how_to_start_again(tmp_path):
-    protocol, path, stored = _written(tmp_path)
+    experiment, path, stored = _written(tmp_path)
     stored["model"]["mjcf_sha1"] = "0" * 16  # as if the generator had changed since
     _rewrite(path, stored)
     with pytest.raises(E.ExperimentMismatch, match="Start it again"):
-        R.ResultsFile.open(path, protocol)
+        R.ResultsFile.open(path, experiment)
     del stored["model"]  # written before files recorded their model
     _rewrite(path, stored)
     with pytest.raises(E.ExperimentMismatch, match="before results files recorded"):
-        R.ResultsFile.open(path, protocol)
-    assert R.ResultsFile.load(path).protocol == protocol  # still read for figures and comparisons
+        R.ResultsFile.open(path, experiment)
+    assert R.ResultsFile.load(path).experiment == experiment  # still read for figures and comparisons
 
 
 def test_a_results_file_written_before_a_parameter_was_declared_continues_as_run_at_its_value(tmp_path):
     """sim/plant.toml: a parameter is added with the value that reproduces the model before it."""
-    protocol, path, stored = _written(tmp_path)
+    experiment, path, stored = _written(tmp_path)
     del stored["plant_values"]["fabric.stretch"]  # as a file written before it was declared
     _rewrite(path, stored)
-    assert R.ResultsFile.open(path, protocol).plant_values["fabric.stretch"] == "edges"
+    assert R.ResultsFile.open(path, experiment).plant_values["fabric.stretch"] == "edges"
     stored["plant_values"]["fabric.stretch"] = "threads"  # but a value it did record is held to
     _rewrite(path, stored)
     with pytest.raises(E.ExperimentMismatch, match="fabric.stretch differ"):
-        R.ResultsFile.open(path, protocol)
+        R.ResultsFile.open(path, experiment)
 
 
 # ------------------------------------------------------------------------------------------- the command
@@ -346,8 +346,8 @@ def test_values_fixed_over_the_plant_go_into_every_run_and_name_its_trials_apart
     plain = G.GateSample(arms=(G.Arm("manhattan", "manhattan"),))
     fidelity = G.parse_fidelity("15:0.001")
     arm = sample.arms[0]
-    assert sample.protocol(arm, fidelity).plant_model().rig().fabric.stretch == "threads"
-    assert plain.protocol(arm, fidelity).plant_model().rig().fabric.stretch == "edges"
+    assert sample.experiment(arm, fidelity).plant_model().rig().fabric.stretch == "threads"
+    assert plain.experiment(arm, fidelity).plant_model().rig().fabric.stretch == "edges"
     assert sample.results_path(tmp_path, arm, fidelity) != plain.results_path(tmp_path, arm, fidelity)
     assert "fabric.stretch=threads" in sample.results_path(tmp_path, arm, fidelity).name
     assert sample.plant_label == "polyester with fabric.stretch=threads"
@@ -372,7 +372,7 @@ def test_a_gate_stopped_part_way_holds_the_same_stratified_trials_in_each_run(tm
     with pytest.raises(_Stop):
         G.run_missing(sample, runs, 1, on_record=stop_after_two_positions)
     files = [
-        R.ResultsFile.open(getattr(runs[0], n).path, getattr(runs[0], n).protocol)
+        R.ResultsFile.open(getattr(runs[0], n).path, getattr(runs[0], n).experiment)
         for n in ("finer", "candidate", "floor")
     ]
     keys = [set(f.records) for f in files]

@@ -13,9 +13,9 @@ from mantaray.sim.fig3 import fig3_jobs
 def test_every_object_gets_five_targets_in_the_square_with_its_papers_alpha():
     jobs = fig3_jobs("polyester", {}, seed=3, resolution=11, timestep_s=0.002)
     assert len(jobs) == 7 * F.FIG3_TRIALS
-    for protocol, trial in jobs:
-        assert protocol.alpha_m == F.FIG3_ALPHA_M[protocol.object_name] and protocol.controller == "manhattan"
-        assert protocol.duration_s == 60.0 and protocol.stop_when_reached
+    for experiment, trial in jobs:
+        assert experiment.alpha_m == F.FIG3_ALPHA_M[experiment.object_name] and experiment.controller == "manhattan"
+        assert experiment.duration_s == 60.0 and experiment.stop_when_reached
         assert trial.start_m == (0.0, 0.0) and all(abs(v) <= 0.2 for v in trial.target_m)
     again = fig3_jobs("polyester", {}, seed=3, resolution=11, timestep_s=0.002)
     other = fig3_jobs("polyester", {}, seed=4, resolution=11, timestep_s=0.002)

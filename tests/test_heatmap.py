@@ -37,27 +37,27 @@ SMALL = E.Experiment(
 @settings(max_examples=200, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), cells=st.integers(1, 40), data=st.data())
 def test_targets_lie_in_their_cell_and_starts_on_the_workspace(seed, cells, data):
-    protocol = E.Experiment(cells=cells, seed=seed)
+    experiment = E.Experiment(cells=cells, seed=seed)
     cell = data.draw(st.integers(0, cells**2 - 1))
     k = data.draw(st.integers(0, 50))
-    trial = E.make_trial(protocol, MODULE, cell, k)
-    x_lo, x_hi, y_lo, y_hi = E.cell_bounds(protocol, MODULE, cell)
+    trial = E.make_trial(experiment, MODULE, cell, k)
+    x_lo, x_hi, y_lo, y_hi = E.cell_bounds(experiment, MODULE, cell)
     assert x_lo <= trial.target_m[0] <= x_hi and y_lo <= trial.target_m[1] <= y_hi
     assert all(abs(v) <= 0.25 for v in trial.start_m)
-    assert trial == E.make_trial(protocol, MODULE, cell, k)  # from (seed, cell, k) alone
+    assert trial == E.make_trial(experiment, MODULE, cell, k)  # from (seed, cell, k) alone
 
 
 def test_cells_tile_the_workspace_in_x_then_y():
-    protocol = E.Experiment()
-    assert E.cell_bounds(protocol, MODULE, 0) == pytest.approx((-0.25, -0.225, -0.25, -0.225))
-    assert E.cell_bounds(protocol, MODULE, 1) == pytest.approx((-0.225, -0.2, -0.25, -0.225))
-    assert E.cell_bounds(protocol, MODULE, 20) == pytest.approx((-0.25, -0.225, -0.225, -0.2))
-    assert E.cell_bounds(protocol, MODULE, 399) == pytest.approx((0.225, 0.25, 0.225, 0.25))
+    experiment = E.Experiment()
+    assert E.cell_bounds(experiment, MODULE, 0) == pytest.approx((-0.25, -0.225, -0.25, -0.225))
+    assert E.cell_bounds(experiment, MODULE, 1) == pytest.approx((-0.225, -0.2, -0.25, -0.225))
+    assert E.cell_bounds(experiment, MODULE, 20) == pytest.approx((-0.25, -0.225, -0.225, -0.2))
+    assert E.cell_bounds(experiment, MODULE, 399) == pytest.approx((0.225, 0.25, 0.225, 0.25))
 
 
 def test_starts_are_uniform_over_the_workspace_and_the_seed_decides_them():
-    protocol = E.Experiment()  # the paper's 4,000 trials
-    starts = np.array([t.start_m for t in E.trials(protocol)])
+    experiment = E.Experiment()  # the paper's 4,000 trials
+    starts = np.array([t.start_m for t in E.trials(experiment)])
     assert len(starts) == 4000
     counts, _, _ = np.histogram2d(starts[:, 0], starts[:, 1], bins=4, range=[[-0.25, 0.25], [-0.25, 0.25]])
     assert counts.min() > 250 - 4 * np.sqrt(250) and counts.max() < 250 + 4 * np.sqrt(250)  # 16 bins of 250
@@ -118,7 +118,7 @@ def _record(cell: int, k: int, success: bool, reached: bool = False, fell: bool 
 
 
 def test_summary_rates_score_and_regions():
-    results = R.ResultsFile(path=None, protocol=E.Experiment(cells=2, trials_per_cell=10))
+    results = R.ResultsFile(path=None, experiment=E.Experiment(cells=2, trials_per_cell=10))
     for k in range(10):
         results.records[f"0:{k}"] = _record(0, k, success=True)  # cell 0: 100 %
         results.records[f"1:{k}"] = _record(1, k, success=k < 5, fell=k >= 8)  # cell 1: 50 %, 20 % fell
@@ -170,7 +170,7 @@ def test_more_trials_or_cells_on_the_same_file_keep_the_trials_there_and_add_the
     (kept,) = first.records.values()
     grown = R.ResultsFile.open(path, SMALL)
     assert grown.records == first.records and len(grown.missing()) == 7
-    assert R.ResultsFile.load(path).protocol == SMALL  # the header names the larger run now
+    assert R.ResultsFile.load(path).experiment == SMALL  # the header names the larger run now
     X.run(grown, X.run_local(SMALL, grown.missing(), jobs=1))
     final = R.ResultsFile.load(path)
     assert len(final.records) == 8 and final.records[kept["key"]] == kept
@@ -187,9 +187,9 @@ def test_a_results_file_of_other_options_is_not_continued(tmp_path):
         R.ResultsFile.open(tmp_path / "other.jsonl", SMALL)
 
 
-def _synthetic_file(path: Path, protocol: E.Experiment, lines: list[str]) -> None:
+def _synthetic_file(path: Path, experiment: E.Experiment, lines: list[str]) -> None:
     """A results file of this protocol with these trial lines (no simulation)."""
-    R.ResultsFile.open(path, protocol)
+    R.ResultsFile.open(path, experiment)
     with open(path, "a") as f:
         f.write("".join(line + "\n" for line in lines))
 
@@ -366,13 +366,13 @@ def test_ray_runs_the_same_trials_as_local_processes():
 
 @pytest.mark.parametrize("offset_m", [0.01, 0.05])  # within eps at the start; a short way off
 def test_a_trial_stopped_at_reach_records_where_it_was_judged_in_strict_json(offset_m):
-    protocol = E.Experiment(cells=2, trials_per_cell=1, duration_s=3.0, stop_when_reached=True)
+    experiment = E.Experiment(cells=2, trials_per_cell=1, duration_s=3.0, stop_when_reached=True)
     start = (0.02, -0.03)
     trial = E.Trial(cell=0, k=0, start_m=start, target_m=(start[0] + offset_m, start[1]), seed=5)
-    record = json.loads(json.dumps(R.trial_record(trial, X.TrialRunner(protocol).result(trial)), allow_nan=False))
+    record = json.loads(json.dumps(R.trial_record(trial, X.TrialRunner(experiment).result(trial)), allow_nan=False))
     assert record["reached"] and record["success"]
     error_m = np.hypot(*(np.subtract(record["final_m"], record["target_m"])))
-    assert error_m == pytest.approx(record["final_error_m"], abs=2e-5) and error_m < protocol.tolerance_m
+    assert error_m == pytest.approx(record["final_error_m"], abs=2e-5) and error_m < experiment.tolerance_m
 
 
 def _runner_kind_and_double(runner, x):
@@ -577,14 +577,14 @@ def test_a_physics_that_cannot_be_integrated_ends_the_run_in_one_line_naming_the
 def test_a_gzipped_results_file_opens_for_comparison_but_is_not_continued(tmp_path):
     import gzip
 
-    protocol = E.Experiment(cells=2, trials_per_cell=1, duration_s=0.5)
+    experiment = E.Experiment(cells=2, trials_per_cell=1, duration_s=0.5)
     plain = tmp_path / "results.jsonl"
-    R.ResultsFile.open(plain, protocol)
+    R.ResultsFile.open(plain, experiment)
     packed = tmp_path / "results.jsonl.gz"
     packed.write_bytes(gzip.compress(plain.read_bytes()))
-    assert R.ResultsFile.load(packed).protocol == protocol
+    assert R.ResultsFile.load(packed).experiment == experiment
     with pytest.raises(ValueError, match="gunzip it first"):
-        R.ResultsFile.open(packed, protocol)
+        R.ResultsFile.open(packed, experiment)
     run = subprocess.run(
         [
             sys.executable,

@@ -101,8 +101,10 @@ def test_the_radian_reading_scales_the_papers_gains_and_nothing_else():
     assert gains["y"].kd == pytest.approx(paper["kd"] * 180 / math.pi)
     assert gains["x"].integral_limit == paper["integral_limit"]
     assert controller_gains("euclidean", None, 1.0) == {}  # degrees: the firmware's own defaults
-    protocol = Experiment(cells=2, trials_per_cell=1, plant_set=(("reading.pid_unit", "rad"),), controller="euclidean")
-    spec = trial_spec(protocol, trials(protocol)[0])
+    experiment = Experiment(
+        cells=2, trials_per_cell=1, plant_set=(("reading.pid_unit", "rad"),), controller="euclidean"
+    )
+    spec = trial_spec(experiment, trials(experiment)[0])
     assert spec.gains["radial"].ki == pytest.approx(m.PID_DEFAULTS[m.Axis.RADIAL]["ki"] * 180 / math.pi)
 
 

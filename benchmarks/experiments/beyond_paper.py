@@ -112,7 +112,7 @@ def compare(run: str) -> dict | None:
             return None
     tuned, base = loaded[tuned_path], loaded[base_path]
     differ = sorted(
-        k for k, v in tuned.protocol.to_json().items() if k not in PAIRED_APART and base.protocol.to_json()[k] != v
+        k for k, v in tuned.experiment.to_json().items() if k not in PAIRED_APART and base.experiment.to_json()[k] != v
     )
     if differ:  # then trial k of a cell is not the same start, target and noise in both: no pairs
         raise SystemExit(f"{run}: the final check and {base_path} differ in {', '.join(differ)}: not paired trials")

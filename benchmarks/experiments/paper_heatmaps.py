@@ -62,7 +62,7 @@ def zone_rates(results_path: Path) -> dict:
     from mantaray.sim import summary as S
 
     results = R.ResultsFile.load(results_path)
-    s, p = S.summarize(results), results.protocol
+    s, p = S.summarize(results), results.experiment
     centres = -0.25 + (np.arange(p.cells) + 0.5) * 0.5 / p.cells
     ax, ay = np.meshgrid(np.abs(centres), np.abs(centres))
     zones = {
@@ -264,9 +264,9 @@ def findings(euclidean_path: Path, manhattan_path: Path) -> dict:
 
     runs = {c: R.ResultsFile.load(p) for c, p in (("euclidean", euclidean_path), ("manhattan", manhattan_path))}
     out = {}
-    stopped = any(r.protocol.stop_when_reached for r in runs.values())  # then "end" is not measured
+    stopped = any(r.experiment.stop_when_reached for r in runs.values())  # then "end" is not measured
     for rule in ("reached",) if stopped else F.RULES:
-        stats = {c: F.map_stats(r.records.values(), r.protocol.cells, rule) for c, r in runs.items()}
+        stats = {c: F.map_stats(r.records.values(), r.experiment.cells, rule) for c, r in runs.items()}
         out[rule] = [
             {"name": f.name, "holds": f.holds, "measured": f.measured}
             for f in F.heatmap_findings(stats["manhattan"], stats["euclidean"])

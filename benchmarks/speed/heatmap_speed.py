@@ -126,7 +126,7 @@ def main() -> int:
         f"{'fell early':>10s} {'4,000 trials':>12s}"
     )
     for fidelity, stretch in itertools.product(configs, stretches):
-        protocol = E.Experiment(
+        experiment = E.Experiment(
             object_name=args.object,
             controller=args.controller,
             alpha_m=args.alpha,
@@ -137,10 +137,10 @@ def main() -> int:
             plant_set=() if stretch is None else (("fabric.stretch", stretch),),
         )
         named = f"{args.object}_{args.controller}_alpha{args.alpha:g}_{args.plant}_{fidelity.slug}"
-        results = R.ResultsFile.open(Path(args.out) / f"{named}{G.fixed_slug(protocol.plant_set)}.jsonl", protocol)
+        results = R.ResultsFile.open(Path(args.out) / f"{named}{G.fixed_slug(experiment.plant_set)}.jsonl", experiment)
         todo = results.missing()
         t0 = time.perf_counter()
-        X.run(results, X.run_local(protocol, todo, args.jobs))
+        X.run(results, X.run_local(experiment, todo, args.jobs))
         wall = time.perf_counter() - t0
         done = {t.key for t in todo}
         new = [r for r in results.records.values() if r["key"] in done]
