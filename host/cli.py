@@ -69,7 +69,6 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     of its own (configuration, every position and telemetry frame) and the paper's Fig. 3-style plot."""
     from .rig_run import EXIT_STATUS, RigRun, StopRules
     from .runlog import RunLog
-    from .view import RunView
 
     course = _course(args, parser)
     setup, source, tracker, out = _rig_inputs(args, parser, course.at(0.0))
@@ -79,15 +78,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if live is not None:
             _report(f"live view at {live.options.page_url}")
         log = RunLog.new(out, "rig", {"args": settings})
-        view = RunView(
-            "mantaray_rig",
-            log.path.with_suffix(".rrd"),
-            None if live is None else live.options.grpc_url,
-            settings,
-            rig_description.ACTUATOR_COUNT,
-            (m.Configure.module_x, m.Configure.module_y),
-            _report,
-        )
+        view = _view(log.path.with_suffix(".rrd"), live, settings)
         try:
             run = RigRun(
                 args.port,
@@ -114,6 +105,15 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         + (f"; recording {recording}" if recording else "")
     )
     return EXIT_STATUS.get(outcome, 1)
+
+
+def _view(recording, live, settings: dict):
+    """The run's view: its recording, and the live server's stream when --live started one."""
+    from .view import RunView
+
+    grpc_url = None if live is None else live.options.grpc_url
+    module_m = (m.Configure.module_x, m.Configure.module_y)
+    return RunView("mantaray_rig", recording, grpc_url, settings, rig_description.ACTUATOR_COUNT, module_m, _report)
 
 
 def _course(args: argparse.Namespace, parser: argparse.ArgumentParser):

@@ -19,23 +19,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     output(parser, writable_file, args.out, FIGURE_SUFFIXES)
     runs = [load_results(parser, given, "compare") for given in (args.first, args.second)]
     (a, b), (pa, pb) = [summarize(r) for r in runs], [r.experiment for r in runs]
-    # what success means, and where it is measured, must be the same in both runs; object, controller, alpha,
-    # gains and plant are what a comparison is for
-    differ = [name for name in ("cells", "tolerance_m", "duration_s") if getattr(pa, name) != getattr(pb, name)]
-    if set(pa.cell_ids()) != set(pb.cell_ids()):
-        differ.append("only_cells")
-    if differ:
-        parser.error(
-            "the runs measure success differently ("
-            + "; ".join(f"{name} {getattr(pa, name)} against {getattr(pb, name)}" for name in differ)
-            + "): compare runs that "
-            "differ only in what is being compared"
-        )
-    if not args.reached and (pa.stop_when_reached or pb.stop_when_reached):
-        parser.error(
-            "a run that stops at its first frame within ε (--stop-when-reached) has no end-of-T success; "
-            "compare with --reached"
-        )
+    _check_comparable(parser, pa, pb, args.reached)
     for given, results in zip((args.first, args.second), runs, strict=True):
         left = len(results.missing())
         if left:
@@ -63,3 +47,22 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         f"{score_a - score_b:+.1f}{relative}; figure {figure}"
     )
     return 0
+
+
+def _check_comparable(parser: argparse.ArgumentParser, pa, pb, reached: bool) -> None:
+    """What success means, and where it is measured, must be the same in both runs (object, controller, α, gains
+    and plant are what a comparison is for); a usage error otherwise."""
+    differ = [name for name in ("cells", "tolerance_m", "duration_s") if getattr(pa, name) != getattr(pb, name)]
+    if set(pa.cell_ids()) != set(pb.cell_ids()):
+        differ.append("only_cells")
+    if differ:
+        parser.error(
+            "the runs measure success differently ("
+            + "; ".join(f"{name} {getattr(pa, name)} against {getattr(pb, name)}" for name in differ)
+            + "): compare runs that differ only in what is being compared"
+        )
+    if not reached and (pa.stop_when_reached or pb.stop_when_reached):
+        parser.error(
+            "a run that stops at its first frame within ε (--stop-when-reached) has no end-of-T success; "
+            "compare with --reached"
+        )
