@@ -211,10 +211,10 @@ class RigSession:
     def _keep_board_estop(self) -> None:
         """A board met in its emergency stop (another host's, or one its reset kept) stays in it: latched here too."""
         if not self.estopped and m.State(self.probe().state) == m.State.ESTOP:
-            self.estopped = True
+            self.running, self.estopped = False, True
             self.report(
-                f"{self.port}: the board is in its emergency stop, which this host did not send: it stays latched "
-                f"until `mantaray stop --port {shlex.quote(self.port)}`"
+                f"{self.port}: the board is in an emergency stop this session did not send: it stays latched until "
+                f"`mantaray stop --port {shlex.quote(self.port)}`"
             )
 
     def _apply(self) -> None:
@@ -299,8 +299,8 @@ class RigSession:
     def start(self) -> None:
         if self.estopped:
             raise EmergencyStopLatched(
-                f"the emergency stop is latched: `mantaray stop --port {shlex.quote(self.port)}` (stop()) clears it "
-                "before a start"
+                f"the emergency stop is latched: `mantaray stop --port {shlex.quote(self.port)}` clears it before a "
+                "start"
             )
         self.command(m.Start())
         self.running = True

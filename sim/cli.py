@@ -52,8 +52,9 @@ finer fidelity, and at the finer one with every start moved 0.1 mm (the noise fl
 at T, reached, fell off, time to reach, final error) for a bias and for more flips than the floor. The verdict: the
 candidate "keeps the finer one's outcomes" or "changes them", with the numbers. Trials go to --trials-dir as they
 finish, shared by every gate that needs the same run: interrupt it and the same command continues. --runs compares
-three existing heatmap results files instead. Exit status: 0 keeps, 1 changes, 2 a usage error, 3 no verdict (the
-sample is incomplete, or the physics diverged)."""
+three existing heatmap results files instead. The trials go round the three runs in an order whose every prefix is a
+stratified sample, so Ctrl-C writes the report of the trials paired so far (no verdict; exit 130). Exit status: 0
+keeps, 1 changes, 2 a usage error, 3 no verdict (the sample is incomplete, or the physics diverged)."""
 
 COMPARE = "The difference map of two heatmap runs (first minus second), like the paper's Euclidean - Manhattan."
 

@@ -36,8 +36,10 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             if args.fig3 and best is not None and evidence.kind == "findings":
                 fig3 = C.fig3_for(best, args.plant, pool, out / "fig3.png", args.resolution, args.timestep)
     except RunLogError as exc:  # a log the simulation cannot start (say, off the fabric's corner)
+        progress.close()
         return _refused(str(exc))
     except KeyboardInterrupt:
+        progress.close()
         C.write_report(study, evidence, out)
         print(
             f"\ninterrupted: {len(S.completed(study))} candidates are in {out / 'study.db'}; the same command "
@@ -45,8 +47,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             file=sys.stderr,
         )
         return 130
-    finally:
-        progress.close()
+    progress.close()
     report = C.write_report(study, evidence, out, fig3)
     best = report["best"]
     print(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
 from pathlib import Path
 
@@ -106,7 +107,8 @@ def _run_missing(sample, runs: list, jobs: int | None) -> bool:
     interruptible()
     try:
         G.run_missing(sample, runs, workers(jobs), on_record=lambda record: bar.update(1))
-    except KeyboardInterrupt:  # the trials paired so far still get their report, without a verdict
+    except KeyboardInterrupt:  # the trials paired so far still get their report (a few seconds: a second Ctrl-C,
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # or one forwarded by a driver, must not cut it), no verdict
         return False
     finally:
         bar.close()

@@ -23,7 +23,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from .results_file import ResultsFile, ResultsFileBusy
     from .summary import heatmap_outputs
 
-    experiment = _protocol(args, parser)
+    experiment = _experiment(args, parser)
     check_ray(parser, args)
     if args.live and args.executor == "ray":
         parser.error("--live shows the trial of a worker of this machine: use it with --executor local")
@@ -41,6 +41,8 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             f"continuing {out / 'results.jsonl'}: {total - len(todo)} of {total} trials already done", file=sys.stderr
         )
     live = start_live(parser, args, _report)
+    if live is not None:
+        _report(f"live view of one worker's trials at {live.options.page_url}")
     bar = Progress(total, initial=total - len(todo), unit="trial", label="heatmap")  # on stderr, beside --json
     interruptible()
     try:
@@ -48,6 +50,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if live is not None:
             live.linger(args.linger, _report)
     except KeyboardInterrupt:
+        bar.close()
         print(
             f"\ninterrupted: {len(results.records)} of {total} trials are in {out / 'results.jsonl'}; "
             f"the same command continues the run",
@@ -55,15 +58,17 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         )
         return 130
     except SimulationUnstable as exc:
+        bar.close()
         _report(f"{exc}; the {len(results.records)} finished trials are kept in {out / 'results.jsonl'}")
         return 1
     except RayUnavailable as exc:
+        bar.close()
         _report(str(exc))
         return 2
     finally:
-        bar.close()
         if live is not None:
             live.close()
+    bar.close()
     title = (
         f"{args.object}, {args.controller}, α = {args.alpha:g} m, ε = {args.tolerance:g} m, T = {args.duration:g} s, "
         f"{experiment.trials_per_cell} trials/cell"
@@ -73,7 +78,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     return 0
 
 
-def _protocol(args: argparse.Namespace, parser: argparse.ArgumentParser):
+def _experiment(args: argparse.Namespace, parser: argparse.ArgumentParser):
     """The experiment the arguments describe; a usage error for one that cannot be."""
     from .experiment import Experiment
 
@@ -117,8 +122,6 @@ def _records(args: argparse.Namespace, experiment, todo: list, live):
 
     if args.executor == "ray":
         return run_ray(experiment, todo, args.jobs, args.ray_address)
-    if live is not None:
-        _report(f"live view of one worker's trials at {live.options.page_url}")
     return run_local(experiment, todo, workers(args.jobs), None if live is None else Watch(live.options.grpc_url))
 
 

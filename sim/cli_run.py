@@ -37,7 +37,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if bar is not None:
             bar.close()
     _warnings(args, result)
-    summary = {**result.summary(), "plant": args.plant, "plant_set": dict(args.set), "recording": None, **paths}
+    summary = {**result.summary(), "plant": args.plant, "plant_set": dict(args.set), **paths}
     print(json.dumps(summary) if args.json else _summary_line(args, result, paths))
     return 0 if result.success else 1
 
@@ -130,7 +130,7 @@ def _warnings(args: argparse.Namespace, result) -> None:
 HEADLINE = {"fell off": "FELL OFF", "success": "SUCCESS", "not within ε at T": "NOT WITHIN ε AT T"}  # the line's start
 
 
-def _summary_line(args: argparse.Namespace, result, paths: dict[str, str]) -> str:
+def _summary_line(args: argparse.Namespace, result, paths: dict) -> str:
     from .trial_run import outcome_words
 
     reach = (

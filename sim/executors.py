@@ -8,6 +8,7 @@ import os
 import signal
 import socket
 import sys
+from collections import OrderedDict
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,25 +27,29 @@ class Watch:
     recording: Path | None = None
 
 
+BRIDGES_KEPT = 3  # models a runner keeps loaded (a fidelity gate alternates two)
+
+
 class TrialRunner:
     """Runs trials in this process: the firmware core in-process (no pty) and the MuJoCo model of the trial's rig.
 
-    The runner keeps one link (the firmware runs on across trials, as a board does); it loads a model when a
-    trial's rig differs from the last one's (the two controllers of one plant share it). With a watch, each trial
-    is streamed to the view as a recording of its own, named by its cell and trial number.
+    The runner keeps a bridge for each of the last BRIDGES_KEPT rigs it ran, each with a link of its own (the
+    firmware runs on across trials, as a board does, and a bridge's firmware clock never goes back): the two
+    controllers of one plant share one, and a fidelity gate's trials, which alternate two meshes, load each model
+    once. With a watch, each trial is streamed to the view as a recording of its own, named by its cell and trial
+    number.
     """
 
     def __init__(self, experiment: Experiment | None = None, watch: Watch | None = None) -> None:
-        from mantaray.host.link import Link
-        from mantaray.host.transport import InProcessTransport
-
         self.experiment, self.watch = experiment, watch
-        self._link = Link(InProcessTransport(simulated_clock=True))
+        self._bridges: OrderedDict[str, object] = OrderedDict()  # rig key -> its Bridge, the last used last
         self._rig_key: str | None = None
-        self._bridge_now = None
         self._unstable: tuple[str, SimulationUnstable] | None = None  # the last rig that would not load
 
     def _bridge(self, experiment: Experiment):
+        from mantaray.host.link import Link
+        from mantaray.host.transport import InProcessTransport
+
         from .bridge import Bridge
 
         key = json.dumps(
@@ -58,17 +63,22 @@ class TrialRunner:
         )
         if self._unstable is not None and self._unstable[0] == key:
             raise self._unstable[1]  # the same rig diverges the same way: do not load it again
-        if key != self._rig_key:
+        bridge = self._bridges.pop(key, None)
+        if bridge is None:
+            link = Link(InProcessTransport(simulated_clock=True))
             try:
-                self._bridge_now = Bridge(self._link, experiment.rig(), experiment.plant_model().tracking())
+                bridge = Bridge(link, experiment.rig(), experiment.plant_model().tracking())
             except SimulationUnstable as exc:
                 self._unstable = (key, exc)
                 raise
-            self._rig_key = key
-        return self._bridge_now
+            while len(self._bridges) >= BRIDGES_KEPT:
+                self._bridges.popitem(last=False)
+        self._bridges[key] = bridge
+        self._rig_key = key
+        return bridge
 
     def result(self, trial: Trial, experiment: Experiment | None = None):
-        """The bridge.TrialResult of one trial of protocol (default: the runner's own)."""
+        """The bridge.TrialResult of one trial of the experiment (default: the runner's own)."""
         experiment = experiment or self.experiment
         bridge = self._bridge(experiment)
         view = self._show(bridge, experiment, trial) if self.watch is not None else None
@@ -108,11 +118,11 @@ class TrialRunner:
             world=True,
             name=f"cell{trial.cell}_trial{trial.k}",
         )
-        bridge.view = TrialView(view, bridge.model, bridge.data, bridge.rig, self._link)
+        bridge.view = TrialView(view, bridge.model, bridge.data, bridge.rig, bridge.link)
         return bridge.view
 
     def run(self, trial: Trial, experiment: Experiment | None = None) -> dict:
-        """The record of one trial of protocol (default: the runner's own)."""
+        """The record of one trial of the experiment (default: the runner's own)."""
         try:
             result = self.result(trial, experiment)
         except ValueError as exc:  # model.fabric_height: the start is not over the fabric
@@ -141,13 +151,13 @@ def _init_worker(watch: Watch | None = None, claim=None) -> None:
 
 
 def _run_in_worker(job: tuple[dict, Trial]) -> dict:
-    protocol_json, trial = job
-    return _worker.run(trial, Experiment.from_json(protocol_json))
+    experiment_json, trial = job
+    return _worker.run(trial, Experiment.from_json(experiment_json))
 
 
 def _run_tagged_in_worker(job: tuple[object, dict, Trial]) -> tuple[object, dict]:
-    tag, protocol_json, trial = job
-    return tag, _worker.run(trial, Experiment.from_json(protocol_json))
+    tag, experiment_json, trial = job
+    return tag, _worker.run(trial, Experiment.from_json(experiment_json))
 
 
 def _call_in_worker(job: tuple[Callable, object]) -> object:

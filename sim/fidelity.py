@@ -27,7 +27,7 @@ from . import findings as F
 from .experiment import Experiment
 from .paired import discordance, mean_interval
 from .plant import DEFAULT_PLANT
-from .results_file import ResultsFile
+from .results_file import ResultsFile, write_whole
 from .rig import FIDELITIES, Fidelity
 
 PERTURBATION_M = 1e-4  # [m] how far the noise floor's run moves every start
@@ -389,10 +389,10 @@ def report_markdown(report: dict) -> str:
 
 
 def write_report(report: dict, out: Path) -> tuple[Path, Path]:
-    """report.json and report.md in out."""
+    """report.json and report.md in out, each written whole (an interruption leaves the old one or the new)."""
     out.mkdir(parents=True, exist_ok=True)
-    (out / "report.json").write_text(json.dumps(report, indent=1, ensure_ascii=False) + "\n")
-    (out / "report.md").write_text(report_markdown(report))
+    write_whole(out / "report.json", (json.dumps(report, indent=1, ensure_ascii=False) + "\n").encode())
+    write_whole(out / "report.md", report_markdown(report).encode())
     return out / "report.json", out / "report.md"
 
 

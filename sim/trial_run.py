@@ -39,10 +39,11 @@ def run_trial(
     port: str | None = None,
     realtime: bool = False,
     progress: Callable[[float], None] | None = None,
-) -> tuple[TrialResult, dict[str, str]]:
+) -> tuple[TrialResult, dict[str, str | None]]:
     """The trial run on a virtual MCU of its own (or the board at port), in lock-step unless realtime, and its
-    outputs: (result, {figure, trajectory, recording, video: path}) for those written. A start that is not over the
-    hanging sheet raises model.fabric_height's ValueError."""
+    outputs: (result, {figure, trajectory, recording, video: path}), the recording None where it could not be
+    written, the video only when asked for. A start that is not over the hanging sheet raises model.fabric_height's
+    ValueError."""
     from mantaray.host.link import Link
     from mantaray.host.transport import SerialTransport
     from mantaray.host.view import RunView
@@ -68,7 +69,6 @@ def run_trial(
             import mujoco.viewer
 
             bridge.viewer = mujoco.viewer.launch_passive(bridge.model, bridge.data)
-            stack.callback(bridge.viewer.close)
         if outputs.video_fps is not None:
             from .video import Recorder
 
@@ -77,14 +77,15 @@ def run_trial(
             result = bridge.run(spec, progress=progress)
         finally:
             recording = trial_view.close()
+        if bridge.viewer is not None:
+            bridge.viewer.close()
         if live is not None:
             live.linger(outputs.linger_s, report)
     paths = {
         "figure": str(_figure(result, rig, outputs)),
         "trajectory": str(save_trajectory(result, outputs.out / f"{outputs.stem}.npz")),
+        "recording": None if recording is None else str(recording),  # None: the view could not write it
     }
-    if recording is not None:
-        paths["recording"] = str(recording)
     if bridge.recorder is not None:
         paths["video"] = str(bridge.recorder.save(outputs.out / f"{outputs.stem}.mp4"))
     return result, paths

@@ -62,7 +62,7 @@ def run_tuning(
     if plan.final_trials and best is not None:
         path = out / "final" / "results.jsonl"
         final = T.final_check(checked, best, plan.final_trials, plan.final_seed, pool, path, cells=plan.final_cells)
-        final["figures"] = _final_heatmaps(path, f"{plan.title}, {{trials}} trials/cell, seed {plan.final_seed}")
+        final["figures"] = _final_heatmaps(path, plan.title, plan.final_seed)
     return final, confirmation
 
 
@@ -88,12 +88,13 @@ def _noted(progress: Progress) -> Callable[[int, int, dict], None]:
     return report_candidate
 
 
-def _final_heatmaps(path: Path, title: str) -> list[str]:
+def _final_heatmaps(path: Path, title: str, seed: int) -> list[str]:
     """The final check's heatmaps under both rules (and cells.csv, summary.json) beside its trials, as sim heatmap
-    draws them; {trials} in the title is the check's trials per cell."""
+    draws them, titled with its trials per cell and seed."""
     from .results_file import ResultsFile
     from .summary import heatmap_outputs
 
     results = ResultsFile.load(path)
-    summary = heatmap_outputs(results, path.parent, title.format(trials=results.experiment.trials_per_cell))
+    title = f"{title}, {results.experiment.trials_per_cell} trials/cell, seed {seed}"
+    summary = heatmap_outputs(results, path.parent, title)
     return [summary["figure"], summary["reach_figure"]]

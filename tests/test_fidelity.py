@@ -379,3 +379,38 @@ def test_a_gate_stopped_part_way_holds_the_same_stratified_trials_in_each_run(tm
     assert keys[0] == keys[1] == keys[2] and len(keys[0]) == 2  # the same two trials in each run
     drawn = list(F.stratified_draw(E.Experiment.cells, 2, sample.seed).values())
     assert keys[0] == {f"{drawn[0][0]}:0", f"{drawn[1][0]}:0"}  # the first drawn cell of two strata, first trial
+
+
+def test_a_runner_keeps_the_models_a_gate_alternates_loaded_once_each():
+    """A gate's trials alternate two meshes on each worker: each model is loaded once, not once a trial."""
+    from mantaray.sim.executors import TrialRunner
+
+    sample = G.GateSample(arms=(G.Arm("manhattan", "manhattan"),), duration_s=0.2)
+    coarse, fine = (sample.experiment(sample.arms[0], G.parse_fidelity(f)) for f in ("5:0.002", "7:0.002"))
+    runner = TrialRunner()
+    first = runner._bridge(coarse), runner._bridge(fine)
+    again = runner._bridge(coarse), runner._bridge(fine)
+    assert first[0] is again[0] and first[1] is again[1] and first[0] is not first[1]
+    assert (first[0].rig.fabric.resolution, first[1].rig.fabric.resolution) == (5, 7)
+
+
+def test_an_interrupted_gate_reports_the_trials_paired_so_far_without_a_verdict(tmp_path):
+    import signal
+    import time
+
+    args = [sys.executable, "-m", "mantaray.cli", "sim", "fidelity", "--candidate", "5:0.002", "--finer", "7:0.002"]
+    args += ["--cells-per-stratum", "2", "--trials-per-cell", "2", "--duration", "10", "--controller", "manhattan"]
+    args += ["--trials-dir", str(tmp_path / "trials"), "--out", str(tmp_path / "gate"), "--jobs", "1"]
+    gate = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:  # interrupt once the three runs hold a few trials between them
+        time.sleep(0.2)
+        if sum(p.read_text().count("\n") - 1 for p in (tmp_path / "trials").glob("*.jsonl")) >= 4:
+            break
+    gate.send_signal(signal.SIGINT)
+    out, err = gate.communicate(timeout=120)
+    assert gate.returncode == 130 and "Traceback" not in err, err
+    report = json.loads((tmp_path / "gate" / "report.json").read_text())
+    assert report["verdict"] is None and 1 <= report["pairs"] < report["expected_pairs"] == 20
+    assert "**Incomplete**" in (tmp_path / "gate" / "report.md").read_text()
+    assert f"the report of the {report['pairs']} paired so far" in err

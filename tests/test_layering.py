@@ -60,7 +60,7 @@ def test_the_rig_command_runs_without_loading_the_simulation(tmp_path):
         "path_phase_figure(np.zeros((3, 2)), np.zeros((3, 2)), (0, 0), [(0.1, 0)], 0.02, 't', (0.5, 0.5), 26.6,"
         " sys.argv[1])\n"
         "print(sorted(m for m in sys.modules if m.split('.')[0] == 'mujoco' or m.startswith('mantaray.sim.')"
-        " and m not in ('mantaray.sim.cli', 'mantaray.sim.objects', 'mantaray.sim.parameters', 'mantaray.sim.tracking',"
+        " and m not in ('mantaray.sim.cli', 'mantaray.sim.cli_options', 'mantaray.sim.objects', 'mantaray.sim.parameters', 'mantaray.sim.tracking',"
         " 'mantaray.sim.plant', 'mantaray.sim.rig')))\n"
     )
     proc = subprocess.run(

@@ -1,6 +1,6 @@
 """The rig's commands without a rig: the loop on a recorded video against the virtual MCU, and the bench's tools.
 
-The loop with its keys and logs; monitor, stop and estop, jog and zero, markers, calibrate."""
+The loop with its keys and logs; monitor, stop and estop, jog and zero, markers, calibrate-camera."""
 
 from __future__ import annotations
 

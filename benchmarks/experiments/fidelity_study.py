@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import gzip
 import json
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -154,9 +155,12 @@ def main() -> int:
     for name in names:
         if not args.collect:
             print(f"{name}: {' '.join(command(name, args.jobs))}", flush=True)
+            gate_run = subprocess.Popen(command(name, args.jobs), cwd=REPO)
             try:
-                code = subprocess.run(command(name, args.jobs), cwd=REPO).returncode
-            except KeyboardInterrupt:  # the gate keeps every finished trial; write them back before stopping
+                code = gate_run.wait()
+            except KeyboardInterrupt:  # the gate keeps every finished trial and reports them: wait, then write back
+                gate_run.send_signal(signal.SIGINT)  # where only this process was interrupted (the gate takes two)
+                gate_run.wait()
                 collect(name)
                 (COMMITTED / "convergence.md").write_text(table())
                 print(f"\ninterrupted: {name}'s trials are kept; the same command continues", file=sys.stderr)
