@@ -21,6 +21,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+from mantaray.sim.cli_common import interruptible
 from mantaray.sim.committed import keep
 from mantaray.sim.results_file import write_whole
 
@@ -152,6 +153,7 @@ def main() -> int:
     if unknown:
         parser.error(f"unknown gates {', '.join(unknown)}; the gates are {', '.join(GATES)}")
     restore()
+    interruptible()  # Ctrl-C (or SIGINT, also when started in the background, or SIGTERM) ends it as below
     for name in names:
         if not args.collect:
             print(f"{name}: {' '.join(command(name, args.jobs))}", flush=True)
