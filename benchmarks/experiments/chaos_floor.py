@@ -7,7 +7,8 @@ trials than the finer one does with every start moved 0.1 mm. A rolling sphere's
 start moved d brings grows with d; this measures that growth on one configuration, on the gate's own sample (the
 paper's Manhattan and Euclidean, 8 cells a stratum x 5 trials, seed 77), its first --pairs trials of each controller
 in the gate's run order (a stratified prefix). Each shifted run is kept where the gate keeps its runs
-(out/fidelity/trials/, the same file a gate's floor uses for 0.1 mm), so it resumes and shares trials. Prints, per
+(out/fidelity/trials/, the same file a gate's floor uses for 0.1 mm), so it resumes and shares trials (on a fresh
+clone, `python3 benchmarks/experiments/fidelity_study.py --collect` first puts the committed ones there). Prints, per
 shift, the flips of reached, fell off and within ε at T against the unmoved run, and the mean |difference| of the time
 to reach and of the final error; a mesh or step change that flips about as many trials as a shift of d changes the
 outcomes as much as moving every start by d does.
