@@ -150,12 +150,8 @@ def _init_worker(watch: Watch | None = None, claim=None) -> None:
     _worker = TrialRunner(watch=watch if shows else None)
 
 
-def _run_in_worker(job: tuple[dict, Trial]) -> dict:
-    experiment_json, trial = job
-    return _worker.run(trial, Experiment.from_json(experiment_json))
-
-
-def _run_tagged_in_worker(job: tuple[object, dict, Trial]) -> tuple[object, dict]:
+def _run_in_worker(job: tuple[object, dict, Trial]) -> tuple[object, dict]:
+    """(tag, record) of one (tag, experiment, trial) job: the tag says where the record belongs."""
     tag, experiment_json, trial = job
     return tag, _worker.run(trial, Experiment.from_json(experiment_json))
 
@@ -190,10 +186,14 @@ class LocalPool:
 
     def imap(self, jobs: list[tuple[Experiment, Trial]], ordered: bool = False) -> Iterator[dict]:
         """Records as the jobs finish (in any order), or in the jobs' order."""
+        tagged = [(None, p, t) for p, t in jobs]
         if ordered and self._pool is not None:
-            yield from self._pool.imap(_run_in_worker, [(p.to_json(), t) for p, t in jobs], chunksize=1)
-            return
-        for _, record in self.imap_tagged([(None, p, t) for p, t in jobs]):
+            tagged_records = self._pool.imap(
+                _run_in_worker, [(tag, p.to_json(), t) for tag, p, t in tagged], chunksize=1
+            )
+        else:
+            tagged_records = self.imap_tagged(tagged)
+        for _, record in tagged_records:
             yield record
 
     def imap_tagged(self, jobs: list[tuple[object, Experiment, Trial]]) -> Iterator[tuple[object, dict]]:
@@ -203,9 +203,7 @@ class LocalPool:
             for tag, experiment, trial in jobs:
                 yield tag, self._runner.run(trial, experiment)
             return
-        yield from self._pool.imap_unordered(
-            _run_tagged_in_worker, [(tag, p.to_json(), t) for tag, p, t in jobs], chunksize=1
-        )
+        yield from self._pool.imap_unordered(_run_in_worker, [(tag, p.to_json(), t) for tag, p, t in jobs], chunksize=1)
 
     def map(self, jobs: list[tuple[Experiment, Trial]]) -> list[dict]:
         """The jobs' records, in the jobs' order."""
@@ -323,6 +321,21 @@ def run_ray(experiment: Experiment, todo: list[Trial], jobs: int | None, address
     """Records of the trials as they finish, on Ray actors (a cluster at address, or a local Ray instance)."""
     with RayPool(jobs, address) as pool:
         yield from pool.imap([(experiment, t) for t in todo])
+
+
+def run_into(
+    files: list[ResultsFile],
+    jobs: list[tuple[int, Trial]],
+    workers: int,
+    progress: Callable[[dict], None] | None = None,
+) -> None:
+    """Run jobs of several results files, (index into files, trial), on `workers` local processes in any order,
+    appending each record to its own file as it finishes."""
+    with LocalPool(workers) as pool:
+        for i, record in pool.imap_tagged([(i, files[i].experiment, t) for i, t in jobs]):
+            files[i].append(record)
+            if progress is not None:
+                progress(record)
 
 
 def run(results: ResultsFile, records: Iterable[dict], progress: Callable[[dict], None] | None = None) -> None:

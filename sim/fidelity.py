@@ -118,12 +118,13 @@ class GateSample:
     def cells(self) -> tuple[int, ...]:
         return F.stratified_sample(Experiment.cells, self.cells_per_stratum, self.seed)
 
-    def run_order(self) -> dict[int, tuple[int, int]]:
-        """Each cell's place in the order the gate runs its trials: (j, s) for the j-th cell drawn from stratum s
-        (findings.stratified_draw). Trial number first, then this: every prefix of the order is a stratified
-        sample, the first trial of the cells each stratum drew first."""
+    def run_order(self):
+        """The order the gate runs its trials in, as a sort key of a Trial: trial number, then (j, s) for the j-th
+        cell drawn from stratum s (findings.stratified_draw). Every prefix of the order is a stratified sample, the
+        first trial of the cells each stratum drew first."""
         drawn = F.stratified_draw(Experiment.cells, self.cells_per_stratum, self.seed)
-        return {cell: (j, s) for s, cells in enumerate(drawn.values()) for j, cell in enumerate(cells)}
+        place = {cell: (j, s) for s, cells in enumerate(drawn.values()) for j, cell in enumerate(cells)}
+        return lambda trial: (trial.k, *place[trial.cell])
 
     @property
     def plant_label(self) -> str:
@@ -428,17 +429,13 @@ def run_missing(sample: GateSample, runs: list[Runs], jobs: int, on_record=None)
     stopped part way holds the same trials in each run: a smaller stratified sample, already paired."""
     from . import executors as X
 
-    place = sample.run_order()
+    position = sample.run_order()
     files = [getattr(r, name) for r in runs for name in ("finer", "candidate", "floor")]
     todo = sorted(
         ((i, t) for i, results in enumerate(files) for t in results.missing()),
-        key=lambda job: (job[1].k, *place[job[1].cell], job[0]),
+        key=lambda job: (*position(job[1]), job[0]),
     )
-    with X.LocalPool(jobs) as pool:
-        for i, record in pool.imap_tagged([(i, files[i].experiment, t) for i, t in todo]):
-            files[i].append(record)
-            if on_record is not None:
-                on_record(record)
+    X.run_into(files, todo, jobs, on_record)
 
 
 def load_runs(candidate: str | Path, finer: str | Path, floor: str | Path) -> list[Runs]:

@@ -52,7 +52,7 @@ def main() -> int:
         parser.error("each shift must be in (0, 0.01] m, and --pairs at least 1")
     arms = (G.Arm("manhattan", "manhattan"), G.Arm("euclidean", "euclidean"))
     sample = G.GateSample(plant=args.plant, plant_set=fixed, arms=arms)
-    place = sample.run_order()
+    position = sample.run_order()
     runs = {
         (arm.label, shift): ResultsFile.open(
             sample.results_path(TRIALS, arm, fidelity, shift), sample.experiment(arm, fidelity, shift)
@@ -62,21 +62,23 @@ def main() -> int:
     }
     first = {}  # each arm's first --pairs trial keys in the gate's order
     for arm in arms:
-        ordered = sorted(trials(runs[arm.label, 0.0].experiment), key=lambda t: (t.k, *place[t.cell]))
+        ordered = sorted(trials(runs[arm.label, 0.0].experiment), key=position)
         first[arm.label] = [t.key for t in ordered[: args.pairs]]
     todo = [
-        (i, results.experiment, t)
+        (i, t)
         for i, ((label, _), results) in enumerate(runs.items())
         for t in results.missing()
         if t.key in first[label]
     ]
-    files = list(runs.values())
     print(f"{len(todo)} trials to run on {args.jobs} workers", file=sys.stderr, flush=True)
-    with X.LocalPool(args.jobs) as pool:
-        for done, (i, record) in enumerate(pool.imap_tagged(todo), 1):
-            files[i].append(record)
-            if done % 10 == 0 or done == len(todo):
-                print(f"  {done}/{len(todo)} trials", file=sys.stderr, flush=True)
+    done = []
+
+    def progress(record: dict) -> None:
+        done.append(record)
+        if len(done) % 10 == 0 or len(done) == len(todo):
+            print(f"  {len(done)}/{len(todo)} trials", file=sys.stderr, flush=True)
+
+    X.run_into(list(runs.values()), todo, args.jobs, progress)
     print(
         f"{sample.plant_label} plant, {fidelity.label}: flips against the unmoved run over {args.pairs} trials of each "
         "of manhattan, euclidean"

@@ -109,8 +109,8 @@ def table() -> str:
     rows = [
         "# The fidelity gate on each mesh and step (the sphere, to the end of T)",
         "",
-        "Written by `python3 benchmarks/experiments/fidelity_study.py`; each gate's report, with the command that reproduces "
-        "it, is in its folder here. Rates over the pooled sample of both controllers: candidate / finer. Flips: "
+        "Written by `python3 benchmarks/experiments/fidelity_study.py`; each gate's report, with the command that "
+        "reproduces it, is in its folder here. Rates over the pooled sample of both controllers: candidate / finer. Flips: "
         "trials whose outcome differs from the finer run's, for the candidate / for the finer run with every start "
         "moved 0.1 mm (the noise floor).",
         "",
