@@ -16,7 +16,6 @@ from mantaray.arguments import (
 )
 from mantaray.outputs import writable_dir
 from mantaray.protocol import messages as m
-from mantaray.protocol import rig as rig_description
 from mantaray.protocol.codec import bounds_text
 
 from . import cli_board, cli_camera
@@ -72,7 +71,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
     course = _course(args, parser)
     setup, source, tracker, out = _rig_inputs(args, parser, course.at(0.0))
-    settings = {k: v for k, v in vars(args).items() if k != "func"}
+    settings = {k: v for k, v in vars(args).items() if k != "func"} | {"rig": str(args.rig.path)}
     live = start_live(parser, args, _report)
     try:
         if live is not None:
@@ -90,6 +89,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
                 StopRules(args.tolerance, args.hold, args.timeout, _half_module_m()),
                 reconnect_timeout_s=args.reconnect_timeout,
                 view=view,
+                description=args.rig,
             )
             outcome = run.run()
         finally:
@@ -108,12 +108,14 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
 
 def _view(recording, live, settings: dict):
-    """The run's view: its recording, and the live server's stream when --live started one."""
+    """The run's view: its recording, and the live server's stream when --live started one. It plots the four
+    actuators telemetry reports (the driven module's)."""
     from .view import RunView
 
     grpc_url = None if live is None else live.options.grpc_url
     module_m = (m.Configure.module_x, m.Configure.module_y)
-    return RunView("mantaray_rig", recording, grpc_url, settings, rig_description.ACTUATOR_COUNT, module_m, _report)
+    reported = next(f.count for f in m.Telemetry.FIELDS if f.name == "command")
+    return RunView("mantaray_rig", recording, grpc_url, settings, reported, module_m, _report)
 
 
 def _course(args: argparse.Namespace, parser: argparse.ArgumentParser):

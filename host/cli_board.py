@@ -11,6 +11,7 @@ import time
 
 from mantaray.arguments import number
 from mantaray.protocol import messages as m
+from mantaray.protocol import rig
 
 from .ports import PortError, check_port
 
@@ -59,6 +60,7 @@ def _attach(args: argparse.Namespace, parser: argparse.ArgumentParser, reconnect
         args.port,
         reconnect_timeout_s=reconnect_timeout_s,
         report=lambda text: print(f"mantaray {args.command}: {text}", file=sys.stderr),
+        description=args.rig,
     ).attach()
     identity = session.identity
     assert identity is not None  # attach() identified the board
@@ -164,15 +166,19 @@ def cmd_jog(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """Move one carriage to a position (+ lowers its corner) and report where its encoder says it got to, to check
     each motor's and encoder's direction and the pulley. The firmware must be idle (`mantaray stop` makes it so);
     the carriage then holds there until `stop` (which levels the surface) or `start`."""
-    from mantaray.protocol.rig import ACTUATOR_RANGE_M
-
     from .link import CommandRefused
 
     jog = _checked(parser, m.Jog(actuator=args.actuator, position=args.position))
-    if abs(args.position) > ACTUATOR_RANGE_M:  # the firmware refuses it too, but only once connected
+    description = args.rig
+    if args.actuator >= description.actuator_count:  # the firmware refuses it too, but only once connected
         parser.error(
-            f"--position must be within ±{ACTUATOR_RANGE_M:g} m (the actuators' travel, protocol/rig.toml), "
-            f"got {args.position:g}"
+            f"--actuator must be 0..{description.actuator_count - 1} ({description.describe()}, "
+            f"{description.path.name}), got {args.actuator}"
+        )
+    if abs(args.position) > description.actuator_range_m:
+        parser.error(
+            f"--position must be within ±{description.actuator_range_m:g} m (the actuators' travel, "
+            f"{description.path.name}), got {args.position:g}"
         )
     session = _attach(args, parser)
     try:
@@ -211,7 +217,14 @@ def cmd_zero(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     them there. The firmware must be idle (`mantaray stop` makes it so)."""
     from .link import CommandRefused
 
-    zero = _checked(parser, m.Zero(actuators=sum(1 << i for i in args.actuators)))
+    count = args.rig.actuator_count
+    actuators = list(range(count)) if args.actuators == "all" else args.actuators
+    if max(actuators) >= count:  # the firmware refuses it too, but only once connected
+        parser.error(
+            f"--actuators must be within 0..{count - 1} ({args.rig.describe()}, {args.rig.path.name}), "
+            f"got {max(actuators)}"
+        )
+    zero = _checked(parser, m.Zero(actuators=sum(1 << i for i in actuators)))
     session = _attach(args, parser)
     try:
         session.command(zero)
@@ -219,14 +232,15 @@ def cmd_zero(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         return _refused("zero", session, exc)
     finally:
         session.close()
-    print(f"actuators {', '.join(map(str, args.actuators))}: their present positions are now 0 m")
+    print(f"actuators {', '.join(map(str, actuators))}: their present positions are now 0 m")
     return 0
 
 
-def _actuators(text: str) -> list[int]:
+def _actuators(text: str) -> list[int] | str:
+    """Actuator indices within the protocol's bounds, or "all" (the rig's own count is checked once --rig is known)."""
     spec = next(f for f in m.Jog.FIELDS if f.name == "actuator")
     if text == "all":
-        return list(range(int(spec.min), int(spec.max) + 1))
+        return text
     try:
         chosen = sorted({int(v) for v in text.split(",")})
     except ValueError:
@@ -237,14 +251,31 @@ def _actuators(text: str) -> list[int]:
 
 
 # ------------------------------------------------------------------------------------------- parsers
+def rig_file(text: str) -> rig.RigDescription:
+    """A rig file, read and checked (protocol/rig.py); what is wrong with it is a usage error."""
+    try:
+        return rig.load(text)
+    except rig.RigDescriptionError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def add_port_argument(parser: argparse.ArgumentParser) -> None:
-    """--port, as every command that talks to a board takes it (checked by ports.check_port before any work)."""
+    """--port and --rig, as every command that talks to a board takes them (the port is checked by
+    ports.check_port before any work; the board is refused at identify unless it was built for the rig)."""
     parser.add_argument(
         "--port",
         required=True,
         default=argparse.SUPPRESS,
         help="serial device path of the firmware: a board (/dev/ttyACM0, "
         "/dev/ttyUSB0), or the /dev/pts/N that mantaray vmcu or simavr prints",
+    )
+    parser.add_argument(
+        "--rig",
+        type=rig_file,
+        default=rig.default(),
+        metavar="FILE",
+        help="the rig the board drives: its rig file (default protocol/rig.toml, one module; arrays: "
+        "protocol/rigs/*.toml); a board built for another is refused",
     )
 
 
@@ -301,7 +332,9 @@ def add_parsers(sub: argparse._SubParsersAction, fmt: type[argparse.HelpFormatte
         type=int,
         required=True,
         choices=range(int(actuator.min), int(actuator.max) + 1),
-        help="which carriage (PROTOCOL.md, geometry: 0 -x-y, 1 +x-y, 2 -x+y, 3 +x+y)",
+        metavar="I",
+        help="which carriage (PROTOCOL.md §5: on one module 0 -x-y, 1 +x-y, 2 -x+y, 3 +x+y; an array numbers its "
+        "grid's nodes row by row)",
     )
     jog.add_argument("--position", type=float, required=True, help="where to [m], + lowers the corner")
     jog.add_argument(

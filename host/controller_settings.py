@@ -43,7 +43,7 @@ TILT_SLACK_DEG = 1e-4  # [deg] the firmware's slack on the derived limit (float 
 
 def max_tilt_deg(module_x_m: float, module_y_m: float) -> float:
     """[deg] The steepest tilt configure takes for the module: atan(range / ((m + n) / 2))."""
-    return math.degrees(math.atan(rig.ACTUATOR_RANGE_M / ((module_x_m + module_y_m) / 2)))
+    return math.degrees(math.atan(rig.default().actuator_range_m / ((module_x_m + module_y_m) / 2)))
 
 
 class SettingsError(ValueError):

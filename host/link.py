@@ -23,20 +23,22 @@ class IncompatibleFirmware(LinkError):
     """identify showed a protocol version or schema hash other than this host's, or another rig's actuators."""
 
 
-# The rig constants that the host's commands depend on (their bounds, the tilt limit): a board built with others
-# is refused at identify. The other reported constants only warn (Link.rig_differences).
-BINDING_CONSTANTS = ("actuator_count", "actuator_range")
+# The rig constants that the host's commands depend on (their bounds, the tilt limit, which actuators make which
+# module): a board built with others is refused at identify. The other reported constants only warn
+# (Link.rig_differences).
+BINDING_CONSTANTS = ("actuator_count", "actuator_range", "modules_x", "modules_y")
 
 
-def rig_differences(reply: m.IdentifyReply) -> dict[str, str]:
-    """identify_reply field -> what differs, for each rig constant the firmware reports that this host's
-    protocol/rig.toml states otherwise (floats compared at the wire's f32 precision)."""
+def rig_differences(reply: m.IdentifyReply, description: rig.RigDescription) -> dict[str, str]:
+    """identify_reply field -> what differs, for each rig constant the firmware reports that the host's rig file
+    states otherwise (floats compared at the wire's f32 precision)."""
     out = {}
-    for name, expected in rig.REPORTED.items():
+    units = description.reported_units
+    for name, expected in description.reported.items():
         got = getattr(reply, name)
         if not math.isclose(got, expected, rel_tol=1e-6):
-            unit = f" {rig.REPORTED_UNITS[name]}" if rig.REPORTED_UNITS[name] else ""
-            out[name] = f"{name} is {got:g}{unit} on the board, {expected:g}{unit} in this host's protocol/rig.toml"
+            unit = f" {units[name]}" if units[name] else ""
+            out[name] = f"{name} is {got:g}{unit} on the board, {expected:g}{unit} in {description.path.name}"
     return out
 
 
@@ -72,8 +74,10 @@ class Link:
         ack_timeout_s: float = 0.2,
         retries: int = 3,
         on_message: Callable[[Message], None] | None = None,
+        description: rig.RigDescription | None = None,
     ) -> None:
         self.transport = transport
+        self.description = description or rig.default()  # the rig the host expects the board to drive
         self.ack_timeout_s = ack_timeout_s
         self.retries = retries
         self.on_message = on_message
@@ -208,12 +212,13 @@ class Link:
                 f"speaks {m.PROTOCOL_VERSION} (schema 0x{m.SCHEMA_HASH:08X}): flash the firmware built from "
                 f"this checkout, or use the host that matches the firmware"
             )
-        differences = rig_differences(reply)
+        differences = rig_differences(reply, self.description)
         binding = [text for name, text in differences.items() if name in BINDING_CONSTANTS]
         if binding:
             raise IncompatibleFirmware(
-                f"the firmware was built for another rig ({'; '.join(binding)}): describe your rig in "
-                f"protocol/rig.toml, run python3 protocol/generate.py, and flash the firmware built from it"
+                f"the firmware was built for another rig ({'; '.join(binding)}): give the host the board's rig file "
+                f"(--rig), or describe your rig in {self.description.path.name}, run python3 protocol/generate.py, "
+                f"and flash the firmware built from it"
             )
         self.rig_differences = list(differences.values())
         return reply

@@ -12,6 +12,7 @@ import time
 from dataclasses import dataclass
 
 from mantaray.protocol import messages as m
+from mantaray.protocol.rig import RigDescription
 
 from .keys import Keys
 from .link import LinkError
@@ -94,10 +95,13 @@ class RigRun:
         *,
         reconnect_timeout_s: float = 30.0,
         view: RunView | None = None,
+        description: RigDescription | None = None,
     ) -> None:
         self.source, self.tracker, self.log, self.course, self.rules = source, tracker, log, course, rules
         self.view = view  # the run's streams (recording, live view): fed after every frame
-        self.session = RigSession(port, setup, report=self.report, reconnect_timeout_s=reconnect_timeout_s)
+        self.session = RigSession(
+            port, setup, report=self.report, reconnect_timeout_s=reconnect_timeout_s, description=description
+        )
         self.loop = ClosedLoop(self.session.position)
         self.outcome = "timeout"
         self._interrupted = False

@@ -17,6 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from mantaray.protocol import messages as m
+from mantaray.protocol import rig
 
 from .link import CommandRefused, IncompatibleFirmware, Link, LinkError
 from .transport import SerialTransport, Transport
@@ -59,15 +60,17 @@ def connect(
     timeout_s: float = 30.0,
     ack_timeout_s: float = 0.2,
     open_transport: Callable[[str], Transport] = SerialTransport,
+    description: rig.RigDescription | None = None,
 ) -> tuple[Link, m.IdentifyReply]:
     """Opens the port (waiting up to timeout_s for it to appear), waits out the Uno's reset, identifies.
 
     Changes nothing on the firmware: a monitor can attach to a running rig. IncompatibleFirmware is raised
-    at once; a port that does not open or a firmware that does not answer raise LinkError at the timeout.
+    at once (also for a board built for another rig than description, the default rig if None); a port that does
+    not open or a firmware that does not answer raise LinkError at the timeout.
     """
     deadline = time.monotonic() + timeout_s
     while True:
-        link = Link(_open(port, deadline, open_transport), ack_timeout_s=ack_timeout_s)
+        link = Link(_open(port, deadline, open_transport), ack_timeout_s=ack_timeout_s, description=description)
         try:
             # judged once the port is there: a replugged pty is briefly missing, and is no Uno that resets
             wait_s = reset_wait_s if reset_wait_s is not None else 0.0 if is_pty(port) else UNO_RESET_WAIT_S
@@ -143,8 +146,10 @@ class RigSession:
         ack_timeout_s: float = 0.2,
         report: Callable[[str], None] = lambda text: None,
         open_transport: Callable[[str], Transport] = SerialTransport,
+        description: rig.RigDescription | None = None,
     ) -> None:
         self.port = port
+        self.description = description or rig.default()  # the rig the board must have been built for
         self.setup = setup or Setup()
         self.reset_wait_s = reset_wait_s  # [s] None: connect() decides by the kind of port
         self.reconnect_timeout_s = reconnect_timeout_s
@@ -198,6 +203,7 @@ class RigSession:
                 timeout_s=timeout_s,
                 ack_timeout_s=self.ack_timeout_s,
                 open_transport=self._open_transport,
+                description=self.description,
             )
         except IncompatibleFirmware:
             raise

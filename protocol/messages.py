@@ -8,8 +8,8 @@ from typing import ClassVar
 
 from .codec import FieldSpec, Message
 
-PROTOCOL_VERSION = 1
-SCHEMA_HASH = 0xB5A57DAB
+PROTOCOL_VERSION = 2
+SCHEMA_HASH = 0xCED7188B
 MAX_PACKET = 44  # [bytes] id + seq + payload + CRC
 MAX_WIRE = 46  # [bytes] COBS packet + delimiter
 NO_FIELD = 255
@@ -260,11 +260,11 @@ class Jog(Message):
     SIZE: ClassVar[int] = 5  # [bytes] payload
     STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
-        FieldSpec('actuator', 'B', 1, None, None, 0, 3, ''),
+        FieldSpec('actuator', 'B', 1, None, None, 0, 15, ''),
         FieldSpec('position', 'f', 1, None, None, None, None, 'm'),
     )
 
-    actuator: int = 0  # Actuator index (PROTOCOL.md, geometry).
+    actuator: int = 0  # Actuator index (PROTOCOL.md §5); one the firmware's rig does not have is refused (out_of_range).
     position: float = 0.0  # [m] Command, + lowers the corner; within the actuator range.
 
 
@@ -293,13 +293,13 @@ class Zero(Message):
     NAME: ClassVar[str] = 'zero'
     DIRECTION: ClassVar[str] = 'host_to_mcu'
     REPLY: ClassVar[str | None] = 'ack'
-    SIZE: ClassVar[int] = 1  # [bytes] payload
+    SIZE: ClassVar[int] = 2  # [bytes] payload
     STATES: ClassVar[frozenset[int]] = frozenset({State.IDLE})
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
-        FieldSpec('actuators', 'B', 1, None, None, 1, 15, ''),
+        FieldSpec('actuators', 'H', 1, None, None, 1, None, ''),
     )
 
-    actuators: int = 0  # Bit i set: zero actuator i (PROTOCOL.md, geometry).
+    actuators: int = 0  # Bit i set: zero actuator i (PROTOCOL.md §5); a bit for an actuator the firmware's rig does not have is refused (out_of_range).
 
 
 @dataclass(frozen=True)
@@ -379,7 +379,7 @@ class IdentifyReply(Message):
     NAME: ClassVar[str] = 'identify_reply'
     DIRECTION: ClassVar[str] = 'mcu_to_host'
     REPLY: ClassVar[str | None] = None
-    SIZE: ClassVar[int] = 26  # [bytes] payload
+    SIZE: ClassVar[int] = 28  # [bytes] payload
     STATES: ClassVar[frozenset[int]] = frozenset()
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('protocol_version', 'H', 1, None, None, None, None, ''),
@@ -394,6 +394,8 @@ class IdentifyReply(Message):
         FieldSpec('encoder_counts', 'H', 1, None, None, None, None, ''),
         FieldSpec('pulley_circumference', 'f', 1, None, None, None, None, 'm/rev'),
         FieldSpec('actuator_period', 'I', 1, None, None, None, None, 'us'),
+        FieldSpec('modules_x', 'B', 1, None, None, None, None, ''),
+        FieldSpec('modules_y', 'B', 1, None, None, None, None, ''),
     )
 
     protocol_version: int = 0  # [protocol] version of the firmware's schema.
@@ -408,6 +410,8 @@ class IdentifyReply(Message):
     encoder_counts: int = 0  # Counts per encoder revolution the firmware was built for.
     pulley_circumference: float = 0.0  # [m/rev] Belt travel per motor revolution the firmware was built for.
     actuator_period: int = 0  # [us] Period of the firmware's actuator position loops.
+    modules_x: int = 0  # Modules along x: the firmware drives a modules_x x modules_y array (1 x 1: one module).
+    modules_y: int = 0  # Modules along y.
 
 
 @dataclass(frozen=True)
@@ -460,7 +464,7 @@ class Telemetry(Message):
     NAME: ClassVar[str] = 'telemetry'
     DIRECTION: ClassVar[str] = 'mcu_to_host'
     REPLY: ClassVar[str | None] = None
-    SIZE: ClassVar[int] = 37  # [bytes] payload
+    SIZE: ClassVar[int] = 39  # [bytes] payload
     STATES: ClassVar[frozenset[int]] = frozenset()
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('time', 'I', 1, None, None, None, None, 'ms'),
@@ -475,6 +479,8 @@ class Telemetry(Message):
         FieldSpec('crc_errors', 'H', 1, None, None, None, None, ''),
         FieldSpec('frame_errors', 'H', 1, None, None, None, None, ''),
         FieldSpec('loop_overruns', 'H', 1, None, None, None, None, ''),
+        FieldSpec('module', 'B', 1, None, None, None, None, ''),
+        FieldSpec('fault_actuator', 'B', 1, None, None, None, None, ''),
     )
 
     time: int = 0  # [ms] Firmware clock: every microsecond counted, so it wraps at 2^32 ms (49.7 days).
@@ -484,11 +490,13 @@ class Telemetry(Message):
     position_age: int = 0  # [ms] Time since the last valid position (65535: none, or longer).
     tilt_zx: float = 0.0  # [deg] theta_zx after saturation (Euclidean: theta resolved along x). (wire = value / 0.01)
     tilt_zy: float = 0.0  # [deg] theta_zy after saturation (Euclidean: theta resolved along y). (wire = value / 0.01)
-    command: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)  # [m] Actuator commands a_i, + lowers the corner. (wire = value / 1e-05)
-    measured: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)  # [m] Measured actuator positions, same convention. (wire = value / 1e-05)
+    command: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)  # [m] Commands a_i of module `module`'s four actuators (its corners in PROTOCOL.md §5's order), + lowers the corner. (wire = value / 1e-05)
+    measured: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)  # [m] Measured positions of the same four actuators, same convention. (wire = value / 1e-05)
     crc_errors: int = 0  # Frames dropped for a bad CRC since boot (wraps).
     frame_errors: int = 0  # Frames dropped for bad COBS, oversize or truncation since boot (wraps).
     loop_overruns: int = 0  # Actuator-loop runs that started a whole period or more late since boot (saturates at 65535; 0 where the actuators are ideal).
+    module: int = 0  # The module whose actuators command and measured are (PROTOCOL.md §5): the one the controller drives; 0 on one module.
+    fault_actuator: int = 0  # The actuator whose stall or encoder fault latched first, 255 if none: on an array it stops every module.
 
 
 @dataclass(frozen=True)

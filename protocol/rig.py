@@ -1,14 +1,283 @@
-"""The rig's constants for the host and the simulation. Generated from protocol/rig.toml by protocol/generate.py; do not edit."""
+"""The rig description (protocol/rig.toml; an array's in protocol/rigs/): read, checked, and the geometry it implies.
 
-ACTUATOR_COUNT = 4  # Linear actuators, one at each corner (PROTOCOL.md §5). (identify_reply.actuator_count)
-ACTUATOR_RANGE_M = 0.25  # [m] Travel of each actuator about its reference height z0: commands live in [-range, +range] (the paper). (identify_reply.actuator_range)
-MODULE_SIZE_X_M = 0.5  # [m] The module's size m along x: actuators at x = +-m/2 (the paper); configure's default.
-MODULE_SIZE_Y_M = 0.5  # [m] The module's size n along y: actuators at y = +-n/2 (the paper); configure's default.
-ENCODER_COUNTS = 4096  # Counts per revolution of the 12-bit magnetic encoder (AS5600). (identify_reply.encoder_counts)
-PULLEY_CIRCUMFERENCE_M = 0.04  # [m/rev] Belt travel per motor revolution: a GT2 20-tooth pulley. Measure yours (docs/BRINGUP.md). (identify_reply.pulley_circumference)
-MOTOR_SPEED_RPM = 120.0  # [rev/min] Motor shaft speed at full drive: RS Pro 834-7590, 12 V, no load (the paper).
-ACTUATOR_PERIOD_US = 4000  # [us] Period of the four actuator position loops (250 Hz). (identify_reply.actuator_period)
+One module is a modules_x = modules_y = 1 rig. An array is modules_x x modules_y modules of module_size_x_m x
+module_size_y_m each, with one actuator on every node of the (modules_x + 1) x (modules_y + 1) grid: neighbouring
+modules share the actuators on their common edge (PROTOCOL.md §5 numbers them). The host, the simulation and the code
+generator all read a rig through load(); a description that contradicts itself or its board is refused with the
+field named (RigDescriptionError).
+"""
 
-# What the firmware reports at identify (identify_reply field -> this description's value).
-REPORTED = {'actuator_count': ACTUATOR_COUNT, 'actuator_range': ACTUATOR_RANGE_M, 'encoder_counts': ENCODER_COUNTS, 'pulley_circumference': PULLEY_CIRCUMFERENCE_M, 'actuator_period': ACTUATOR_PERIOD_US}
-REPORTED_UNITS = {'actuator_count': '', 'actuator_range': 'm', 'encoder_counts': '', 'pulley_circumference': 'm/rev', 'actuator_period': 'us'}
+from __future__ import annotations
+
+import functools
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+if __package__ in (None, ""):
+    from boards import BOARDS, Board
+    from codegen import TYPES
+else:
+    from .boards import BOARDS, Board
+    from .codegen import TYPES
+
+RIG_TOML = Path(__file__).with_name("rig.toml")  # the default rig: one module, the paper's
+RIGS = Path(__file__).with_name("rigs")  # other rigs: arrays
+
+PER_ACTUATOR = ("pwm_pin", "dir_pin", "motor_sign", "mux_channel", "analog_pin", "encoder_sign")
+ONE_OR_PER_ACTUATOR = ("mux_address",)  # one value shared by every actuator, or one each
+PINS = ("pwm_pin", "dir_pin", "analog_pin", "bench_pin", "probe_controller_pin", "probe_actuator_pin", "probe_loop_pin")
+SIGNS = ("motor_sign", "encoder_sign")
+MUX_CHANNELS = 8  # TCA9548A
+INTEGER_RANGE = {"u8": (0, 0xFF), "i8": (-0x80, 0x7F), "u16": (0, 0xFFFF), "u32": (0, 0xFFFFFFFF)}
+MAX_ACTUATORS = 16  # jog.actuator and zero.actuators (a 16-bit mask) address actuators 0..15 (schema.toml)
+
+
+class RigDescriptionError(ValueError):
+    """A rig file contradicts itself, its board, or (for the generator) schema.toml."""
+
+
+@dataclass(frozen=True)
+class RigDescription:
+    """One rig file, checked. Lengths [m]; actuator i and module k numbered as PROTOCOL.md §5."""
+
+    path: Path
+    board: Board
+    core: dict  # [core] key -> entry (value, type, unit, doc, identify)
+    board_entries: dict  # [board] key -> entry
+
+    def value(self, key: str):
+        section = self.core if key in self.core else self.board_entries
+        return section[key]["value"]
+
+    @property
+    def name(self) -> str:
+        return self.path.stem
+
+    @property
+    def modules_x(self) -> int:
+        return self.core["modules_x"]["value"]
+
+    @property
+    def modules_y(self) -> int:
+        return self.core["modules_y"]["value"]
+
+    @property
+    def module_count(self) -> int:
+        return self.modules_x * self.modules_y
+
+    @property
+    def actuator_count(self) -> int:
+        return self.core["actuator_count"]["value"]
+
+    @property
+    def actuator_range_m(self) -> float:
+        return self.core["actuator_range_m"]["value"]
+
+    @property
+    def module_size_x_m(self) -> float:
+        return self.core["module_size_x_m"]["value"]
+
+    @property
+    def module_size_y_m(self) -> float:
+        return self.core["module_size_y_m"]["value"]
+
+    @property
+    def motor_speed_rpm(self) -> float:
+        return self.core["motor_speed_rpm"]["value"]
+
+    @property
+    def pulley_circumference_m(self) -> float:
+        return self.core["pulley_circumference_m"]["value"]
+
+    @property
+    def half_extent_m(self) -> tuple[float, float]:
+        """[m] Half the whole surface's size along x and y: the array spans ±these about its centre."""
+        return self.modules_x * self.module_size_x_m / 2, self.modules_y * self.module_size_y_m / 2
+
+    @property
+    def reported(self) -> dict:
+        """What the firmware reports at identify: identify_reply field -> this description's value."""
+        return {e["identify"]: e["value"] for e in self.core.values() if "identify" in e}
+
+    @property
+    def reported_units(self) -> dict:
+        return {e["identify"]: e.get("unit", "") for e in self.core.values() if "identify" in e}
+
+    def describe(self) -> str:
+        size = f"{self.module_size_x_m:g} x {self.module_size_y_m:g} m"
+        if self.module_count == 1:
+            return f"one {size} module on {self.actuator_count} actuators"
+        return f"a {self.modules_x} x {self.modules_y} array of {size} modules on {self.actuator_count} actuators"
+
+    def actuator_xy(self, actuator: int) -> tuple[float, float]:
+        """[m] Where actuator i stands, in the fabric frame (origin at the surface's centre)."""
+        if not 0 <= actuator < self.actuator_count:
+            raise ValueError(f"actuator {actuator}: {self.describe()} has actuators 0..{self.actuator_count - 1}")
+        i, j = actuator % (self.modules_x + 1), actuator // (self.modules_x + 1)
+        hx, hy = self.half_extent_m
+        return i * self.module_size_x_m - hx, j * self.module_size_y_m - hy
+
+    def module_corners(self, module: int) -> tuple[int, int, int, int]:
+        """Module k's four actuators, in a single module's order: (−x, −y), (+x, −y), (−x, +y), (+x, +y)."""
+        if not 0 <= module < self.module_count:
+            raise ValueError(f"module {module}: {self.describe()} has modules 0..{self.module_count - 1}")
+        p, q = module % self.modules_x, module // self.modules_x
+        row = self.modules_x + 1
+        first = q * row + p
+        return first, first + 1, first + row, first + row + 1
+
+    def modules_of(self, actuator: int) -> tuple[int, ...]:
+        """The modules actuator i is a corner of: 1, 2 or 4 of them."""
+        return tuple(k for k in range(self.module_count) if actuator in self.module_corners(k))
+
+    def module_at(self, x_m: float, y_m: float) -> int | None:
+        """The module over (x, y) [m] (on a shared edge: the one at larger x, y), or None outside the surface."""
+        hx, hy = self.half_extent_m
+        if not (-hx <= x_m <= hx and -hy <= y_m <= hy):
+            return None
+        p = min(int((x_m + hx) / self.module_size_x_m), self.modules_x - 1)
+        q = min(int((y_m + hy) / self.module_size_y_m), self.modules_y - 1)
+        return q * self.modules_x + p
+
+
+def _read(path: Path) -> dict:
+    try:
+        with open(path, "rb") as f:
+            return tomllib.load(f)
+    except FileNotFoundError:
+        raise RigDescriptionError(f"{path}: no such rig file") from None
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise RigDescriptionError(f"{path}: not a readable TOML file ({exc})") from None
+
+
+def _well_formed(where: str, key: str, entry: dict) -> None:
+    """An entry has a value of its type (each of a list's values), a doc and a known type."""
+    if not isinstance(entry, dict) or entry.get("type") not in TYPES or "doc" not in entry or "value" not in entry:
+        raise RigDescriptionError(f"{where} {key}: needs value, doc and a type of {', '.join(TYPES)}")
+    for v in entry["value"] if isinstance(entry["value"], list) else [entry["value"]]:
+        if entry["type"] == "f32":
+            ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+        else:
+            low, high = INTEGER_RANGE[entry["type"]]
+            ok = isinstance(v, int) and not isinstance(v, bool) and low <= v <= high
+        if not ok:
+            raise RigDescriptionError(f"{where} {key}: {v!r} is not a {entry['type']}")
+
+
+def _entries(where: str, section: dict, template: dict | None) -> dict:
+    """The section's entries. The default rig's are whole; another rig has every one of them, each whole (a copy of
+    the default file) or as a plain value that takes its type, unit, doc and identify from the default's."""
+    if template is None:
+        return section
+    missing = [key for key in template if key not in section]
+    unknown = [key for key in section if key not in template]
+    if missing or unknown:
+        parts = ([f"lacks {', '.join(missing)}"] if missing else []) + (
+            [f"has unknown {', '.join(unknown)} (known: {', '.join(template)})"] if unknown else []
+        )
+        raise RigDescriptionError(f"{where}: {'; '.join(parts)}")
+    out = {}
+    for key, value in section.items():
+        if isinstance(value, dict) and value.get("type", template[key]["type"]) != template[key]["type"]:
+            raise RigDescriptionError(
+                f"{where} {key}: a {template[key]['type']} (protocol/rig.toml), not {value['type']}"
+            )
+        out[key] = value if isinstance(value, dict) else {**template[key], "value": value}
+    return out
+
+
+def check(rig: dict, path: Path) -> Board:
+    """Raises RigDescriptionError on the first disagreement found in a rig of whole entries; returns its board."""
+    where = path.name
+    board = BOARDS.get(rig.get("arduino"))
+    if board is None:
+        raise RigDescriptionError(f"{where} arduino: {rig.get('arduino')!r} is not one of {', '.join(BOARDS)}")
+    for section in ("core", "board"):
+        for key, entry in rig[section].items():
+            _well_formed(where, key, entry)
+
+    def v(key: str):
+        return rig["core"][key]["value"] if key in rig["core"] else rig["board"][key]["value"]
+
+    for key in ("modules_x", "modules_y"):
+        if v(key) < 1:
+            raise RigDescriptionError(f"{where} {key}: {v(key)} modules; a rig has at least 1 along each axis")
+    for key in ("module_size_x_m", "module_size_y_m", "actuator_range_m", "pulley_circumference_m"):
+        if v(key) <= 0:
+            raise RigDescriptionError(f"{where} {key}: {v(key)} must be positive")
+    count = (v("modules_x") + 1) * (v("modules_y") + 1)
+    if v("actuator_count") != count:
+        raise RigDescriptionError(
+            f"{where} actuator_count: {v('actuator_count')}, but {v('modules_x')} x {v('modules_y')} modules stand "
+            f"on {count} actuators, (modules_x + 1) x (modules_y + 1)"
+        )
+    if count > MAX_ACTUATORS:
+        raise RigDescriptionError(
+            f"{where} modules_x, modules_y: {count} actuators; the protocol addresses at most {MAX_ACTUATORS}"
+        )
+    for key in PER_ACTUATOR:
+        if not isinstance(v(key), list) or len(v(key)) != count:
+            got = len(v(key)) if isinstance(v(key), list) else "one"
+            raise RigDescriptionError(f"{where} {key}: {got} values for {count} actuators")
+    for key in ONE_OR_PER_ACTUATOR:
+        if isinstance(v(key), list) and len(v(key)) != count:
+            raise RigDescriptionError(f"{where} {key}: {len(v(key))} values for {count} actuators (or give one)")
+    for key in SIGNS:
+        if any(s not in (-1, 1) for s in v(key)):
+            raise RigDescriptionError(f"{where} {key}: each must be 1 or -1, got {v(key)}")
+    for key in PINS:
+        for pin in v(key) if isinstance(v(key), list) else [v(key)]:
+            if pin not in board.pins:
+                raise RigDescriptionError(f"{where} {key}: the {board.name} has no pin {pin} ({board.pin_range()})")
+            if pin in board.reserved:
+                raise RigDescriptionError(f"{where} {key}: pin {pin} is {board.reserved[pin]} on the {board.name}")
+    for pin in v("pwm_pin"):
+        if pin not in board.pwm:
+            raise RigDescriptionError(
+                f"{where} pwm_pin: pin {pin} has no PWM on the {board.name} ({', '.join(map(str, sorted(board.pwm)))})"
+            )
+    used = [pin for key in PINS for pin in (v(key) if isinstance(v(key), list) else [v(key)])]
+    twice = sorted({p for p in used if used.count(p) > 1})
+    if twice:
+        names = [key for key in PINS if set(v(key) if isinstance(v(key), list) else [v(key)]) & set(twice)]
+        raise RigDescriptionError(f"{where} {', '.join(names)}: a pin is used twice ({twice})")
+    channels = v("mux_channel")
+    if any(not 0 <= c < MUX_CHANNELS for c in channels):
+        raise RigDescriptionError(f"{where} mux_channel: a TCA9548A has channels 0..{MUX_CHANNELS - 1}, got {channels}")
+    addresses = v("mux_address") if isinstance(v("mux_address"), list) else [v("mux_address")] * count
+    seen: dict[tuple[int, int], int] = {}
+    for actuator, encoder in enumerate(zip(addresses, channels, strict=True)):
+        if encoder in seen:
+            raise RigDescriptionError(
+                f"{where} mux_channel: actuators {seen[encoder]} and {actuator} share one encoder "
+                f"(multiplexer 0x{encoder[0]:02X}, channel {encoder[1]})"
+            )
+        seen[encoder] = actuator
+    return board
+
+
+def load(path: Path | str = RIG_TOML) -> RigDescription:
+    """Read and check a rig file; RigDescriptionError names what is wrong."""
+    path = Path(path)
+    raw = _read(path)
+    template = None if path.resolve() == RIG_TOML.resolve() else _read(RIG_TOML)
+    sections = {}
+    for section in ("core", "board"):
+        if not isinstance(raw.get(section), dict):
+            raise RigDescriptionError(f"{path.name}: needs a [{section}] table")
+        sections[section] = _entries(f"{path.name} [{section}]", raw[section], template and template[section])
+    board = check({"arduino": raw.get("arduino"), **sections}, path)
+    return RigDescription(path=path, board=board, core=sections["core"], board_entries=sections["board"])
+
+
+def committed() -> list[RigDescription]:
+    """Every rig this checkout describes: the default, then protocol/rigs/*.toml by name."""
+    return [load(), *(load(p) for p in sorted(RIGS.glob("*.toml")))]
+
+
+@functools.cache
+def default() -> RigDescription:
+    """The default rig, protocol/rig.toml: what the host and the simulation assume unless given another."""
+    return load()

@@ -38,7 +38,7 @@ SPEC_NAMES = {
     "x": "target x",
     "y": "target y",
 }  # a refused command field -> what a trial spec calls it
-MODULE_M = (rig_description.MODULE_SIZE_X_M, rig_description.MODULE_SIZE_Y_M)  # [m] the rig's m, n
+MODULE_M = (rig_description.default().module_size_x_m, rig_description.default().module_size_y_m)  # [m] m, n
 CLOCK_GAP_US = 1_000_000  # [us] the firmware clock moves on this much between trials, so it never goes back
 # [s] In lock-step nothing is real-time (the firmware's clock waits for the bridge), so the link may wait this
 # long for each answer: it costs nothing when the firmware answers in ~0.1 ms, and rides out a loaded machine.

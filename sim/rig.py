@@ -22,8 +22,8 @@ from .parameters import lookup
 class Module:
     """The module: actuators at its corners (±size_x/2, ±size_y/2), fabric frame origin at its centre."""
 
-    size_x_m: float = _rig.MODULE_SIZE_X_M  # [m] the paper's m (frame and actuator spacing along x)
-    size_y_m: float = _rig.MODULE_SIZE_Y_M  # [m] the paper's n
+    size_x_m: float = _rig.default().module_size_x_m  # [m] the paper's m (frame and actuator spacing along x)
+    size_y_m: float = _rig.default().module_size_y_m  # [m] the paper's n
     z0_m: float = 1.5  # [m] reference height: corners at a_i = 0 (paper)
 
 
@@ -36,8 +36,8 @@ class Actuators:
     new command no faster than the motor can drive the belt.
     """
 
-    range_m: float = _rig.ACTUATOR_RANGE_M  # [m] travel each way from z0 (protocol/rig.toml)
-    motor_speed_rpm: float = _rig.MOTOR_SPEED_RPM  # [rev/min] at full drive (protocol/rig.toml)
+    range_m: float = _rig.default().actuator_range_m  # [m] travel each way from z0 (protocol/rig.toml)
+    motor_speed_rpm: float = _rig.default().motor_speed_rpm  # [rev/min] at full drive (protocol/rig.toml)
     # [m/rev] belt per motor revolution: the plant's, which sets the simulated carriage's top speed (a fitted value;
     # the board's own is protocol/rig.toml's, which the bench-mode firmware never applies: it drives no motor)
     pulley_circumference_m: float = _d("actuators.pulley_circumference_m")

@@ -18,7 +18,7 @@ from mantaray.protocol import messages as m
 from mantaray.protocol import rig
 from mantaray.protocol.codec import FieldRefused
 
-RANGE = rig.ACTUATOR_RANGE_M  # [m] actuator travel (protocol/rig.toml)
+RANGE = rig.default().actuator_range_m  # [m] actuator travel (protocol/rig.toml)
 SLACK = 1e-9  # [m] decoding raw * 1e-5 in float64
 E = m.ErrorCode
 

@@ -347,8 +347,9 @@ def test_generator_outputs_match_and_detect_an_edit():
 def test_generator_check_fails_on_an_edited_copy(tmp_path):
     """--check, run on a copy of the tree whose messages.py was hand-edited, exits 1 and names the file."""
     gen = _load_generate(PROTOCOL / "generate.py")
-    sources = ("generate.py", "generate_rig.py", "codegen.py", "schema.toml", "rig.toml", "vectors.json")
-    for path in [PROTOCOL / name for name in sources] + list(gen.outputs()):
+    sources = ("generate.py", "generate_rig.py", "codegen.py", "rig.py", "boards.py", "schema.toml", "rig.toml")
+    rigs = list((PROTOCOL / "rigs").glob("*.toml"))
+    for path in [PROTOCOL / name for name in (*sources, "vectors.json")] + rigs + list(gen.outputs()):
         if not path.exists():
             continue
         target = tmp_path / path.relative_to(REPO)

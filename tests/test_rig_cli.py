@@ -302,7 +302,15 @@ def test_a_port_that_is_no_serial_device_is_refused_at_once_in_one_line(still_vi
             ("rig", "--port", "/dev/null", "--camera", "0", "--target", "0,0", "--alpha", "1"),
             "noise_amplitude: 1 m is outside 0..0.25 m",
         ),
-        (("jog", "--port", "/dev/null", "--actuator", "4", "--position", "0.1"), "invalid choice: 4"),
+        (("jog", "--port", "/dev/null", "--actuator", "16", "--position", "0.1"), "invalid choice: 16"),
+        (
+            ("jog", "--port", "/dev/null", "--actuator", "4", "--position", "0.1"),
+            "--actuator must be 0..3 (one 0.5 x 0.5 m module on 4 actuators, rig.toml), got 4",
+        ),
+        (
+            ("jog", "--port", "/dev/null", "--rig", "nowhere.toml", "--actuator", "4", "--position", "0.1"),
+            "argument --rig: nowhere.toml: no such rig file",
+        ),
         (
             ("jog", "--port", "/dev/null", "--actuator", "0", "--position", "nan"),
             "jog.position: must be a finite number",
@@ -342,7 +350,8 @@ def test_a_port_that_is_no_serial_device_is_refused_at_once_in_one_line(still_vi
             ("calibrate-camera", "--board-out", "board.png", "--square-mm", "0"),
             "argument --square-mm: must be > 0, got 0",
         ),
-        (("zero", "--port", "/dev/null", "--actuators", "0,9"), "actuators are 0..3"),
+        (("zero", "--port", "/dev/null", "--actuators", "0,16"), "actuators are 0..15"),
+        (("zero", "--port", "/dev/null", "--actuators", "0,9"), "--actuators must be within 0..3"),
         (("zero", "--port", "/dev/null", "--actuators", "one"), "expected actuator indices"),
     ],
 )

@@ -1,12 +1,15 @@
-"""protocol/rig.toml is the one rig description: checked against itself and the schema, reported by the firmware at
-identify, compared by the host, and the source of the simulation's and the references' rig constants."""
+"""A rig file (protocol/rig.toml, an array's in protocol/rigs/) is the one rig description: checked against itself, its
+board and the schema, reported by the firmware at identify, compared by the host, and the source of the simulation's
+and the references' rig constants."""
 
 from __future__ import annotations
 
-import copy
+import re
 
 import paper_reference as ref
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from mantaray.host import link as L
 from mantaray.host.link import IncompatibleFirmware, Link, LinkError
@@ -18,59 +21,172 @@ from mantaray.sim import parameters as P
 from mantaray.sim.bridge import Bridge
 from mantaray.sim.rig import Actuators, Rig
 
-
-@pytest.fixture
-def description():
-    return G.load_rig(), load_schema()
+ARRAY = rig.RIGS / "array_2x2.toml"
 
 
-def test_the_committed_description_passes_its_checks(description):
-    G.check(*description)
+def test_the_committed_descriptions_pass_their_checks_and_agree_with_the_schema():
+    rigs = rig.committed()
+    assert [r.name for r in rigs] == ["rig", "array_2x2"]
+    for description in rigs:
+        G.check_schema(description, load_schema())
+    one, array = rigs
+    assert (one.modules_x, one.modules_y, one.actuator_count, one.board.name) == (1, 1, 4, "uno")
+    assert (array.modules_x, array.modules_y, array.actuator_count, array.board.name) == (2, 2, 9, "mega2560")
+    assert array.half_extent_m == (0.5, 0.5)  # 1 x 1 m on 9 posts
+
+
+def _edited(tmp_path, source, old: str, new: str):
+    """A copy of a rig file with one line's text replaced (the line must be there)."""
+    text = source.read_text()
+    assert re.search(old, text, flags=re.M), old
+    path = tmp_path / source.name
+    path.write_text(re.sub(old, new, text, count=1, flags=re.M))
+    return path
+
+
+@pytest.mark.parametrize(
+    "old, new, needle",
+    [
+        (r"^actuator_count = 9", "actuator_count = 8", "actuator_count: 8, but 2 x 2 modules stand on 9 actuators"),
+        (r"^modules_y = 2", "modules_y = 0", "modules_y: 0 modules"),
+        (r"^modules_x = 2", "modules_x = 3", "actuator_count: 9, but 3 x 2 modules stand on 12 actuators"),
+        (r"^mux_channel = .*", "mux_channel = [0, 1, 2, 3, 4, 5, 6, 1, 0]", "actuators 1 and 7 share one encoder"),
+        (r"^mux_channel = .*", "mux_channel = [0, 1, 2, 3, 4, 5, 6, 7, 8]", "a TCA9548A has channels 0..7"),
+        (r"^dir_pin = .*", "", "lacks dir_pin"),
+        (r"^pwm_pin = .*", "pwm_pin = [2, 3, 5, 6, 7, 8, 44, 45]", "pwm_pin: 8 values for 9 actuators"),
+        (r"^pwm_pin = .*", "pwm_pin = [2, 3, 5, 6, 7, 8, 44, 45, 47]", "pin 47 has no PWM on the mega2560"),
+        (r"^dir_pin = .*", "dir_pin = [22, 23, 24, 25, 26, 27, 28, 29, 31]", "a pin is used twice ([31])"),
+        (r"^bench_pin = .*", "bench_pin = 70", "the mega2560 has no pin 70 (0..69)"),
+        (r"^bench_pin = .*", "bench_pin = 20", "pin 20 is I2C (SDA) on the mega2560"),
+        (r"^arduino = .*", 'arduino = "nano"', "arduino: 'nano' is not one of uno, mega2560"),
+        (r"^encoder_counts = .*", "encoder_counts = 4096\nencoder_cpr = 4096", "has unknown encoder_cpr"),
+        (r"^motor_sign = .*", "motor_sign = [1, 1, 1, 1, 1, 1, 1, 1, 0]", "motor_sign: each must be 1 or -1"),
+        (r"^pwm_max = .*", "pwm_max = 256", "pwm_max: 256 is not a u8"),
+        (r"^module_size_x_m = .*", "module_size_x_m = -0.5", "module_size_x_m: -0.5 must be positive"),
+        (r"^actuator_range_m = .*", 'actuator_range_m = "far"', "actuator_range_m: 'far' is not a f32"),
+        (r"^\[board\]", "[boards]", "needs a [board] table"),
+        (r"^modules_x = 2", "modules_x = [2", "not a readable TOML file"),
+    ],
+)
+def test_an_array_file_that_contradicts_itself_or_its_board_is_refused_naming_the_field(tmp_path, old, new, needle):
+    with pytest.raises(rig.RigDescriptionError) as info:
+        rig.load(_edited(tmp_path, ARRAY, old, new))
+    assert needle in str(info.value)
+    assert "array_2x2.toml" in str(info.value)  # which file
+
+
+@pytest.mark.parametrize(
+    "old, new, needle",
+    [
+        (r"^pwm_pin = \{ value = \[3, 5, 6, 9\]", "pwm_pin = { value = [3, 5, 6, 7]", "pin 7 has no PWM on the uno"),
+        (r"^bench_pin = \{ value = 2,", "bench_pin = { value = 19,", "pin 19 is I2C (SCL) on the uno"),
+        (r"^motor_speed_rpm = \{ value = 120.0, type = \"f32\",", "motor_speed_rpm = { value = 120.0,", "needs value"),
+        (r"^modules_x = \{ value = 1,", "modules_x = { value = 3,", "3 x 1 modules stand on 8 actuators"),
+    ],
+)
+def test_the_default_file_is_checked_the_same_way(tmp_path, old, new, needle):
+    with pytest.raises(rig.RigDescriptionError, match=re.escape(needle)):
+        rig.load(_edited(tmp_path, rig.RIG_TOML, old, new))
+
+
+def test_a_missing_rig_file_is_one_clear_error(tmp_path):
+    with pytest.raises(rig.RigDescriptionError, match="no such rig file"):
+        rig.load(tmp_path / "nowhere.toml")
+
+
+def test_more_actuators_than_the_protocol_addresses_are_refused(tmp_path):
+    text = ARRAY.read_text().replace("modules_x = 2", "modules_x = 4").replace("modules_y = 2", "modules_y = 3")
+    path = tmp_path / "array_4x3.toml"
+    path.write_text(text.replace("actuator_count = 9", "actuator_count = 20"))
+    with pytest.raises(rig.RigDescriptionError, match="20 actuators; the protocol addresses at most 16"):
+        rig.load(path)
 
 
 @pytest.mark.parametrize(
     "edit, needle",
     [
-        (lambda r, s: r["board"]["pwm_pin"].update(value=[3, 5, 6]), "3 values for 4 actuators"),
-        (lambda r, s: r["board"]["pwm_pin"].update(value=[3, 5, 6, 7]), "pin 7 has no PWM"),
-        (lambda r, s: r["board"]["dir_pin"].update(value=[4, 7, 8, 13]), "a pin is used twice ([13])"),
-        (lambda r, s: r["board"]["bench_pin"].update(value=20), "the Uno has no pin 20"),
-        (lambda r, s: r["core"]["encoder_counts"].update(identify="encoder_cpr"), "no u16 field 'encoder_cpr'"),
-        (lambda r, s: r["core"]["actuator_range_m"].update(value=0.3), "configure.tilt_limit default"),
-        (lambda r, s: r["core"]["module_size_x_m"].update(value=0.6), "configure.module_x default"),
-        (lambda r, s: r["core"]["motor_speed_rpm"].pop("type"), "needs value, doc and a type"),
+        (lambda s: s["messages"][1]["fields"][1].update(default=0.6), "configure.module_x default"),
+        (lambda s: next(m for m in s["messages"] if m["name"] == "jog")["fields"][0].update(max=3), "jog.actuator"),
     ],
 )
-def test_a_description_that_contradicts_itself_the_uno_or_the_schema_is_refused(description, edit, needle):
-    rig_toml, schema = copy.deepcopy(description)
-    edit(rig_toml, schema)
-    with pytest.raises(G.RigDescriptionError) as info:
-        G.check(rig_toml, schema)
-    assert needle in str(info.value)
+def test_a_schema_that_contradicts_a_rig_is_refused(edit, needle):
+    schema = load_schema()
+    edit(schema)
+    with pytest.raises(rig.RigDescriptionError, match=re.escape(needle)):
+        G.check_schema(rig.default(), schema)
+
+
+@given(st.integers(1, 3), st.integers(1, 3), st.floats(0.2, 1.0), st.floats(0.2, 1.0))
+def test_the_grid_numbers_actuators_and_modules_as_the_protocol_says(nx, ny, mx, my):
+    """PROTOCOL.md §5: each module's corners stand ±m/2, ±n/2 about its centre in one module's order, each actuator
+    is a corner of exactly the modules that list it, and a module's centre lies in that module."""
+    core = {k: dict(v) for k, v in rig.default().core.items()}
+    for key, value in (("modules_x", nx), ("modules_y", ny), ("module_size_x_m", mx), ("module_size_y_m", my)):
+        core[key]["value"] = value
+    core["actuator_count"]["value"] = (nx + 1) * (ny + 1)
+    d = rig.RigDescription(rig.RIG_TOML, rig.default().board, core, rig.default().board_entries)
+    hx, hy = d.half_extent_m
+    for k in range(d.module_count):
+        corners = [d.actuator_xy(a) for a in d.module_corners(k)]
+        cx = sum(x for x, _ in corners) / 4
+        cy = sum(y for _, y in corners) / 4
+        for c, (x, y) in enumerate(corners):
+            assert x == pytest.approx(cx + (mx / 2 if c & 1 else -mx / 2))
+            assert y == pytest.approx(cy + (my / 2 if c & 2 else -my / 2))
+        assert d.module_at(cx, cy) == k
+    for a in range(d.actuator_count):
+        x, y = d.actuator_xy(a)
+        assert -hx - 1e-9 <= x <= hx + 1e-9 and -hy - 1e-9 <= y <= hy + 1e-9
+        assert d.modules_of(a) == tuple(k for k in range(d.module_count) if a in d.module_corners(k))
+        assert 1 <= len(d.modules_of(a)) <= 4
+    assert d.module_at(hx + 0.01, 0.0) is None
+
+
+def test_one_module_is_the_paper_numbering():
+    one = rig.default()
+    assert [one.actuator_xy(i) for i in range(4)] == [(-0.25, -0.25), (0.25, -0.25), (-0.25, 0.25), (0.25, 0.25)]
+    assert one.module_corners(0) == (0, 1, 2, 3)
 
 
 def test_the_firmware_reports_the_rig_it_was_built_for_at_identify():
     link = Link(InProcessTransport(simulated_clock=True))
     reply = link.identify()
-    assert {name: getattr(reply, name) for name in rig.REPORTED} == pytest.approx(rig.REPORTED, rel=1e-6)
+    reported = rig.default().reported
+    assert {"modules_x", "modules_y"} <= set(reported)
+    assert {name: getattr(reply, name) for name in reported} == pytest.approx(reported, rel=1e-6)
     assert link.rig_differences == []
 
 
-def test_a_board_built_with_another_pulley_is_named_in_a_warning(monkeypatch):
-    monkeypatch.setitem(rig.REPORTED, "pulley_circumference", 0.045)  # as if this host's rig.toml said 0.045
-    link = Link(InProcessTransport(simulated_clock=True))
+def test_a_board_built_with_another_pulley_is_named_in_a_warning(tmp_path):
+    other = rig.load(
+        _edited(
+            tmp_path,
+            rig.RIG_TOML,
+            r"pulley_circumference_m = \{ value = 0.040",
+            "pulley_circumference_m = { value = 0.045",
+        )
+    )
+    link = Link(InProcessTransport(simulated_clock=True), description=other)
     link.identify()
-    assert link.rig_differences == [
-        "pulley_circumference is 0.04 m/rev on the board, 0.045 m/rev in this host's protocol/rig.toml"
-    ]
+    assert link.rig_differences == ["pulley_circumference is 0.04 m/rev on the board, 0.045 m/rev in rig.toml"]
 
 
-@pytest.mark.parametrize("name, value", [("actuator_range", 0.3), ("actuator_count", 6)])
-def test_a_board_built_for_other_actuators_is_refused_at_identify(monkeypatch, name, value):
-    monkeypatch.setitem(rig.REPORTED, name, value)
-    with pytest.raises(IncompatibleFirmware, match=f"another rig \\({name} is .* on the board"):
-        Link(InProcessTransport(simulated_clock=True)).identify()
-    assert name in L.BINDING_CONSTANTS
+def test_a_board_built_for_another_travel_is_refused_at_identify(tmp_path):
+    other = rig.load(
+        _edited(tmp_path, rig.RIG_TOML, r"actuator_range_m = \{ value = 0.25", "actuator_range_m = { value = 0.3")
+    )
+    with pytest.raises(IncompatibleFirmware, match="another rig \\(actuator_range is .* on the board"):
+        Link(InProcessTransport(simulated_clock=True), description=other).identify()
+    assert "actuator_range" in L.BINDING_CONSTANTS
+
+
+def test_a_host_given_the_array_refuses_a_board_built_for_one_module():
+    with pytest.raises(IncompatibleFirmware) as info:
+        Link(InProcessTransport(simulated_clock=True), description=rig.load(ARRAY)).identify()
+    text = str(info.value)
+    assert "actuator_count is 4 on the board, 9 in array_2x2.toml" in text
+    assert "modules_x is 1 on the board, 2 in array_2x2.toml" in text
+    assert "--rig" in text
 
 
 def test_the_bridge_refuses_a_simulated_rig_whose_travel_is_not_the_firmwares():
@@ -79,8 +195,9 @@ def test_the_bridge_refuses_a_simulated_rig_whose_travel_is_not_the_firmwares():
 
 
 def test_the_simulation_and_the_references_take_the_rig_from_the_description():
-    assert Rig().module.size_x_m == rig.MODULE_SIZE_X_M and Rig().module.size_y_m == rig.MODULE_SIZE_Y_M
-    assert Actuators().range_m == rig.ACTUATOR_RANGE_M == ref.ACTUATOR_RANGE  # the paper's ±0.25 m
-    assert Actuators().motor_speed_rpm == rig.MOTOR_SPEED_RPM
+    one = rig.default()
+    assert Rig().module.size_x_m == one.module_size_x_m and Rig().module.size_y_m == one.module_size_y_m
+    assert Actuators().range_m == one.actuator_range_m == ref.ACTUATOR_RANGE  # the paper's ±0.25 m
+    assert Actuators().motor_speed_rpm == one.motor_speed_rpm
     pulley = P.lookup("actuators.pulley_circumference_m")
-    assert pulley.low <= rig.PULLEY_CIRCUMFERENCE_M <= pulley.high  # the board's pulley is a plausible plant
+    assert pulley.low <= one.pulley_circumference_m <= pulley.high  # the board's pulley is a plausible plant

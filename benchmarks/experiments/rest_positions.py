@@ -95,7 +95,9 @@ def main() -> int:
         print(f"({x_m * 100:+6.1f}, {y_m * 100:+6.1f}) " + " ".join(cells), flush=True)
     finest = meshes[-1].label
     for mesh in meshes[:-1]:
-        pairs = [(a, b) for a, b in zip(rests[mesh.label], rests[finest], strict=True) if a is not None and b is not None]
+        pairs = [
+            (a, b) for a, b in zip(rests[mesh.label], rests[finest], strict=True) if a is not None and b is not None
+        ]
         if not pairs:
             print(f"{mesh.label} against {finest}: no drop at rest on both", flush=True)
             continue

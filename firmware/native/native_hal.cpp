@@ -32,7 +32,7 @@ uint32_t NativeHal::now_us() const {
 }
 
 void NativeHal::actuators_power(bool on) {
-  if (on && !power_) injected_faults_ = 0;  // as a board's bank clears its latched faults
+  if (on && !power_) injected_ = {0, kNoActuator};  // as a board's bank clears its latched faults
   power_ = on;
   actuators_.power(on);
 }

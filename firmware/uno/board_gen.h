@@ -1,4 +1,4 @@
-// The Uno's pin map and bus addresses (wiring: firmware/README.md). Generated from protocol/rig.toml by protocol/generate.py; do not edit.
+// The uno's pin map and bus addresses (wiring: firmware/README.md). Generated from protocol/rig.toml by protocol/generate.py; do not edit.
 #pragma once
 
 #include <stdint.h>  // uint8_t, int8_t, uint32_t
@@ -10,7 +10,7 @@ constexpr uint8_t kPwmPin[4] = {3, 5, 6, 9};  // Each actuator's H-bridge PWM in
 constexpr uint8_t kDirPin[4] = {4, 7, 8, 12};  // Each H-bridge's direction input: HIGH lowers the corner (before motor_sign).
 constexpr int8_t kMotorSign[4] = {1, 1, 1, 1};  // -1 where a motor is wired the other way round.
 constexpr uint8_t kPwmMax = 255;  // analogWrite() full scale.
-constexpr uint8_t kMuxAddress = 0x70;  // TCA9548A I2C multiplexer with A0..A2 low: every AS5600 answers at one address, so each sits on its own channel.
+constexpr uint8_t kMuxAddress = 0x70;  // TCA9548A I2C multiplexer with A0..A2 low: every AS5600 answers at one address, so each sits on its own channel. One address for all encoders, or one per actuator where more than eight need a second multiplexer.
 constexpr uint8_t kMuxChannel[4] = {0, 1, 2, 3};  // Multiplexer channel of each actuator's encoder.
 constexpr uint8_t kEncoderAddress = 0x36;  // AS5600's I2C address (fixed).
 constexpr uint8_t kEncoderAngleRegister = 0x0E;  // AS5600's ANGLE register: 12 bits, high byte first.

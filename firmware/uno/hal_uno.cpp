@@ -48,12 +48,14 @@ class UnoHal final : public Hal {
     g_bank.power(on);
   }
 
-  void actuators_zero(uint8_t mask) override {
+  void actuators_zero(uint16_t mask) override {
     if (g_bench) return g_external.zero(mask);
     g_bank.zero(mask);
   }
 
-  uint16_t actuator_faults() const override { return g_bench ? 0 : g_bank.faults(); }
+  ActuatorFaults actuator_faults() const override {
+    return g_bench ? ActuatorFaults{0, kNoActuator} : ActuatorFaults{g_bank.faults(), g_bank.fault_actuator()};
+  }
   uint32_t actuator_overruns() const override { return g_bank.overruns(); }
 
   proto::Clock clock_kind() const override { return g_bench ? proto::Clock::kSimulated : proto::Clock::kWall; }

@@ -25,7 +25,7 @@ POSITION_FIELD = {spec.name: i for i, spec in enumerate(m.ObjectPosition.FIELDS)
 
 TILT_TOL = 0.006  # [deg] tilt telemetry is an integer of 0.01 deg
 COMMAND_TOL = 1e-5  # [m] command telemetry is an integer of 1e-5 m
-ACTUATOR_RANGE = rig.ACTUATOR_RANGE_M  # [m] jog bound and actuator travel (protocol/rig.toml)
+ACTUATOR_RANGE = rig.default().actuator_range_m  # [m] jog bound and actuator travel (protocol/rig.toml)
 
 STATES = ("idle", "running", "reached", "fault", "estop")
 

@@ -17,6 +17,12 @@ def test_identify_reply_matches_this_host(dut):
     assert reply.clock in (m.Clock.WALL, m.Clock.SIMULATED)
 
 
+def test_identify_reports_an_array_shape_that_matches_its_actuators(dut):
+    reply = dut.command(m.Identify())
+    assert reply.modules_x >= 1 and reply.modules_y >= 1
+    assert reply.actuator_count == (reply.modules_x + 1) * (reply.modules_y + 1)  # PROTOCOL.md §5
+
+
 def test_identify_reply_is_the_same_every_time(dut):
     replies = {dut.command(m.Identify()) for _ in range(3)}
     assert len(replies) == 1

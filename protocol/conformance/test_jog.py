@@ -35,6 +35,7 @@ def test_jogs_add_up_across_actuators(dut):
 
 BAD = [
     ((4, 0.1), OUT, 0),
+    ((15, 0.1), OUT, 0),
     ((255, 0.1), OUT, 0),
     ((0, math.nan), NOT_FINITE, 1),
     ((1, math.inf), NOT_FINITE, 1),

@@ -28,7 +28,7 @@ def test_zero_makes_the_masked_actuators_hold_at_zero(dut, mask):
             assert t.measured[i] == pytest.approx(0.0, abs=2e-3)  # where they stand is now z0
 
 
-@pytest.mark.parametrize("mask", [0, 16, 255])
+@pytest.mark.parametrize("mask", [0, 16, 255, 1 << 15, 0xFFFF])
 def test_a_mask_naming_no_actuator_or_too_many_is_refused(dut, mask):
     _jog_all(dut)
     before = tuple(dut.probe().command)

@@ -10,7 +10,7 @@ constexpr uint8_t ActuatorBank::kReadFailuresForFault;  // C++14: the definition
 void ActuatorBank::begin(uint32_t now_us) {
   for (uint8_t i = 0; i < kActuatorCount; ++i) {
     if (!io_.encoder_read(i, raw_[i])) {
-      faults_ |= proto::faults::kEncoder;
+      latch(proto::faults::kEncoder, i);
       read_failures_[i] = kReadFailuresForFault;
     }
     loop_[i].reset(raw_[i]);
@@ -30,11 +30,11 @@ void ActuatorBank::tick(uint32_t now_us) {
     if (io_.encoder_read(i, raw_[i])) {
       read_failures_[i] = 0;
     } else if (read_failures_[i] < kReadFailuresForFault && ++read_failures_[i] == kReadFailuresForFault) {
-      faults_ |= proto::faults::kEncoder;
+      latch(proto::faults::kEncoder, i);
     }
     if (read_failures_[i]) continue;  // a missed reading: keep the last duty for at most two periods
     const float duty = loop_[i].step(config_, setpoint_m_[i], raw_[i], dt_s);
-    if (loop_[i].stalled()) faults_ |= proto::faults::kStall;
+    if (loop_[i].stalled()) latch(proto::faults::kStall, i);
     if (powered_ && !faults_) io_.motor_write(i, duty);
   }
   if (!powered_ || faults_) io_.motors_off();
@@ -58,9 +58,15 @@ void ActuatorBank::power(bool on) {
     if (read_failures_[i] >= kReadFailuresForFault) read_failures_[i] = 0;  // retried at the next run
   }
   faults_ = 0;
+  fault_actuator_ = kNoActuator;
 }
 
-void ActuatorBank::zero(uint8_t mask) {
+void ActuatorBank::latch(uint16_t fault, uint8_t actuator) {
+  if (!faults_) fault_actuator_ = actuator;
+  faults_ |= fault;
+}
+
+void ActuatorBank::zero(uint16_t mask) {
   for (uint8_t i = 0; i < kActuatorCount; ++i) {
     if (mask & (1u << i)) loop_[i].reset(raw_[i]);
   }

@@ -40,14 +40,17 @@ class ActuatorBank {
   // Off: every motor off at once, loops idle. Off -> on: the loops drive again, latched stalls clear.
   void power(bool on);
   // Present positions of the actuators in the mask (bit i: actuator i) become 0 m.
-  void zero(uint8_t mask);
+  void zero(uint16_t mask);
   void measured(float (&out_m)[kActuatorCount]) const;
   // proto::faults bits (stall, encoder) latched since the last power-on.
   uint16_t faults() const { return faults_; }
+  uint8_t fault_actuator() const { return fault_actuator_; }  // whose fault latched first; kNoActuator if none
   // Loop runs that came more than one whole period late since boot.
   uint32_t overruns() const { return overruns_; }
 
  private:
+  void latch(uint16_t fault, uint8_t actuator);  // the first fault since power-on also names its actuator
+
   ActuatorIo& io_;
   const ActuatorConfig& config_;
   const uint32_t period_us_;
@@ -58,6 +61,7 @@ class ActuatorBank {
   uint32_t last_run_us_ = 0;
   uint32_t overruns_ = 0;
   uint16_t faults_ = 0;
+  uint8_t fault_actuator_ = kNoActuator;
   bool powered_ = true;
 };
 

@@ -55,7 +55,7 @@ void Firmware::poll() {
   const uint32_t now = hal_.now_us();
   millis(now);
   supervisor_.tick(now);
-  const uint16_t actuator_faults = hal_.actuator_faults();
+  const uint16_t actuator_faults = hal_.actuator_faults().bits;
   if (actuator_faults & ~supervisor_.faults()) supervisor_.shutdown(actuator_faults);
   apply_outputs();
   const uint32_t period_us = static_cast<uint32_t>(supervisor_.config().telemetry_period) * 1000u;
@@ -181,7 +181,9 @@ void Firmware::send_identify_reply() {
                                    kActuatorRangeM,
                                    kEncoderCounts,
                                    kPulleyCircumferenceM,
-                                   kActuatorPeriodUs};
+                                   kActuatorPeriodUs,
+                                   kModulesX,
+                                   kModulesY};
   uint8_t payload[proto::IdentifyReply::kSize];
   proto::encode(reply, payload);
   send(proto::IdentifyReply::kId, payload, sizeof payload);
@@ -200,14 +202,17 @@ void Firmware::send_telemetry(uint32_t now_us) {
   t.position_age = supervisor_.position_age_ms(now_us);
   t.tilt_zx = to_wire_i16(out.tilt_zx, T::kTiltZxScale);
   t.tilt_zy = to_wire_i16(out.tilt_zy, T::kTiltZyScale);
-  for (uint8_t i = 0; i < kActuatorCount; ++i) {
-    t.command[i] = to_wire_i16(out.command[i], T::kCommandScale);
-    t.measured[i] = to_wire_i16(measured[i], T::kMeasuredScale);
+  t.module = 0;  // the one module: an array's controller will name the module it drives
+  for (uint8_t c = 0; c < 4; ++c) {
+    const uint8_t i = corner_actuator(t.module, c);
+    t.command[c] = to_wire_i16(out.command[i], T::kCommandScale);
+    t.measured[c] = to_wire_i16(measured[i], T::kMeasuredScale);
   }
   t.crc_errors = decoder_.crc_errors();
   t.frame_errors = decoder_.frame_errors();
   const uint32_t overruns = hal_.actuator_overruns();
   t.loop_overruns = overruns > 0xFFFFu ? 0xFFFF : static_cast<uint16_t>(overruns);
+  t.fault_actuator = hal_.actuator_faults().actuator;
   uint8_t payload[T::kSize];
   proto::encode(t, payload);
   send(T::kId, payload, sizeof payload);

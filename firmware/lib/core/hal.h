@@ -10,6 +10,12 @@
 
 namespace mr {
 
+// What the actuators latched since power last came on.
+struct ActuatorFaults {
+  uint16_t bits;     // proto::faults bits: stall, encoder
+  uint8_t actuator;  // the actuator whose fault latched first; kNoActuator if none
+};
+
 class Hal {
  public:
   // Monotonic firmware clock [us]; wraps after 2^32 us (71.6 min); the core only takes differences.
@@ -25,9 +31,10 @@ class Hal {
   // false cuts every actuator output at once (emergency stop, faults); true restores them.
   virtual void actuators_power(bool on) = 0;
   // The actuators in the mask (bit i: actuator i) now stand at 0 m (homing).
-  virtual void actuators_zero(uint8_t mask) = 0;
-  // proto::faults bits the actuators latched (stall, encoder); cleared when power comes back on.
-  virtual uint16_t actuator_faults() const = 0;
+  virtual void actuators_zero(uint16_t mask) = 0;
+  // proto::faults bits the actuators latched (stall, encoder), and the actuator whose fault latched first
+  // (kNoActuator if none); both cleared when power comes back on.
+  virtual ActuatorFaults actuator_faults() const = 0;
   // Actuator-loop runs that started a whole period or more late since boot (0 for ideal actuators).
   virtual uint32_t actuator_overruns() const = 0;
 

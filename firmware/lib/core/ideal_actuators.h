@@ -20,7 +20,7 @@ class IdealActuators {
   }
   void power(bool on) { powered_ = on; }
   // Zeroing: the supervisor sets these actuators' commands to 0, so their positions follow.
-  void zero(uint8_t mask) {
+  void zero(uint16_t mask) {
     for (uint8_t i = 0; i < kActuatorCount; ++i) {
       if (mask & (1u << i)) position_m_[i] = 0.0f;
     }

@@ -8,8 +8,8 @@
 namespace mr {
 namespace proto {
 
-constexpr uint16_t kProtocolVersion = 1;
-constexpr uint32_t kSchemaHash = 0xB5A57DABu;
+constexpr uint16_t kProtocolVersion = 2;
+constexpr uint32_t kSchemaHash = 0xCED7188Bu;
 constexpr uint8_t kMaxPacket = 44;  // [bytes] id + seq + payload + CRC
 constexpr uint8_t kMaxWire = 46;  // [bytes] COBS packet + delimiter
 constexpr uint8_t kNoField = 255;  // nack.field when no single field is at fault
@@ -299,7 +299,7 @@ inline ErrorCode validate(const EmergencyStop& /*m*/, uint8_t& /*field*/) {
 struct Jog {
   static constexpr uint8_t kId = 0x08;
   static constexpr uint8_t kSize = 5;  // [bytes] payload
-  uint8_t actuator;  // Actuator index (PROTOCOL.md, geometry).
+  uint8_t actuator;  // Actuator index (PROTOCOL.md §5); one the firmware's rig does not have is refused (out_of_range).
   float position;  // [m] Command, + lowers the corner; within the actuator range.
   static constexpr uint8_t kFieldActuator = 0;
   static constexpr uint8_t kFieldPosition = 1;
@@ -314,7 +314,7 @@ inline void decode(const uint8_t* in, Jog& m) {
 }
 // Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
 inline ErrorCode validate(const Jog& m, uint8_t& field) {
-  if ((m.actuator > 3)) { field = 0; return ErrorCode::kOutOfRange; }
+  if ((m.actuator > 15)) { field = 0; return ErrorCode::kOutOfRange; }
   if (!is_finite(m.position)) { field = 1; return ErrorCode::kNotFinite; }
   return ErrorCode::kOk;
 }
@@ -340,19 +340,19 @@ inline ErrorCode validate(const SimClock& /*m*/, uint8_t& /*field*/) {
 // Homing: take the present position of each actuator in the mask as 0 m, the reference height z0.
 struct Zero {
   static constexpr uint8_t kId = 0x0A;
-  static constexpr uint8_t kSize = 1;  // [bytes] payload
-  uint8_t actuators;  // Bit i set: zero actuator i (PROTOCOL.md, geometry).
+  static constexpr uint8_t kSize = 2;  // [bytes] payload
+  uint16_t actuators;  // Bit i set: zero actuator i (PROTOCOL.md §5); a bit for an actuator the firmware's rig does not have is refused (out_of_range).
   static constexpr uint8_t kFieldActuators = 0;
 };
 inline void encode(const Zero& m, uint8_t* out) {
-  put_u8(out + 0, m.actuators);
+  put_u16(out + 0, m.actuators);
 }
 inline void decode(const uint8_t* in, Zero& m) {
-  m.actuators = get_u8(in + 0);
+  m.actuators = get_u16(in + 0);
 }
 // Field-local checks from the schema (NaN/inf, bounds, enum values); field = index of the first bad one.
 inline ErrorCode validate(const Zero& m, uint8_t& field) {
-  if ((m.actuators < 1) || (m.actuators > 15)) { field = 0; return ErrorCode::kOutOfRange; }
+  if ((m.actuators < 1)) { field = 0; return ErrorCode::kOutOfRange; }
   return ErrorCode::kOk;
 }
 
@@ -478,7 +478,7 @@ inline ErrorCode validate(const ObjectPosition& m, uint8_t& field) {
 // Answer to identify.
 struct IdentifyReply {
   static constexpr uint8_t kId = 0x81;
-  static constexpr uint8_t kSize = 26;  // [bytes] payload
+  static constexpr uint8_t kSize = 28;  // [bytes] payload
   uint16_t protocol_version;  // [protocol] version of the firmware's schema.
   uint8_t firmware_major;  // Firmware version, major.
   uint8_t firmware_minor;  // Firmware version, minor.
@@ -491,6 +491,8 @@ struct IdentifyReply {
   uint16_t encoder_counts;  // Counts per encoder revolution the firmware was built for.
   float pulley_circumference;  // [m/rev] Belt travel per motor revolution the firmware was built for.
   uint32_t actuator_period;  // [us] Period of the firmware's actuator position loops.
+  uint8_t modules_x;  // Modules along x: the firmware drives a modules_x x modules_y array (1 x 1: one module).
+  uint8_t modules_y;  // Modules along y.
   static constexpr uint8_t kFieldProtocolVersion = 0;
   static constexpr uint8_t kFieldFirmwareMajor = 1;
   static constexpr uint8_t kFieldFirmwareMinor = 2;
@@ -503,6 +505,8 @@ struct IdentifyReply {
   static constexpr uint8_t kFieldEncoderCounts = 9;
   static constexpr uint8_t kFieldPulleyCircumference = 10;
   static constexpr uint8_t kFieldActuatorPeriod = 11;
+  static constexpr uint8_t kFieldModulesX = 12;
+  static constexpr uint8_t kFieldModulesY = 13;
 };
 inline void encode(const IdentifyReply& m, uint8_t* out) {
   put_u16(out + 0, m.protocol_version);
@@ -517,6 +521,8 @@ inline void encode(const IdentifyReply& m, uint8_t* out) {
   put_u16(out + 16, m.encoder_counts);
   put_f32(out + 18, m.pulley_circumference);
   put_u32(out + 22, m.actuator_period);
+  put_u8(out + 26, m.modules_x);
+  put_u8(out + 27, m.modules_y);
 }
 inline void decode(const uint8_t* in, IdentifyReply& m) {
   m.protocol_version = get_u16(in + 0);
@@ -531,6 +537,8 @@ inline void decode(const uint8_t* in, IdentifyReply& m) {
   m.encoder_counts = get_u16(in + 16);
   m.pulley_circumference = get_f32(in + 18);
   m.actuator_period = get_u32(in + 22);
+  m.modules_x = get_u8(in + 26);
+  m.modules_y = get_u8(in + 27);
 }
 
 // The command with this id and seq was applied (or was a retransmission of one that was).
@@ -580,7 +588,7 @@ inline void decode(const uint8_t* in, Nack& m) {
 // Firmware state; after every accepted object_position and every telemetry_period.
 struct Telemetry {
   static constexpr uint8_t kId = 0x84;
-  static constexpr uint8_t kSize = 37;  // [bytes] payload
+  static constexpr uint8_t kSize = 39;  // [bytes] payload
   uint32_t time;  // [ms] Firmware clock: every microsecond counted, so it wraps at 2^32 ms (49.7 days).
   uint8_t state;  // Supervisor state. (enum state)
   uint16_t faults;  // Latched fault flags. (flags faults)
@@ -588,11 +596,13 @@ struct Telemetry {
   uint16_t position_age;  // [ms] Time since the last valid position (65535: none, or longer).
   int16_t tilt_zx;  // [deg] theta_zx after saturation (Euclidean: theta resolved along x). (wire = value / 0.01)
   int16_t tilt_zy;  // [deg] theta_zy after saturation (Euclidean: theta resolved along y). (wire = value / 0.01)
-  int16_t command[4];  // [m] Actuator commands a_i, + lowers the corner. (wire = value / 1e-05)
-  int16_t measured[4];  // [m] Measured actuator positions, same convention. (wire = value / 1e-05)
+  int16_t command[4];  // [m] Commands a_i of module `module`'s four actuators (its corners in PROTOCOL.md §5's order), + lowers the corner. (wire = value / 1e-05)
+  int16_t measured[4];  // [m] Measured positions of the same four actuators, same convention. (wire = value / 1e-05)
   uint16_t crc_errors;  // Frames dropped for a bad CRC since boot (wraps).
   uint16_t frame_errors;  // Frames dropped for bad COBS, oversize or truncation since boot (wraps).
   uint16_t loop_overruns;  // Actuator-loop runs that started a whole period or more late since boot (saturates at 65535; 0 where the actuators are ideal).
+  uint8_t module;  // The module whose actuators command and measured are (PROTOCOL.md §5): the one the controller drives; 0 on one module.
+  uint8_t fault_actuator;  // The actuator whose stall or encoder fault latched first, 255 if none: on an array it stops every module.
   static constexpr uint8_t kFieldTime = 0;
   static constexpr uint8_t kFieldState = 1;
   static constexpr uint8_t kFieldFaults = 2;
@@ -605,6 +615,8 @@ struct Telemetry {
   static constexpr uint8_t kFieldCrcErrors = 9;
   static constexpr uint8_t kFieldFrameErrors = 10;
   static constexpr uint8_t kFieldLoopOverruns = 11;
+  static constexpr uint8_t kFieldModule = 12;
+  static constexpr uint8_t kFieldFaultActuator = 13;
   static constexpr float kTiltZxScale = 0.01f;  // [deg] per wire unit
   static constexpr float kTiltZyScale = 0.01f;  // [deg] per wire unit
   static constexpr float kCommandScale = 1e-05f;  // [m] per wire unit
@@ -629,6 +641,8 @@ inline void encode(const Telemetry& m, uint8_t* out) {
   put_u16(out + 31, m.crc_errors);
   put_u16(out + 33, m.frame_errors);
   put_u16(out + 35, m.loop_overruns);
+  put_u8(out + 37, m.module);
+  put_u8(out + 38, m.fault_actuator);
 }
 inline void decode(const uint8_t* in, Telemetry& m) {
   m.time = get_u32(in + 0);
@@ -649,6 +663,8 @@ inline void decode(const uint8_t* in, Telemetry& m) {
   m.crc_errors = get_u16(in + 31);
   m.frame_errors = get_u16(in + 33);
   m.loop_overruns = get_u16(in + 35);
+  m.module = get_u8(in + 37);
+  m.fault_actuator = get_u8(in + 38);
 }
 
 // Sent once when the firmware starts, so the host notices a reset.

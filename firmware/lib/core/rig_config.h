@@ -11,4 +11,13 @@ constexpr uint8_t kFirmwareMajor = 0;
 constexpr uint8_t kFirmwareMinor = 1;
 constexpr uint8_t kFirmwarePatch = 0;
 
+constexpr uint8_t kModuleCount = kModulesX * kModulesY;
+constexpr uint8_t kNoActuator = 0xFF;  // telemetry.fault_actuator when no actuator faulted
+
+// Module k's corner c (0..3: one module's order, (-x, -y), (+x, -y), (-x, +y), (+x, +y)) is this actuator, the
+// node (k % modules_x + c % 2, k / modules_x + c / 2) of the modules' grid (PROTOCOL.md §5).
+constexpr uint8_t corner_actuator(uint8_t module, uint8_t corner) {
+  return static_cast<uint8_t>((module / kModulesX + corner / 2) * (kModulesX + 1) + module % kModulesX + corner % 2);
+}
+
 }  // namespace mr

@@ -156,6 +156,10 @@ ErrorCode Supervisor::jog(const proto::Jog& msg, uint8_t& field) {
   field = proto::kNoField;
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
+  if (msg.actuator >= kActuatorCount) {  // the schema's bound is the protocol's 16; this rig has fewer
+    field = proto::Jog::kFieldActuator;
+    return ErrorCode::kOutOfRange;
+  }
   if (msg.position > kActuatorRangeM || msg.position < -kActuatorRangeM) {
     field = proto::Jog::kFieldPosition;
     return ErrorCode::kOutOfRange;
@@ -168,6 +172,10 @@ ErrorCode Supervisor::zero(const proto::Zero& msg, uint8_t& field) {
   field = proto::kNoField;
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
+  if (msg.actuators >> kActuatorCount) {  // a bit for an actuator this rig does not have
+    field = proto::Zero::kFieldActuators;
+    return ErrorCode::kOutOfRange;
+  }
   for (uint8_t i = 0; i < kActuatorCount; ++i) {
     if (msg.actuators & (1u << i)) output_.command[i] = 0.0f;
   }

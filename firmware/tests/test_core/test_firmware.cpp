@@ -178,13 +178,17 @@ TEST_CASE("firmware: identify reply carries versions, schema hash, max_wire and 
     proto::IdentifyReply r;
     proto::decode(f.payload.data(), r);
     CHECK(r.protocol_version == proto::kProtocolVersion);
-    CHECK(r.protocol_version == 1);
+    CHECK(r.protocol_version == 2);
     CHECK(r.firmware_major == mr::kFirmwareMajor);
     CHECK(r.firmware_minor == mr::kFirmwareMinor);
     CHECK(r.firmware_patch == mr::kFirmwarePatch);
     CHECK(r.schema_hash == proto::kSchemaHash);
     CHECK(r.max_wire == 46);
     CHECK(r.clock == static_cast<uint8_t>(clock));
+    CHECK(r.actuator_count == mr::kActuatorCount);  // the rig it was built for (protocol/rig.toml)
+    CHECK(r.modules_x == mr::kModulesX);
+    CHECK(r.modules_y == mr::kModulesY);
+    CHECK(r.actuator_count == (r.modules_x + 1) * (r.modules_y + 1));
   }
 }
 
@@ -581,12 +585,13 @@ TEST_CASE("firmware: an actuator fault from the board goes through the one shutd
     h.send_msg(pos(1, 1000, 0.0f, 0.0f), 3);
     const proto::Telemetry driving = h.expect_telemetry();
     CHECK(driving.command[1] > 0);  // the controller lowers the +x corners
-    h.hal.inject_actuator_faults(fault);
+    h.hal.inject_actuator_faults(fault, 2);
     h.fw.poll();
     h.send_msg(pos(2, 84000, 0.05f, 0.0f), 4);
     proto::Telemetry t = h.expect_telemetry();
     CHECK(t.state == static_cast<uint8_t>(State::kFault));
     CHECK(t.faults == fault);
+    CHECK(t.fault_actuator == 2);  // the telemetry names the actuator
     CHECK(t.command[1] == 0);                     // levelled ...
     CHECK(t.measured[1] == driving.measured[1]);  // ... but with power cut nothing moves
     h.send_msg(proto::Start{}, 5);
@@ -598,6 +603,7 @@ TEST_CASE("firmware: an actuator fault from the board goes through the one shutd
     t = h.expect_telemetry();
     CHECK(t.state == static_cast<uint8_t>(State::kIdle));
     CHECK(t.faults == 0);
+    CHECK(t.fault_actuator == mr::kNoActuator);
     CHECK(t.measured[1] == 0);  // power back: level
   }
 }
@@ -618,8 +624,12 @@ TEST_CASE("firmware: zero makes the masked actuators stand at 0 m, in idle only"
   CHECK(t.command[3] == -5000);  // not in the mask: untouched
   h.send_msg(proto::Zero{0}, 5);
   h.expect_nack(proto::Zero::kId, 5, ErrorCode::kOutOfRange, 0);
-  h.send_msg(proto::EmergencyStop{}, 6);
-  h.expect_ack(proto::EmergencyStop::kId, 6);
-  h.send_msg(proto::Zero{0b1111}, 7);
-  h.expect_nack(proto::Zero::kId, 7, ErrorCode::kBadState, proto::kNoField);
+  h.send_msg(proto::Zero{static_cast<uint16_t>(1u << mr::kActuatorCount)}, 6);  // an actuator this rig lacks
+  h.expect_nack(proto::Zero::kId, 6, ErrorCode::kOutOfRange, 0);
+  h.send_msg(proto::Jog{mr::kActuatorCount, 0.0f}, 7);
+  h.expect_nack(proto::Jog::kId, 7, ErrorCode::kOutOfRange, 0);
+  h.send_msg(proto::EmergencyStop{}, 8);
+  h.expect_ack(proto::EmergencyStop::kId, 8);
+  h.send_msg(proto::Zero{0b1111}, 9);
+  h.expect_nack(proto::Zero::kId, 9, ErrorCode::kBadState, proto::kNoField);
 }
