@@ -591,7 +591,7 @@ TEST_CASE("firmware: an actuator fault from the board goes through the one shutd
     proto::Telemetry t = h.expect_telemetry();
     CHECK(t.state == static_cast<uint8_t>(State::kFault));
     CHECK(t.faults == fault);
-    CHECK(t.fault_actuator == 2);  // the telemetry names the actuator
+    CHECK(t.fault_actuator == 2);                 // the telemetry names the actuator
     CHECK(t.command[1] == 0);                     // levelled ...
     CHECK(t.measured[1] == driving.measured[1]);  // ... but with power cut nothing moves
     h.send_msg(proto::Start{}, 5);
