@@ -1,4 +1,4 @@
-"""Starts the Uno's ELF in simavr (mantaray-simavr) with its UART on a pty, and reads its timing report on exit."""
+"""Starts an Arduino ELF in simavr (mantaray-simavr, or a rig's) with its UART on a pty; reads its timing report on exit."""
 
 from __future__ import annotations
 
@@ -29,6 +29,8 @@ def end_of_data(elf: Path) -> int:
 
 class SimulatedUno:
     """The Uno firmware running cycle-accurately in simavr; a context manager. `path` is its serial device path.
+    harness names the rig's simavr build (mantaray-simavr-array_2x2 plays the Mega 2560 and the array's hardware)
+    for another rig's ELF (build/avr-mega_array_2x2/firmware.elf).
 
     bench=True holds the bench pin low (external actuators, simulated clock: lock-step with the MuJoCo
     rig); bench=False is the rig, whose motors and multiplexed encoders the harness models. realtime=True
@@ -45,6 +47,7 @@ class SimulatedUno:
         realtime: bool = False,
         run_for_s: float | None = None,
         start_timeout_s: float = 10.0,
+        harness: str = "mantaray-simavr",
     ) -> None:
         self.elf = Path(elf)
         if not self.elf.exists():
@@ -54,7 +57,7 @@ class SimulatedUno:
         self.stats: dict | None = None
         command = (
             [
-                str(native_artifact("mantaray-simavr")),
+                str(native_artifact(harness)),
                 str(self.elf),
                 "--stats",
                 str(self._stats_path),

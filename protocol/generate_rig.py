@@ -1,8 +1,10 @@
-"""Write the rig's constants (firmware core, Uno board, AVR simulator harness) from protocol/rig.toml.
+"""Write each committed rig's constants (firmware core, board pins, AVR simulator harness) from its rig file.
 
 Called by protocol/generate.py, which writes every generated file and checks them in CI. protocol/rig.py reads and
-checks every committed rig file; here each is also checked against schema.toml's rig-derived defaults and bounds
-(RigDescriptionError says what disagrees).
+checks every committed rig file (protocol/rig.toml, protocol/rigs/*.toml); here each is also checked against
+schema.toml's rig-derived defaults and bounds (RigDescriptionError says what disagrees). A rig's headers go to
+firmware/rigs/NAME/ (NAME: "module" for the default rig, else the file's stem), which its builds put on the include
+path: rig_gen.h for the core, board_gen.h for the board layer (firmware/arduino), simavr_gen.h for the harness.
 """
 
 from __future__ import annotations
@@ -12,18 +14,20 @@ from pathlib import Path
 
 if __package__ in (None, ""):
     from codegen import TYPES, camel, f32_literal
-    from rig import MAX_ACTUATORS, RigDescription, RigDescriptionError, committed
+    from rig import MAX_ACTUATORS, ONE_OR_PER_ACTUATOR, RigDescription, RigDescriptionError, committed
 else:
     from .codegen import TYPES, camel, f32_literal
-    from .rig import MAX_ACTUATORS, RigDescription, RigDescriptionError, committed
+    from .rig import MAX_ACTUATORS, ONE_OR_PER_ACTUATOR, RigDescription, RigDescriptionError, committed
 
 __all__ = ["RigDescriptionError", "check_schema", "outputs"]
 
 ROOT = Path(__file__).resolve().parent.parent
-CORE_OUT = ROOT / "firmware" / "lib" / "core" / "rig_gen.h"
-BOARD_OUT = ROOT / "firmware" / "uno" / "board_gen.h"
-SIMAVR_OUT = ROOT / "firmware" / "simavr" / "rig_gen.h"
-HEADER = "Generated from protocol/rig.toml by protocol/generate.py; do not edit."
+RIGS_OUT = ROOT / "firmware" / "rigs"  # one folder per rig
+
+
+def _header(rig: RigDescription) -> str:
+    source = rig.path.resolve().relative_to(ROOT).as_posix()
+    return f"Generated from {source} by protocol/generate.py; do not edit."
 
 
 def _fields(schema: dict, message: str) -> dict:
@@ -85,13 +89,19 @@ def _cpp_constants(section: dict) -> list[str]:
             )
         else:
             out.append(f"constexpr {ctype} k{camel(key)} = {_c_value(key, entry, v)};  // {_comment(entry)}")
+        if key in ONE_OR_PER_ACTUATOR:  # one accessor, whether the rig gives one value or one per actuator
+            each = isinstance(v, list)
+            value = f"k{camel(key)}[actuator]" if each else f"k{camel(key)}"
+            out.append(f"constexpr {ctype} {key}(uint8_t{' actuator' if each else ''}) {{ return {value}; }}")
+            distinct = len(set(v)) if isinstance(v, list) else 1
+            out.append(f"constexpr uint8_t k{camel(key)}Count = {distinct};  // distinct values")
     return out
 
 
 def render_core(rig: RigDescription) -> str:
     return "\n".join(
         [
-            f"// The rig's constants every build of the firmware core shares. {HEADER}",
+            f"// The rig's constants every build of the firmware core shares ({rig.describe()}). {_header(rig)}",
             "#pragma once",
             "",
             "#include <stdint.h>  // uint8_t..uint32_t",
@@ -109,7 +119,7 @@ def render_core(rig: RigDescription) -> str:
 def render_board(rig: RigDescription) -> str:
     return "\n".join(
         [
-            f"// The {rig.board.name}'s pin map and bus addresses (wiring: firmware/README.md). {HEADER}",
+            f"// The {rig.board.name}'s pin map and bus addresses (wiring: firmware/README.md). {_header(rig)}",
             "#pragma once",
             "",
             "#include <stdint.h>  // uint8_t, int8_t, uint32_t",
@@ -138,14 +148,16 @@ def render_simavr(rig: RigDescription) -> str:
         t = board.timer_outputs[board.pwm[pin]]
         return f"{{0x{t.tccr:02X}, 1u << {t.com_bit}, 0x{t.ocr:02X}, {c_pin(pin)}}}"
 
+    count = rig.actuator_count
+    mux = v("mux_address") if isinstance(v("mux_address"), list) else [v("mux_address")] * count
     out = [
-        f"// The rig's hardware as the AVR simulator's harness plays it. {HEADER}",
+        f"// The rig's hardware as the AVR simulator's harness plays it. {_header(rig)}",
         "#pragma once",
         "",
         "#include <stdint.h>  // uint8_t",
         "",
-        f"#define ACTUATOR_COUNT {rig.actuator_count}",
-        f"#define MUX_ADDRESS 0x{v('mux_address'):02X}     // TCA9548A",
+        f'#define MCU_NAME "{board.mcu}"',
+        f"#define ACTUATOR_COUNT {count}",
         f"#define ENCODER_ADDRESS 0x{v('encoder_address'):02X} // AS5600",
         f"#define ANGLE_REGISTER 0x{v('encoder_angle_register'):02X}  // AS5600 ANGLE, 12 bits, high byte first",
         f"#define ENCODER_COUNTS {v('encoder_counts')}  // [counts/rev]",
@@ -161,6 +173,8 @@ def render_simavr(rig: RigDescription) -> str:
         f"  // pins {', '.join(map(str, v('pwm_pin')))}: {', '.join(board.pwm[p] for p in v('pwm_pin'))}",
         f"static const pin_t kDirPin[ACTUATOR_COUNT] = {{{', '.join(c_pin(p) for p in v('dir_pin'))}}};"
         f"  // pins {', '.join(map(str, v('dir_pin')))}: HIGH lowers the corner",
+        f"static const uint8_t kMuxAddress[ACTUATOR_COUNT] = {{{', '.join(f'0x{a:02X}' for a in mux)}}};  // TCA9548A",
+        f"static const uint8_t kMuxChannel[ACTUATOR_COUNT] = {{{', '.join(map(str, v('mux_channel')))}}};",
     ]
     for key in ("bench_pin", "probe_controller_pin", "probe_actuator_pin", "probe_loop_pin"):
         out.append(f"static const pin_t k{camel(key)} = {c_pin(v(key))};  // D{v(key)}")
@@ -168,8 +182,11 @@ def render_simavr(rig: RigDescription) -> str:
 
 
 def outputs(schema: dict) -> dict[Path, str]:
-    rigs = committed()
-    for rig in rigs:
+    out = {}
+    for rig in committed():
         check_schema(rig, schema)
-    default = rigs[0]
-    return {CORE_OUT: render_core(default), BOARD_OUT: render_board(default), SIMAVR_OUT: render_simavr(default)}
+        folder = RIGS_OUT / rig.name
+        out[folder / "rig_gen.h"] = render_core(rig)
+        out[folder / "board_gen.h"] = render_board(rig)
+        out[folder / "simavr_gen.h"] = render_simavr(rig)
+    return out

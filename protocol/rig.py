@@ -53,7 +53,9 @@ class RigDescription:
 
     @property
     def name(self) -> str:
-        return self.path.stem
+        """ "module" for the default rig (protocol/rig.toml), else its file's stem: its build's name
+        (firmware/rigs/NAME/, PlatformIO's environment)."""
+        return "module" if self.path.resolve() == RIG_TOML.resolve() else self.path.stem
 
     @property
     def modules_x(self) -> int:

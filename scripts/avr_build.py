@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Offline AVR build of the Uno firmware with Debian's toolchain, flags read from platformio.ini; reports flash and RAM.
+"""Offline AVR build of the firmware (Uno, Mega 2560) with Debian's toolchain, flags from platformio.ini; reports sizes.
 
 PlatformIO cannot fetch its own toolchain here, so this script does what `pio run -e uno` does with the Debian
 packages gcc-avr, binutils-avr, avr-libc and arduino-core-avr: the Arduino core and variant, each library in
@@ -71,7 +71,10 @@ class Board:
     ram: int  # [bytes] upload.maximum_ram_size
 
 
-BOARDS = {"uno": Board("atmega328p", "16000000L", "ARDUINO_AVR_UNO", "standard", 32256, 2048)}
+BOARDS = {
+    "uno": Board("atmega328p", "16000000L", "ARDUINO_AVR_UNO", "standard", 32256, 2048),
+    "megaatmega2560": Board("atmega2560", "16000000L", "ARDUINO_AVR_MEGA2560", "mega", 253952, 8192),
+}
 
 
 class BuildError(Exception):
@@ -434,7 +437,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--ini", type=Path, default=REPO / "platformio.ini", help="project file (default: %(default)s)")
     parser.add_argument("--env", default="uno", help="PlatformIO environment to build (default: %(default)s)")
     parser.add_argument(
-        "--out", type=Path, default=REPO / "build" / "avr", help="build directory (default: %(default)s)"
+        "--out", type=Path, help="build directory (default: build/avr for uno, build/avr-ENV for another)"
     )
     parser.add_argument("--jobs", "-j", type=int, default=2, help="parallel compilations (default: %(default)s)")
     parser.add_argument("--json", action="store_true", help="print the sizes as JSON instead of text")
@@ -446,7 +449,8 @@ def main(argv: list[str] | None = None) -> int:
         missing = missing_packages(compiling=not args.dry_run)
         if missing:
             raise BuildError(f"the AVR toolchain is incomplete: apt-get install {' '.join(missing)}")
-        plan = plan_build(project, args.out.resolve())
+        out = args.out or REPO / "build" / ("avr" if args.env == "uno" else f"avr-{args.env}")
+        plan = plan_build(project, out.resolve())
         if args.dry_run:
             print("\n".join(shlex.join(command) for command in plan.commands()))
             return 0

@@ -113,6 +113,18 @@ def test_elf_is_built_and_fits_the_budget(build):
 
 
 @needs_toolchain
+def test_the_arrays_mega_image_builds_within_its_budgets(tmp_path):
+    """The 2 x 2 array's environment (platformio.ini mega_array_2x2): the same sources for the ATmega2560."""
+    result = run_script("--env", "mega_array_2x2", "--out", str(tmp_path), "--json")
+    assert result.returncode == 0, result.stderr
+    sizes = json.loads(result.stdout)
+    assert sizes["board"] == "megaatmega2560"
+    assert 0 < sizes["flash"]["used"] <= sizes["flash"]["budget"] and 0 < sizes["ram"]["used"] <= sizes["ram"]["budget"]
+    header = subprocess.run(["avr-readelf", "-h", str(tmp_path / "firmware.elf")], capture_output=True, text=True)
+    assert "avr:6" in header.stdout  # the ATmega2560's architecture (the Uno's ATmega328P is avr:5)
+
+
+@needs_toolchain
 def test_the_image_leaves_room_below_its_budgets(build):
     """Room for what comes next: 1.5 KB of flash and 100 B of static RAM below the budgets (once 210 B and 10 B)."""
     _, sizes = build
@@ -160,7 +172,11 @@ def test_build_unflags_are_removed(tmp_path):
 def test_repository_ini_flags_are_the_ones_used():
     parser = configparser.ConfigParser(inline_comment_prefixes=("#", ";"), interpolation=None)
     parser.read(INI)
-    build_flags = avr_build.ini_values(parser["env:uno"]["build_flags"])
+    build_flags = [  # an include directory as the compiler gets it: resolved against the project
+        f"-I{(INI.parent / flag[2:]).resolve()}" if flag.startswith("-I") else flag
+        for flag in avr_build.ini_values(parser["env:uno"]["build_flags"])
+    ]
+    assert any(flag.endswith("firmware/rigs/module") for flag in build_flags)  # the rig's generated headers
     result = run_script("--dry-run")
     assert result.returncode == 0, result.stderr
     cxx = [c for c in compile_commands(result.stdout) if c.startswith("avr-g++")]

@@ -26,7 +26,7 @@ ARRAY = rig.RIGS / "array_2x2.toml"
 
 def test_the_committed_descriptions_pass_their_checks_and_agree_with_the_schema():
     rigs = rig.committed()
-    assert [r.name for r in rigs] == ["rig", "array_2x2"]
+    assert [r.name for r in rigs] == ["module", "array_2x2"]
     for description in rigs:
         G.check_schema(description, load_schema())
     one, array = rigs

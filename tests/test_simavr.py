@@ -18,6 +18,7 @@ from mantaray.host.simavr import DEFAULT_ELF, SimulatedUno
 from mantaray.host.transport import SerialTransport
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
+from mantaray.protocol import rig
 
 RX_BUFFER_CYCLES = 64 * 10 * 16_000_000 // 115_200  # [cycles] 64 bytes of 10 bits at 115200 baud: 5.6 ms
 LOOP_PERIOD_CYCLES = 4000 * 16  # [cycles] the 250 Hz actuator loop period
@@ -236,3 +237,36 @@ def test_positions_as_fast_as_the_link_allows_lose_no_byte_while_the_loops_run(e
     assert t.crc_errors == 0 and t.frame_errors == 0  # nothing lost or overrun on the way in
     assert m.State(t.state) in (m.State.RUNNING, m.State.REACHED) and t.faults == 0
     assert rate_hz > 60  # several times the camera's 12 Hz, in AVR time
+
+
+@pytest.fixture(scope="module")
+def mega_elf():
+    proc = subprocess.run(
+        [sys.executable, str(REPO / "scripts" / "avr_build.py"), "--env", "mega_array_2x2"],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert proc.returncode == 0, proc.stderr
+    return REPO / "build" / "avr-mega_array_2x2" / "firmware.elf"
+
+
+def test_the_mega_build_drives_the_arrays_nine_actuators_through_two_multiplexers(mega_elf):
+    """The 2 x 2 array's image in the ATmega2560 harness: it reports the array's shape, reads all nine encoders (eight
+    on one multiplexer, the ninth on another) without a fault, and drives the centre actuator, a corner of every
+    module, which telemetry shows as module 0's corner 3."""
+    array = rig.load(rig.RIGS / "array_2x2.toml")
+    with SimulatedUno(mega_elf, bench=False, realtime=True, harness="mantaray-simavr-array_2x2") as mega:
+        link = Link(SerialTransport(mega.path), ack_timeout_s=1.0, description=array)
+        reply = link.identify()
+        assert (reply.modules_x, reply.modules_y, reply.actuator_count) == (2, 2, 9)
+        assert link.rig_differences == []
+        link.command(m.Configure(telemetry_period=0))
+        link.command(m.Jog(actuator=4, position=0.03))
+        t = Probe(link).until(lambda t: abs(t.measured[3] - 0.03) < 1e-3)
+        assert t.faults == 0 and t.fault_actuator == 255 and t.module == 0
+        assert t.measured[:3] == pytest.approx((0.0, 0.0, 0.0), abs=1e-3)  # actuators 0, 1, 3 hold
+        link.close()
+    stats = mega.stats
+    assert stats["actuator_loops"]["count"] > 100
+    assert stats["actuator_loops"]["max_cycles"] < LOOP_PERIOD_CYCLES  # nine loops fit their period

@@ -44,12 +44,12 @@ size_t mr_vmcu_read(void* handle, uint8_t* out, size_t cap) {
 
 // Paper transform, for checking against an independent implementation. Commands in [m], + lowers.
 void mr_manhattan_commands(float tilt_zx_deg, float tilt_zy_deg, float module_x, float module_y, float* out4) {
-  float(&command)[mr::kActuatorCount] = *reinterpret_cast<float(*)[mr::kActuatorCount]>(out4);
+  float(&command)[mr::kCorners] = *reinterpret_cast<float(*)[mr::kCorners]>(out4);
   mr::plane_commands(mr::manhattan_normal(tilt_zx_deg, tilt_zy_deg), module_x, module_y, command);
 }
 
 void mr_euclidean_commands(float theta_deg, float error_x, float error_y, float module_x, float module_y, float* out4) {
-  float(&command)[mr::kActuatorCount] = *reinterpret_cast<float(*)[mr::kActuatorCount]>(out4);
+  float(&command)[mr::kCorners] = *reinterpret_cast<float(*)[mr::kCorners]>(out4);
   mr::plane_commands(mr::euclidean_normal(theta_deg, error_x, error_y), module_x, module_y, command);
 }
 

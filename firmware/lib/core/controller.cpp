@@ -4,6 +4,8 @@
 
 #include <math.h>  // fabsf, hypotf, isfinite
 
+#include "route.h"  // module_centre_x, module_centre_y
+
 namespace mr {
 
 namespace {
@@ -62,7 +64,7 @@ void TiltController::reset(uint32_t noise_seed) {
 }
 
 float TiltController::step(const ControllerConfig& config, float target_x, float target_y, float x, float y, float dt,
-                           ControllerOutput& out) {
+                           ControllerOutput& out, uint8_t module) {
   const bool rate_known = has_prev_ && dt > 0.0f;
   if (!rate_known) dt = 0.0f;
   const float ex = target_x - x;
@@ -100,10 +102,11 @@ float TiltController::step(const ControllerConfig& config, float target_x, float
       break;
     }
     case proto::Controller::kScheduled:
+      // The schedule's edges are the driven module's: the position about its centre.
       out.tilt_zx = scheduled_axis(pid_[kX], config.pid[kX], config.schedule, config.tilt_limit, 0.5f * config.module_x,
-                                   x, ex, rate_x, vx_, dt);
+                                   x - module_centre_x(module, config.module_x), ex, rate_x, vx_, dt);
       out.tilt_zy = scheduled_axis(pid_[kY], config.pid[kY], config.schedule, config.tilt_limit, 0.5f * config.module_y,
-                                   y, ey, rate_y, vy_, dt);
+                                   y - module_centre_y(module, config.module_y), ey, rate_y, vy_, dt);
       normal = manhattan_normal(out.tilt_zx, out.tilt_zy);
       break;
     case proto::Controller::kCascade:
@@ -119,9 +122,15 @@ float TiltController::step(const ControllerConfig& config, float target_x, float
       normal = manhattan_normal(out.tilt_zx, out.tilt_zy);
       break;
   }
-  plane_commands(normal, config.module_x, config.module_y, out.command);
-  for (float& a : out.command) {
-    a = clamp_symmetric(a + config.noise_amplitude * noise_.uniform_pm1(), kActuatorRangeM);
+  float corner[kCorners];
+  plane_commands(normal, config.module_x, config.module_y, corner);
+  if (kModuleCount > 1) {
+    for (float& a : out.command) a = 0.0f;  // the other modules' actuators hold level
+  }
+  out.module = module;
+  for (uint8_t c = 0; c < kCorners; ++c) {
+    out.command[corner_actuator(module, c)] =
+        clamp_symmetric(corner[c] + config.noise_amplitude * noise_.uniform_pm1(), kActuatorRangeM);
   }
   prev_x_ = x;
   prev_y_ = y;

@@ -48,7 +48,9 @@ struct ControllerConfig {
 struct ControllerOutput {
   float tilt_zx;                  // [deg] Euclidean: theta resolved along x
   float tilt_zy;                  // [deg] Euclidean: theta resolved along y
-  float command[kActuatorCount];  // [m] a_i, + lowers the corner, within +-kActuatorRangeM
+  uint8_t module;                 // the module whose corners drive the object (0 on one module)
+  float command[kActuatorCount];  // [m] a_i, + lowers the corner, within +-kActuatorRangeM; on an array the
+                                  // actuators that are not the module's corners hold level (0)
 };
 
 class TiltController {
@@ -56,11 +58,12 @@ class TiltController {
   // Forgets the PIDs' state, the previous position and the velocity; reseeds the noise.
   void reset(uint32_t noise_seed);
 
-  // One control step at a measured object position (x, y) [m] for the target (target_x, target_y) [m].
-  // dt [s] is the time since the previous step's measurement; dt <= 0 marks a first step
-  // (proportional only). Returns the distance to the target [m].
+  // One control step at a measured object position (x, y) [m] for the target (target_x, target_y) [m], driven by
+  // module k's plane (route.h; 0 on one module). dt [s] is the time since the previous step's measurement; dt <= 0
+  // marks a first step (proportional only). Returns the distance to the target [m]. The PIDs carry on across a
+  // change of module (a hand-over): the error and the velocity are the same in every module's frame.
   float step(const ControllerConfig& config, float target_x, float target_y, float x, float y, float dt,
-             ControllerOutput& out);
+             ControllerOutput& out, uint8_t module = 0);
 
  private:
   Pid pid_[kPidCount];

@@ -202,8 +202,8 @@ void Firmware::send_telemetry(uint32_t now_us) {
   t.position_age = supervisor_.position_age_ms(now_us);
   t.tilt_zx = to_wire_i16(out.tilt_zx, T::kTiltZxScale);
   t.tilt_zy = to_wire_i16(out.tilt_zy, T::kTiltZyScale);
-  t.module = 0;  // the one module: an array's controller will name the module it drives
-  for (uint8_t c = 0; c < 4; ++c) {
+  t.module = out.module;
+  for (uint8_t c = 0; c < kCorners; ++c) {
     const uint8_t i = corner_actuator(t.module, c);
     t.command[c] = to_wire_i16(out.command[i], T::kCommandScale);
     t.measured[c] = to_wire_i16(measured[i], T::kMeasuredScale);

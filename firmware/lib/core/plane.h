@@ -1,8 +1,9 @@
-// Geometric transformation (paper, Methods): tilt angles -> plane normal -> the four actuator commands.
+// Geometric transformation (paper, Methods): tilt angles -> plane normal -> a module's four corner commands.
 //
 // Frame and sign conventions, stated once for the whole stack:
 //   - x, y [m] in the fabric plane, origin at the module's centre; z up.
-//   - Actuator i sits at (x_i, y_i) = (+-m/2, +-n/2), numbered 0 (-x,-y), 1 (+x,-y), 2 (-x,+y), 3 (+x,+y).
+//   - Corner i sits at (x_i, y_i) = (+-m/2, +-n/2), numbered 0 (-x,-y), 1 (+x,-y), 2 (-x,+y), 3 (+x,+y): on one
+//     module corner i is actuator i; on an array, corner_actuator (rig_config.h) says which actuator it is.
 //   - A command a_i [m] is how far corner i is LOWERED below the reference height z0:
 //     a_i = z0 - z_i, so a positive a_i moves the corner down.
 //   - A positive tilt theta_zx [deg] lowers the +x corners (1, 3) and raises the -x corners (0, 2);
@@ -12,9 +13,9 @@
 
 #include <stdint.h>  // uint8_t
 
-#include "rig_config.h"  // kActuatorCount
-
 namespace mr {
+
+constexpr uint8_t kCorners = 4;  // a module's corners
 
 struct Normal {
   float x, y, z;  // plane normal n = (n_x, n_y, n_z), as the paper defines it (not unit length)
@@ -28,13 +29,13 @@ Normal euclidean_normal(float theta_deg, float error_x, float error_y);
 
 // a_i = z0 - z_i with z_i = (z0 n_z - n_x x_i - n_y y_i) / n_z, which is (n_x x_i + n_y y_i) / n_z:
 // z0 cancels, so it is not an input. module_x, module_y [m] are the module's m and n.
-void plane_commands(const Normal& n, float module_x, float module_y, float (&command)[kActuatorCount]);
+void plane_commands(const Normal& n, float module_x, float module_y, float (&command)[kCorners]);
 
 // Largest tilt [deg] on both axes at once that keeps every corner within +-range [m]:
 // atan(range / ((m + n) / 2)); 26.57 deg for the paper's 0.5 x 0.5 m module and +-0.25 m.
 float max_tilt_deg(float module_x, float module_y, float range);
 
-// Actuator base position [m] of actuator i.
+// Base position [m] of corner i, about the module's centre.
 float actuator_x(uint8_t i, float module_x);
 float actuator_y(uint8_t i, float module_y);
 

@@ -1,7 +1,10 @@
 // Supervisor state machine and validation.
 #include "supervisor.h"
 
+#include <math.h>  // fabsf, hypotf
+
 #include "plane.h"  // max_tilt_deg
+#include "route.h"  // route, Leg
 #include "wire.h"   // is_finite
 
 namespace mr {
@@ -16,9 +19,12 @@ constexpr float kTiltLimitSlackDeg = 1e-4f;    // [deg] float rounding of the de
 
 bool running(State s) { return s == State::kRunning || s == State::kReached; }
 
-bool inside_module(float x, float y, const proto::Configure& c) {
-  return x >= -0.5f * c.module_x && x <= 0.5f * c.module_x && y >= -0.5f * c.module_y && y <= 0.5f * c.module_y;
-}
+// [m] Half the surface along x and y: one module, or an array of kModulesX x kModulesY of them.
+float half_x(const proto::Configure& c) { return 0.5f * kModulesX * c.module_x; }
+float half_y(const proto::Configure& c) { return 0.5f * kModulesY * c.module_y; }
+
+// A finite coordinate [m] within +-half (a NaN is not).
+bool within(float v, float half) { return fabsf(v) <= half; }
 
 }  // namespace
 
@@ -41,6 +47,7 @@ Supervisor::Supervisor() {
 void Supervisor::level() {
   output_.tilt_zx = 0.0f;
   output_.tilt_zy = 0.0f;
+  output_.module = 0;
   for (float& a : output_.command) a = 0.0f;
 }
 
@@ -75,7 +82,7 @@ ErrorCode Supervisor::configure(const proto::Configure& msg, uint8_t& field) {
   }
   config_ = msg;
   take_configure();
-  if (has_target_ && !inside_module(target_x_, target_y_, config_)) has_target_ = false;
+  if (has_target_ && !(within(target_x_, half_x(config_)) && within(target_y_, half_y(config_)))) has_target_ = false;
   return ErrorCode::kOk;
 }
 
@@ -108,11 +115,11 @@ ErrorCode Supervisor::set_target(const proto::SetTarget& msg, uint8_t& field) {
   field = proto::kNoField;
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
-  if (!inside_module(msg.x, 0.0f, config_)) {
+  if (!within(msg.x, half_x(config_))) {
     field = proto::SetTarget::kFieldX;
     return ErrorCode::kOutOfRange;
   }
-  if (!inside_module(0.0f, msg.y, config_)) {
+  if (!within(msg.y, half_y(config_))) {
     field = proto::SetTarget::kFieldY;
     return ErrorCode::kOutOfRange;
   }
@@ -188,13 +195,13 @@ ErrorCode Supervisor::position(const proto::ObjectPosition& msg, uint32_t now_us
   if (visible) {
     const ErrorCode local = proto::validate(msg, field);
     if (local != ErrorCode::kOk) return local;
-    // On the fabric, or beside it by at most half the module (an object falling off): anything farther is no
+    // On the fabric, or beside it by at most half a module (an object falling off): anything farther is no
     // measurement of it, and near 1e38 m would overflow the Euclidean distance.
-    if (msg.x > config_.module_x || msg.x < -config_.module_x) {
+    if (!within(msg.x, half_x(config_) + 0.5f * config_.module_x)) {
       field = proto::ObjectPosition::kFieldX;
       return ErrorCode::kOutOfRange;
     }
-    if (msg.y > config_.module_y || msg.y < -config_.module_y) {
+    if (!within(msg.y, half_y(config_) + 0.5f * config_.module_y)) {
       field = proto::ObjectPosition::kFieldY;
       return ErrorCode::kOutOfRange;
     }
@@ -232,7 +239,9 @@ ErrorCode Supervisor::position(const proto::ObjectPosition& msg, uint32_t now_us
   }
   has_step_ = true;
   last_step_capture_us_ = msg.capture_time;
-  const float distance = controller_.step(control_, target_x_, target_y_, msg.x, msg.y, dt, output_);
+  const Leg leg = route(msg.x, msg.y, target_x_, target_y_, config_.module_x, config_.module_y, config_.tolerance);
+  float distance = controller_.step(control_, leg.target_x, leg.target_y, msg.x, msg.y, dt, output_, leg.module);
+  if (kModuleCount > 1) distance = hypotf(target_x_ - msg.x, target_y_ - msg.y);  // to the target, not a waypoint
   state_ = distance < config_.tolerance ? State::kReached : State::kRunning;
   return ErrorCode::kOk;
 }

@@ -1,4 +1,4 @@
-// What the Uno's main loop calls on its board layer (hal_uno.cpp): its HAL, start-up and the actuator loops.
+// What the Uno's main loop calls on its board layer (hal_arduino.cpp): its HAL, start-up and the actuator loops.
 #pragma once
 
 #include "hal.h"  // Hal

@@ -1,5 +1,5 @@
 // Uno actuator I/O: analogWrite/digitalWrite for the H-bridges, Wire for the multiplexed encoders.
-#include "uno_io.h"
+#include "actuator_io.h"
 
 #include <Arduino.h>  // pinMode, digitalWrite, analogWrite, analogRead
 #include <Wire.h>     // TwoWire: the TCA9548A and the AS5600s
@@ -14,13 +14,23 @@ namespace {
 constexpr uint16_t kAdcFullScale = 1023;  // 10-bit ADC
 
 void all_pwm_off() {
-  for (uint8_t i = 0; i < 4; ++i) analogWrite(kPwmPin[i], 0);
+  for (uint8_t i = 0; i < kActuatorCount; ++i) analogWrite(kPwmPin[i], 0);
 }
 
-bool select_mux_channel(uint8_t channel) {
-  Wire.beginTransmission(kMuxAddress);
-  Wire.write(static_cast<uint8_t>(1u << channel));
+bool write_mux(uint8_t address, uint8_t channels) {
+  Wire.beginTransmission(address);
+  Wire.write(channels);
   return Wire.endTransmission() == 0;
+}
+
+// Connects actuator i's encoder to the bus alone: its multiplexer's channel, and (with more than one multiplexer)
+// none of the other's, as every AS5600 answers at the one address.
+bool select_encoder(uint8_t actuator) {
+  static uint8_t connected = 0;  // the multiplexer left with a channel on; 0: none known
+  const uint8_t address = mux_address(actuator);
+  if (kMuxAddressCount > 1 && connected != 0 && connected != address && !write_mux(connected, 0)) return false;
+  connected = address;
+  return write_mux(address, static_cast<uint8_t>(1u << kMuxChannel[actuator]));
 }
 
 bool read_as5600(uint16_t& raw) {
@@ -36,8 +46,8 @@ bool read_as5600(uint16_t& raw) {
 
 }  // namespace
 
-void UnoActuatorIo::begin() {
-  for (uint8_t i = 0; i < 4; ++i) {
+void ArduinoActuatorIo::begin() {
+  for (uint8_t i = 0; i < kActuatorCount; ++i) {
     pinMode(kPwmPin[i], OUTPUT);
     pinMode(kDirPin[i], OUTPUT);
   }
@@ -49,26 +59,26 @@ void UnoActuatorIo::begin() {
   }
 }
 
-bool UnoActuatorIo::encoder_read(uint8_t actuator, uint16_t& raw) {
+bool ArduinoActuatorIo::encoder_read(uint8_t actuator, uint16_t& raw) {
   uint16_t angle = 0;
   if (kEncoderSource == EncoderSource::kAnalog) {
     angle = static_cast<uint16_t>(static_cast<uint32_t>(analogRead(kAnalogPin[actuator])) * (kEncoderCounts - 1) /
                                   kAdcFullScale);
-  } else if (!select_mux_channel(kMuxChannel[actuator]) || !read_as5600(angle)) {
+  } else if (!select_encoder(actuator) || !read_as5600(angle)) {
     return false;
   }
   raw = kEncoderSign[actuator] > 0 ? angle : static_cast<uint16_t>((kEncoderCounts - angle) % kEncoderCounts);
   return true;
 }
 
-void UnoActuatorIo::motor_write(uint8_t actuator, float duty) {
+void ArduinoActuatorIo::motor_write(uint8_t actuator, float duty) {
   duty *= kMotorSign[actuator];
   digitalWrite(kDirPin[actuator], duty >= 0.0f ? HIGH : LOW);
   const float magnitude = duty >= 0.0f ? duty : -duty;
   analogWrite(kPwmPin[actuator], static_cast<int>(magnitude * kPwmMax + 0.5f));
 }
 
-void UnoActuatorIo::motors_off() { all_pwm_off(); }
+void ArduinoActuatorIo::motors_off() { all_pwm_off(); }
 
 void on_watchdog_timeout(ResetMark& survives) {
   all_pwm_off();

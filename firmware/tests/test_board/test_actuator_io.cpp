@@ -1,4 +1,4 @@
-// The Uno's actuator stack on the host: the board I/O (uno_io.cpp) and the core's loops against modelled motors.
+// The Uno's actuator stack on the host: the board I/O (actuator_io.cpp) and the core's loops against modelled motors.
 #include <doctest/doctest.h>
 
 #include <math.h>  // fabs
@@ -8,7 +8,7 @@
 #include "actuators.h"
 #include "board_config.h"
 #include "protocol_gen.h"
-#include "uno_io.h"
+#include "actuator_io.h"
 
 namespace {
 
@@ -70,7 +70,7 @@ const float kReadingTolM =
 
 struct Stack {
   Rig rig;
-  mr::board::UnoActuatorIo io;
+  mr::board::ArduinoActuatorIo io;
   ActuatorBank bank{io, kActuator, mr::kActuatorPeriodUs};
 
   explicit Stack(uint16_t offset = 1000) : rig(offset) {

@@ -1,4 +1,4 @@
-// The Uno firmware's ELF in simavr, cycle-accurate, its UART bridged to a pty; probe timing and stack use on exit.
+// The Arduino firmware's ELF (Uno or Mega 2560, as its rig says) in simavr, cycle-accurate, its UART bridged to a pty; probe timing and stack use on exit.
 //
 // Usage: mantaray-simavr FIRMWARE.elf [--bench] [--realtime] [--paint-from ADDR] [--stats FILE] [--run-for S]
 // Prints "pty PATH" on stdout once the serial port exists; the host talks to the firmware there. SIGUSR1 pulls the
@@ -35,10 +35,9 @@
 #include "sim_elf.h"
 #include "uart_pty.h"
 
-#include "rig_gen.h"  // MUX_ADDRESS, kPwmPin, kDirPin, kBenchPin, ... (protocol/rig.toml)
+#include "simavr_gen.h"  // MCU_NAME, kPwmPin, kDirPin, kMuxAddress, kBenchPin, ... (the rig file; firmware/rigs/NAME/)
 
 #define PAINT 0xC5          // stack paint byte
-#define RAMEND_328P 0x08FF  // last RAM address of the ATmega328P
 
 typedef struct {
   const char* name;
@@ -49,33 +48,43 @@ typedef struct {
 } probe_t;
 
 // ---------------------------------------------------------------- the rig's hardware, modelled
-// Its addresses, pins and motor speed are the board's: rig_gen.h is written from protocol/rig.toml.
+// Its addresses, pins and motor speed are the board's: simavr_gen.h is written from the rig file.
 #define MOTOR_STEP_US 500  // [us] motor model update period
 
+#define MUX_BASE 0x70  // TCA9548A: 0x70..0x77 by its A0..A2 pins
+
 typedef struct {
-  avr_irq_t* irq;       // [0] from the master (TWI_IRQ_OUTPUT), [1] to it (TWI_IRQ_INPUT)
-  int selected;         // 0 none, 1 the multiplexer, 2 an encoder
-  uint8_t mux_mask;     // channels the multiplexer connects
-  uint8_t pointer[4];   // each AS5600's register pointer
-  int read_index;       // byte of the current read
-  double angle_rev[4];  // shaft angles [rev]
+  avr_irq_t* irq;                     // [0] from the master (TWI_IRQ_OUTPUT), [1] to it (TWI_IRQ_INPUT)
+  int selected;                       // 0 none, 1 a multiplexer, 2 an encoder
+  int mux;                            // the multiplexer selected (its address - MUX_BASE)
+  uint8_t mux_mask[8];                // channels each multiplexer connects
+  uint8_t pointer[ACTUATOR_COUNT];    // each AS5600's register pointer
+  int read_index;                     // byte of the current read
+  double angle_rev[ACTUATOR_COUNT];   // shaft angles [rev]
 } rig_t;
 
 static rig_t g_rig;
 
-static int encoder_channel(void) {  // the one channel 0..3 connected, or -1
-  int channel = -1;
-  for (int c = 0; c < 8; ++c) {
-    if (g_rig.mux_mask & (1u << c)) {
-      if (channel >= 0 || c > 3) return -1;
-      channel = c;
-    }
+static int is_mux(uint8_t device) {  // one of the rig's multiplexers
+  for (int i = 0; i < ACTUATOR_COUNT; ++i) {
+    if (kMuxAddress[i] == device) return 1;
   }
-  return channel;
+  return 0;
 }
 
-static uint16_t encoder_angle(int channel) {
-  double turns = g_rig.angle_rev[channel] - floor(g_rig.angle_rev[channel]);
+static int encoder_connected(void) {  // the one actuator whose encoder the multiplexers connect, or -1
+  int actuator = -1;
+  for (int i = 0; i < ACTUATOR_COUNT; ++i) {
+    if (g_rig.mux_mask[kMuxAddress[i] - MUX_BASE] & (1u << kMuxChannel[i])) {
+      if (actuator >= 0) return -1;  // two AS5600 on the bus at once: both answer, garbage
+      actuator = i;
+    }
+  }
+  return actuator;
+}
+
+static uint16_t encoder_angle(int actuator) {
+  double turns = g_rig.angle_rev[actuator] - floor(g_rig.angle_rev[actuator]);
   return (uint16_t)(turns * ENCODER_COUNTS) & (ENCODER_COUNTS - 1);
 }
 
@@ -94,9 +103,10 @@ static void on_twi(struct avr_irq_t* irq, uint32_t value, void* param) {
     const uint8_t device = v.u.twi.addr >> 1;
     g_rig.selected = 0;
     g_rig.read_index = 0;
-    if (device == MUX_ADDRESS) {
+    if (is_mux(device)) {
       g_rig.selected = 1;
-    } else if (device == ENCODER_ADDRESS && encoder_channel() >= 0) {
+      g_rig.mux = device - MUX_BASE;
+    } else if (device == ENCODER_ADDRESS && encoder_connected() >= 0) {
       g_rig.selected = 2;
     }
     if (g_rig.selected) answer(TWI_COND_ACK, v.u.twi.addr, 1);
@@ -105,15 +115,15 @@ static void on_twi(struct avr_irq_t* irq, uint32_t value, void* param) {
   if (!g_rig.selected) return;
   if (v.u.twi.msg & TWI_COND_WRITE) {
     if (g_rig.selected == 1) {
-      g_rig.mux_mask = v.u.twi.data;
+      g_rig.mux_mask[g_rig.mux] = v.u.twi.data;
     } else {
-      g_rig.pointer[encoder_channel()] = v.u.twi.data;
+      g_rig.pointer[encoder_connected()] = v.u.twi.data;
     }
     answer(TWI_COND_ACK, v.u.twi.addr, 1);
   }
   if ((v.u.twi.msg & TWI_COND_READ) && g_rig.selected == 2) {
-    const int channel = encoder_channel();
-    const uint16_t angle = g_rig.pointer[channel] == ANGLE_REGISTER ? encoder_angle(channel) : 0;
+    const int actuator = encoder_connected();
+    const uint16_t angle = g_rig.pointer[actuator] == ANGLE_REGISTER ? encoder_angle(actuator) : 0;
     const uint8_t data = g_rig.read_index++ == 0 ? (uint8_t)(angle >> 8) : (uint8_t)(angle & 0xFF);
     answer(TWI_COND_READ, v.u.twi.addr, data);
   }
@@ -134,7 +144,7 @@ static avr_cycle_count_t step_motors(avr_t* avr, avr_cycle_count_t when, void* p
   return when + avr_usec_to_cycles(avr, MOTOR_STEP_US);
 }
 
-static void (*g_core_reset)(avr_t* avr);  // the ATmega328P's own reset hook
+static void (*g_core_reset)(avr_t* avr);  // the MCU's own reset hook
 
 // Every reset (the reset pin's, the watchdog's) clears simavr's cycle timers and PIN registers, though the motors
 // go on turning and the pull-up goes on holding the bench pin high: the motors' timer is set again, the pin put back.
@@ -147,7 +157,7 @@ static void rig_reset(avr_t* avr) {
 static void rig_attach(avr_t* avr) {
   static const char* names[2] = {"32<rig.twi_in", "8>rig.twi_out"};
   memset(&g_rig, 0, sizeof g_rig);
-  for (int i = 0; i < 4; ++i) g_rig.angle_rev[i] = 0.1 + 0.2 * i;  // arbitrary magnet positions
+  for (int i = 0; i < ACTUATOR_COUNT; ++i) g_rig.angle_rev[i] = 0.1 + 0.2 * i;  // arbitrary magnet positions
   g_rig.irq = avr_alloc_irq(&avr->irq_pool, 0, 2, names);
   avr_irq_register_notify(g_rig.irq + 0, on_twi, NULL);
   avr_connect_irq(avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_OUTPUT), g_rig.irq + 0);
@@ -252,16 +262,16 @@ int main(int argc, char** argv) {
     fprintf(stderr, "mantaray-simavr: cannot read %s\n", elf);
     return 1;
   }
-  g_avr = avr_make_mcu_by_name("atmega328p");
+  g_avr = avr_make_mcu_by_name(MCU_NAME);
   if (!g_avr) {
-    fprintf(stderr, "mantaray-simavr: simavr has no atmega328p\n");
+    fprintf(stderr, "mantaray-simavr: simavr has no %s\n", MCU_NAME);
     return 1;
   }
   avr_init(g_avr);
-  g_avr->frequency = 16000000;  // [Hz] the Uno's crystal
+  g_avr->frequency = 16000000;  // [Hz] the Uno's and the Mega 2560's crystal
   avr_load_firmware(g_avr, &firmware);
   if (paint_from >= 0) {
-    for (long a = paint_from; a <= RAMEND_328P; ++a) g_avr->data[a] = PAINT;
+    for (long a = paint_from; a <= g_avr->ramend; ++a) g_avr->data[a] = PAINT;
   }
 
   // The bench pin, held by a jumper (low) or left to the pull-up (high): an external level that the
@@ -315,7 +325,7 @@ int main(int argc, char** argv) {
     }
     long untouched = 0;
     if (paint_from >= 0) {
-      for (long a = paint_from; a <= RAMEND_328P && g_avr->data[a] == PAINT; ++a) untouched++;
+      for (long a = paint_from; a <= g_avr->ramend && g_avr->data[a] == PAINT; ++a) untouched++;
     }
     fprintf(f, "{\n  \"cycles\": %llu,\n  \"frequency_hz\": %u,\n  \"state\": %d,\n", (unsigned long long)g_avr->cycle,
             g_avr->frequency, state);

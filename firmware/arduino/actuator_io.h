@@ -9,7 +9,7 @@
 namespace mr {
 namespace board {
 
-class UnoActuatorIo final : public ActuatorIo {
+class ArduinoActuatorIo final : public ActuatorIo {
  public:
   // Pins to outputs at 0, the I2C bus at kI2cClockHz with its timeout.
   void begin();

@@ -6,14 +6,14 @@
 #include "board_config.h"     // kActuator, kBenchPin (board_gen.h), kActuatorPeriodUs (rig_gen.h)
 #include "hal.h"              // the interface implemented here
 #include "ideal_actuators.h"  // IdealActuators, SimulatedClock: bench mode
-#include "uno_io.h"           // UnoActuatorIo
+#include "actuator_io.h"           // ArduinoActuatorIo
 
 namespace mr {
 namespace board {
 
 namespace {
 
-board::UnoActuatorIo g_io;
+board::ArduinoActuatorIo g_io;
 board::Probe g_probe_actuators;  // high while the four loops run
 ActuatorBank g_bank(g_io, board::kActuator, kActuatorPeriodUs);
 bool g_bench = false;        // bench mode: external actuators (setpoints reported back), simulated clock
@@ -21,7 +21,7 @@ IdealActuators g_external;   // bench mode's actuators
 SimulatedClock g_sim_clock;  // bench mode's clock
 
 // The one HAL of this board: micros() or the bench mode's simulated clock, Serial, the actuator bank.
-class UnoHal final : public Hal {
+class ArduinoHal final : public Hal {
  public:
   // micros() has a 4 us resolution at 16 MHz and wraps like the HAL's clock (2^32 us).
   uint32_t now_us() const override { return g_bench ? g_sim_clock.now_us() : micros(); }
@@ -66,7 +66,7 @@ class UnoHal final : public Hal {
   }
 };
 
-UnoHal g_hal;
+ArduinoHal g_hal;
 
 }  // namespace
 
