@@ -6,7 +6,7 @@
 #include "board_config.h"     // kActuator, kBenchPin (board_gen.h), kActuatorPeriodUs (rig_gen.h)
 #include "hal.h"              // the interface implemented here
 #include "ideal_actuators.h"  // IdealActuators, SimulatedClock: bench mode
-#include "actuator_io.h"           // ArduinoActuatorIo
+#include "actuator_io.h"      // ArduinoActuatorIo
 
 namespace mr {
 namespace board {

@@ -16,7 +16,7 @@
 #include "board_config.h"  // probe pins
 #include "firmware.h"      // mr::Firmware
 #include "protocol_gen.h"  // mr::proto::faults
-#include "actuator_io.h"        // board::on_watchdog_timeout, board::keep_estop, board::Probe
+#include "actuator_io.h"   // board::on_watchdog_timeout, board::keep_estop, board::Probe
 
 namespace {
 

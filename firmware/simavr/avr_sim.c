@@ -1,4 +1,5 @@
-// The Arduino firmware's ELF (Uno or Mega 2560, as its rig says) in simavr, cycle-accurate, its UART bridged to a pty; probe timing and stack use on exit.
+// The Arduino firmware's ELF (Uno or Mega 2560, as its rig says) in simavr, cycle-accurate, its UART bridged to a pty;
+// probe timing and stack use on exit.
 //
 // Usage: mantaray-simavr FIRMWARE.elf [--bench] [--realtime] [--paint-from ADDR] [--stats FILE] [--run-for S]
 // Prints "pty PATH" on stdout once the serial port exists; the host talks to the firmware there. SIGUSR1 pulls the
@@ -37,7 +38,7 @@
 
 #include "simavr_gen.h"  // MCU_NAME, kPwmPin, kDirPin, kMuxAddress, kBenchPin, ... (the rig file; firmware/rigs/NAME/)
 
-#define PAINT 0xC5          // stack paint byte
+#define PAINT 0xC5  // stack paint byte
 
 typedef struct {
   const char* name;
@@ -54,13 +55,13 @@ typedef struct {
 #define MUX_BASE 0x70  // TCA9548A: 0x70..0x77 by its A0..A2 pins
 
 typedef struct {
-  avr_irq_t* irq;                     // [0] from the master (TWI_IRQ_OUTPUT), [1] to it (TWI_IRQ_INPUT)
-  int selected;                       // 0 none, 1 a multiplexer, 2 an encoder
-  int mux;                            // the multiplexer selected (its address - MUX_BASE)
-  uint8_t mux_mask[8];                // channels each multiplexer connects
-  uint8_t pointer[ACTUATOR_COUNT];    // each AS5600's register pointer
-  int read_index;                     // byte of the current read
-  double angle_rev[ACTUATOR_COUNT];   // shaft angles [rev]
+  avr_irq_t* irq;                    // [0] from the master (TWI_IRQ_OUTPUT), [1] to it (TWI_IRQ_INPUT)
+  int selected;                      // 0 none, 1 a multiplexer, 2 an encoder
+  int mux;                           // the multiplexer selected (its address - MUX_BASE)
+  uint8_t mux_mask[8];               // channels each multiplexer connects
+  uint8_t pointer[ACTUATOR_COUNT];   // each AS5600's register pointer
+  int read_index;                    // byte of the current read
+  double angle_rev[ACTUATOR_COUNT];  // shaft angles [rev]
 } rig_t;
 
 static rig_t g_rig;

@@ -111,8 +111,9 @@ TEST_CASE("array: the supervisor takes targets anywhere on the 1 x 1 m surface, 
   CHECK(field == proto::SetTarget::kFieldY);
 }
 
-TEST_CASE("array: the driven module's corners move, every other actuator holds level, and the module changes at "
-          "the hand-over") {
+TEST_CASE(
+    "array: the driven module's corners move, every other actuator holds level, and the module changes at "
+    "the hand-over") {
   Supervisor s;
   uint8_t field = 0;
   REQUIRE(s.set_target(proto::SetTarget{0.3f, -0.25f}, field) == ErrorCode::kOk);
@@ -121,11 +122,11 @@ TEST_CASE("array: the driven module's corners move, every other actuator holds l
   const mr::ControllerOutput& out = s.output();
   CHECK(out.module == 0);
   CHECK(s.state() == State::kRunning);
-  CHECK(out.tilt_zx > 0.0f);  // toward +x, the waypoint at the edge
+  CHECK(out.tilt_zx > 0.0f);                                    // toward +x, the waypoint at the edge
   for (int i : {2, 5, 6, 7, 8}) CHECK(out.command[i] == 0.0f);  // not module 0's
-  CHECK(out.command[1] > 0.0f);  // module 0's +x corners lower ...
+  CHECK(out.command[1] > 0.0f);                                 // module 0's +x corners lower ...
   CHECK(out.command[4] > 0.0f);
-  CHECK(out.command[0] < 0.0f);  // ... its -x corners rise
+  CHECK(out.command[0] < 0.0f);                                                         // ... its -x corners rise
   REQUIRE(s.position(pos(2, 84000, -0.005f, -0.25f), 84000, field) == ErrorCode::kOk);  // within the band
   CHECK(out.module == 1);
   for (int i : {0, 3, 6, 7, 8}) CHECK(out.command[i] == 0.0f);  // not module 1's
