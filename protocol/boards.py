@@ -41,20 +41,23 @@ def _port_pins(layout: str) -> dict[int, tuple[str, int]]:
     return {pin: (name[1], int(name[2])) for pin, name in enumerate(layout.split())}
 
 
+# Timers 0, 1 and 2 sit at the same addresses on both MCUs (the ATmega2560 adds 3, 4 and 5).
+TIMERS_0_TO_2 = {
+    "OC0A": TimerOutput(0x44, 7, 0x47),
+    "OC0B": TimerOutput(0x44, 5, 0x48),
+    "OC1A": TimerOutput(0x80, 7, 0x88),
+    "OC1B": TimerOutput(0x80, 5, 0x8A),
+    "OC2A": TimerOutput(0xB0, 7, 0xB3),
+    "OC2B": TimerOutput(0xB0, 5, 0xB4),
+}
+
 UNO = Board(
     name="uno",
     mcu="atmega328p",
     port_address={"B": 0x25, "C": 0x28, "D": 0x2B},
     pins=_port_pins("PD0 PD1 PD2 PD3 PD4 PD5 PD6 PD7 PB0 PB1 PB2 PB3 PB4 PB5 PC0 PC1 PC2 PC3 PC4 PC5"),
     pwm={3: "OC2B", 5: "OC0B", 6: "OC0A", 9: "OC1A", 10: "OC1B", 11: "OC2A"},
-    timer_outputs={
-        "OC0A": TimerOutput(0x44, 7, 0x47),
-        "OC0B": TimerOutput(0x44, 5, 0x48),
-        "OC1A": TimerOutput(0x80, 7, 0x88),
-        "OC1B": TimerOutput(0x80, 5, 0x8A),
-        "OC2A": TimerOutput(0xB0, 7, 0xB3),
-        "OC2B": TimerOutput(0xB0, 5, 0xB4),
-    },
+    timer_outputs=TIMERS_0_TO_2,
     reserved={0: "the serial link (RX)", 1: "the serial link (TX)", 18: "I2C (SDA)", 19: "I2C (SCL)"},
 )
 
@@ -98,12 +101,7 @@ MEGA2560 = Board(
         46: "OC5A",
     },
     timer_outputs={
-        "OC0A": TimerOutput(0x44, 7, 0x47),
-        "OC0B": TimerOutput(0x44, 5, 0x48),
-        "OC1A": TimerOutput(0x80, 7, 0x88),
-        "OC1B": TimerOutput(0x80, 5, 0x8A),
-        "OC2A": TimerOutput(0xB0, 7, 0xB3),
-        "OC2B": TimerOutput(0xB0, 5, 0xB4),
+        **TIMERS_0_TO_2,
         "OC3A": TimerOutput(0x90, 7, 0x98),
         "OC3B": TimerOutput(0x90, 5, 0x9A),
         "OC3C": TimerOutput(0x90, 3, 0x9C),
