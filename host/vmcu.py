@@ -15,14 +15,17 @@ from .processes import DIE_WITH_PARENT, end
 class VirtualMcu:
     """A `mantaray-vmcu --pty LINK` process; use as a context manager. `path` is the serial device path."""
 
-    def __init__(self, clock: str = "sim", start_timeout_s: float = 5.0, path: str | None = None) -> None:
+    def __init__(
+        self, clock: str = "sim", start_timeout_s: float = 5.0, path: str | None = None, program: str = "mantaray-vmcu"
+    ) -> None:
         """path: where to put the serial device's symlink (default: a fresh temporary directory); a new
-        virtual MCU on the path of one that exited plays a board that reset or was plugged back in."""
+        virtual MCU on the path of one that exited plays a board that reset or was plugged back in. program: the
+        rig's build (mantaray-vmcu-array_2x2 is the 2 x 2 array's)."""
         self._dir = tempfile.TemporaryDirectory(prefix="mantaray-vmcu-")
         self.path = path or str(Path(self._dir.name) / "tty")
         self.clock = clock
         self.process = subprocess.Popen(
-            [str(native_artifact("mantaray-vmcu")), "--pty", self.path, "--clock", clock],
+            [str(native_artifact(program)), "--pty", self.path, "--clock", clock],
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
             preexec_fn=DIE_WITH_PARENT,

@@ -74,6 +74,14 @@ def cmd_conformance(args: argparse.Namespace, parser: argparse.ArgumentParser) -
     ]
     if args.port:
         pytest_args += ["--port", args.port]
+    if args.rig:
+        from mantaray.host.cli_board import rig_file
+
+        try:
+            rig_file(args.rig)  # what is wrong with it, in one line, before pytest starts
+        except argparse.ArgumentTypeError as exc:
+            parser.error(f"argument --rig: {exc}")
+        pytest_args += ["--rig", args.rig]
     extra = args.pytest_args[1:] if args.pytest_args[:1] == ["--"] else args.pytest_args
     return int(pytest.main(pytest_args + extra))
 
@@ -101,6 +109,12 @@ def build_parser() -> argparse.ArgumentParser:
         "on a pty. Arguments after -- go to pytest.",
     )
     conf.add_argument("--port", help="serial device path of the firmware (board, simulator or pty)")
+    conf.add_argument(
+        "--rig",
+        metavar="FILE",
+        help="the rig file the firmware was built for (default protocol/rig.toml); without --port the virtual MCU "
+        "started is that rig's build (protocol/rigs/array_2x2.toml: mantaray-vmcu-array_2x2)",
+    )
     conf.add_argument(
         "pytest_args",
         nargs=argparse.REMAINDER,

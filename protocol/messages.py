@@ -495,7 +495,7 @@ class Telemetry(Message):
     crc_errors: int = 0  # Frames dropped for a bad CRC since boot (wraps).
     frame_errors: int = 0  # Frames dropped for bad COBS, oversize or truncation since boot (wraps).
     loop_overruns: int = 0  # Actuator-loop runs that started a whole period or more late since boot (saturates at 65535; 0 where the actuators are ideal).
-    module: int = 0  # The module whose actuators command and measured are (PROTOCOL.md §5): the one the controller drives; 0 on one module.
+    module: int = 0  # The module whose actuators command and measured are (PROTOCOL.md §5): the one the controller drives; after a jog, the lowest-numbered module the jogged actuator is a corner of; 0 on one module.
     fault_actuator: int = 0  # The actuator whose stall or encoder fault latched first, 255 if none: on an array it stops every module.
 
 

@@ -48,6 +48,39 @@ def test_suite_passes_on_the_wall_clock_through_port(vmcu_built):
     assert_suite_passed(result, "wall")
 
 
+ARRAY = "protocol/rigs/array_2x2.toml"
+
+
+def test_suite_passes_against_the_arrays_virtual_mcu(vmcu_built):
+    """--rig: the suite starts the 2 x 2 array's build (mantaray-vmcu-array_2x2) and reads its shape from identify."""
+    result = conformance("--rig", ARRAY)
+    assert_suite_passed(result, "simulated")
+    assert "another rig" not in result.stdout + result.stderr
+
+
+def test_suite_passes_against_the_arrays_virtual_mcu_on_the_wall_clock_through_port(vmcu_built):
+    from mantaray.host.vmcu import VirtualMcu
+
+    with VirtualMcu(clock="wall", program="mantaray-vmcu-array_2x2") as vmcu:
+        result = conformance("--port", vmcu.path, "--rig", ARRAY)
+    assert_suite_passed(result, "wall")
+
+
+def test_a_board_of_another_rig_is_named_and_a_bad_rig_file_is_one_line(vmcu_built):
+    from mantaray.host.vmcu import VirtualMcu
+
+    with VirtualMcu(clock="sim", program="mantaray-vmcu-array_2x2") as vmcu:
+        result = conformance("--port", vmcu.path, timeout=60)  # the default rig: one module
+    assert result.returncode != 0
+    assert "modules_x is 2 on the board, 1 in rig.toml" in result.stdout + result.stderr
+    result = conformance("--rig", "nowhere.toml", timeout=60)
+    assert result.returncode == 2 and "Traceback" not in result.stdout + result.stderr
+    assert (
+        result.stderr.strip().splitlines()[-1]
+        == "mantaray conformance: error: argument --rig: nowhere.toml: no such rig file"
+    )
+
+
 def test_a_missing_port_is_one_clear_line():
     result = conformance("--port", "/dev/nonexistent", timeout=60)
     assert result.returncode == 2

@@ -251,6 +251,13 @@ def mega_elf():
     return REPO / "build" / "avr-mega_array_2x2" / "firmware.elf"
 
 
+def test_the_protocol_conformance_suite_passes_against_the_mega_binary(mega_elf):
+    """The 2 x 2 array's image on the bench side (simulated clock), with the array's rig file."""
+    with SimulatedUno(mega_elf, bench=True, harness="mantaray-simavr-array_2x2") as mega:
+        proc = _conformance(mega.path, "--rig", "protocol/rigs/array_2x2.toml", "--", "-rs")
+    assert_suite_passed(proc, "simulated")
+
+
 def test_the_mega_build_drives_the_arrays_nine_actuators_through_two_multiplexers(mega_elf):
     """The 2 x 2 array's image in the ATmega2560 harness: it reports the array's shape, reads all nine encoders (eight
     on one multiplexer, the ninth on another) without a fault, and drives the centre actuator, a corner of every

@@ -1,4 +1,4 @@
-"""Pytest plugin of the conformance suite: --port/--vmcu-clock options, the session link and the per-test known state."""
+"""Pytest plugin of the conformance suite: --port/--rig/--vmcu-clock options, the session link and the per-test state."""
 
 from __future__ import annotations
 
@@ -21,6 +21,13 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         metavar="PATH",
         help="serial device path of the firmware under test (board, simulator or pty); "
         "without it a virtual MCU is started for the session",
+    )
+    group.addoption(
+        "--rig",
+        default=None,
+        metavar="FILE",
+        help="the rig file the firmware was built for (default protocol/rig.toml); a self-started virtual MCU is "
+        "that rig's build",
     )
     group.addoption(
         "--vmcu-clock",
@@ -57,16 +64,22 @@ class Connection:
         from mantaray.host.link import IncompatibleFirmware, Link, LinkError
         from mantaray.host.transport import SerialTransport
         from mantaray.paths import NotBuilt
+        from mantaray.protocol import rig
 
         self.vmcu = None
         self.link = None
         port = config.getoption("port")
         try:
+            try:
+                description = rig.load(config.getoption("rig")) if config.getoption("rig") else rig.default()
+            except rig.RigDescriptionError as exc:
+                raise ConnectError(f"--rig {exc}") from None
             if port is None:
                 from mantaray.host.vmcu import VirtualMcu
 
+                program = "mantaray-vmcu" if description.name == "module" else f"mantaray-vmcu-{description.name}"
                 try:
-                    self.vmcu = VirtualMcu(clock=config.getoption("vmcu_clock"))
+                    self.vmcu = VirtualMcu(clock=config.getoption("vmcu_clock"), program=program)
                 except (NotBuilt, RuntimeError, OSError) as exc:
                     raise ConnectError(f"cannot start the virtual MCU: {exc}") from None
                 port = self.vmcu.path
@@ -80,7 +93,7 @@ class Connection:
                 except PortError as exc:
                     raise ConnectError(f"--port {exc}") from None
             try:
-                self.link = Link(SerialTransport(port))
+                self.link = Link(SerialTransport(port), description=description)
             except (OSError, serial.SerialException) as exc:
                 raise ConnectError(f"cannot open {port}: {exc}") from None
             if self.vmcu is None:

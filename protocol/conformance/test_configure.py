@@ -227,15 +227,16 @@ def test_refused_controller_keeps_manhattan(dut):
         NOT_FINITE,
         CONFIGURE_FIELD["module_x"],
     )
-    dut.set_target(0.2, 0.2)
+    cx, cy = dut.centre(0)  # object and target in one module: no route between modules
+    dut.set_target(cx + 0.2, cy + 0.2)
     dut.start()
-    t = dut.position(-0.2, -0.2)
+    t = dut.position(cx - 0.2, cy - 0.2)
     assert t.tilt_zx == pytest.approx(limit, abs=TILT_TOL)
     assert t.tilt_zy == pytest.approx(limit, abs=TILT_TOL)
     dut.stop()
     dut.configure(controller=m.Controller.EUCLIDEAN)
     dut.start()
-    t = dut.position(-0.2, -0.2)
+    t = dut.position(cx - 0.2, cy - 0.2)
     assert t.tilt_zx == pytest.approx(limit / math.sqrt(2), abs=TILT_TOL)
     assert t.tilt_zy == pytest.approx(limit / math.sqrt(2), abs=TILT_TOL)
 
@@ -246,19 +247,20 @@ def test_refused_module_size_keeps_the_target_bounds(dut):
         OUT,
         CONFIGURE_FIELD["tolerance"],
     )
-    dut.set_target(0.25, -0.25)  # inside the 0.5 m module, outside a 0.4 m one
+    hx, hy = dut.half(0.5, 0.5)
+    dut.set_target(hx, -hy)  # inside 0.5 m modules, outside 0.4 m ones
     dut.configure(module_x=0.4, module_y=0.4)
-    dut.refuse(m.SetTarget(0.25, 0.0), OUT, 0)
-    dut.refuse(m.SetTarget(0.0, -0.25), OUT, 1)
+    dut.refuse(m.SetTarget(hx, 0.0), OUT, 0)
+    dut.refuse(m.SetTarget(0.0, -hy), OUT, 1)
 
 
 def test_configure_shrinking_the_module_drops_a_target_outside_it(dut):
     """Firmware behaviour beyond the schema's no_target doc ("start was sent before any set_target"):
     a target left outside a smaller module is forgotten, so start then answers no_target."""
-    dut.set_target(0.25, 0.25)
+    dut.set_target(*dut.half(0.5, 0.5))
     dut.configure(module_x=0.3, module_y=0.3)
     dut.refuse(m.Start(), m.ErrorCode.NO_TARGET)
-    dut.set_target(0.15, 0.15)
+    dut.set_target(*dut.half(0.3, 0.3))
     dut.start()
     assert dut.probe().state == m.State.RUNNING
 

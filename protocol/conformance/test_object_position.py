@@ -299,21 +299,25 @@ def test_commands_stay_within_the_actuator_range(dut):
 
 # ---------------------------------------------------------------------------------------- bounds and pauses
 @pytest.mark.parametrize(
-    "xy, field",
-    [((0.51, 0.0), 2), ((-0.51, 0.0), 2), ((0.0, 0.51), 3), ((0.0, -0.51), 3), ((1e38, 0.0), 2), ((0.0, -3e38), 3)],
+    "beyond, field",
+    [((0.01, 0.0), 2), ((-0.01, 0.0), 2), ((0.0, 0.01), 3), ((0.0, -0.01), 3), ((1e38, 0.0), 2), ((0.0, -3e38), 3)],
 )
-def test_a_position_beyond_the_module_by_more_than_half_of_it_is_out_of_range(dut, xy, field):
-    """On the 0.5 m module a measurement is within +-0.5 m (the fabric and half a module beside it); farther is
-    no measurement of the object (and near 1e38 m would overflow the Euclidean distance)."""
+def test_a_position_beyond_the_module_by_more_than_half_of_it_is_out_of_range(dut, beyond, field):
+    """On the 0.5 m module a measurement is within +-0.5 m (the fabric and half a module beside it; on an array, the
+    surface and half a module beside it); farther (beyond [m] past that) is no measurement of the object (and near
+    1e38 m would overflow the Euclidean distance)."""
     dut.configure(module_x=0.5, module_y=0.5)
+    reach_x, reach_y = (h + 0.25 for h in dut.half(0.5, 0.5))
     dut.set_target(0.1, 0.0)
     dut.start()
     before = dut.position(0.0, 0.0)
-    bad = dut.next_position(*xy)
+    bad = dut.next_position(
+        *(b + math.copysign(r, b) if b else 0.0 for b, r in zip(beyond, (reach_x, reach_y), strict=True))
+    )
     dut.refuse_position(bad, m.ErrorCode.OUT_OF_RANGE, field)
     after = dut.send_position(m.ObjectPosition(bad.frame, bad.capture_time, 0.0, 0.0, VISIBLE))  # still new
     assert after.state == before.state  # refused whole: it entered no history
-    assert dut.position(0.5, -0.5).state == m.State.RUNNING  # the bound itself is a measurement
+    assert dut.position(reach_x, -reach_y).state == m.State.RUNNING  # the bound itself is a measurement
 
 
 @pytest.mark.clock("simulated")

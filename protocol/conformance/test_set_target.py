@@ -13,19 +13,20 @@ from mantaray.protocol.conformance.harness import TILT_TOL, f32_above, f32_below
 NAN, INF = math.nan, math.inf
 OUT, NOT_FINITE = m.ErrorCode.OUT_OF_RANGE, m.ErrorCode.NOT_FINITE
 
+# (name, target for a surface of half sizes hx, hy [m] (0.25 m on one 0.5 m module), code, field)
 BAD = [
-    ((NAN, 0.0), NOT_FINITE, 0),
-    ((INF, 0.0), NOT_FINITE, 0),
-    ((-INF, 0.0), NOT_FINITE, 0),
-    ((0.0, NAN), NOT_FINITE, 1),
-    ((0.0, INF), NOT_FINITE, 1),
-    ((0.0, -INF), NOT_FINITE, 1),
-    ((f32_above(0.25), 0.0), OUT, 0),
-    ((f32_below(-0.25), 0.0), OUT, 0),
-    ((0.0, f32_above(0.25)), OUT, 1),
-    ((0.0, f32_below(-0.25)), OUT, 1),
-    ((1e30, 0.0), OUT, 0),
-    ((0.0, -3.0), OUT, 1),
+    ("nan,0", lambda hx, hy: (NAN, 0.0), NOT_FINITE, 0),
+    ("inf,0", lambda hx, hy: (INF, 0.0), NOT_FINITE, 0),
+    ("-inf,0", lambda hx, hy: (-INF, 0.0), NOT_FINITE, 0),
+    ("0,nan", lambda hx, hy: (0.0, NAN), NOT_FINITE, 1),
+    ("0,inf", lambda hx, hy: (0.0, INF), NOT_FINITE, 1),
+    ("0,-inf", lambda hx, hy: (0.0, -INF), NOT_FINITE, 1),
+    ("past the +x edge", lambda hx, hy: (f32_above(hx), 0.0), OUT, 0),
+    ("past the -x edge", lambda hx, hy: (f32_below(-hx), 0.0), OUT, 0),
+    ("past the +y edge", lambda hx, hy: (0.0, f32_above(hy)), OUT, 1),
+    ("past the -y edge", lambda hx, hy: (0.0, f32_below(-hy)), OUT, 1),
+    ("1e30,0", lambda hx, hy: (1e30, 0.0), OUT, 0),
+    ("0,-3", lambda hx, hy: (0.0, -3.0), OUT, 1),
 ]
 
 
@@ -36,10 +37,10 @@ def steering(dut) -> tuple[float, float]:
     return t.tilt_zx, t.tilt_zy
 
 
-@pytest.mark.parametrize("target,code,field", BAD, ids=[f"{x:.9g},{y:.9g}" for (x, y), _, _ in BAD])
+@pytest.mark.parametrize("target,code,field", [case[1:] for case in BAD], ids=[case[0] for case in BAD])
 def test_bad_target_is_refused_and_keeps_the_old_one(dut, target, code, field):
     dut.set_target(-0.1, 0.1)
-    dut.refuse(m.SetTarget(*target), code, field)
+    dut.refuse(m.SetTarget(*target(*dut.half())), code, field)
     zx, zy = steering(dut)
     assert zx < 0 < zy  # still towards (-0.1, 0.1)
 
@@ -74,10 +75,11 @@ def test_targets_on_the_module_edge_are_accepted(dut, target):
 
 def test_bounds_follow_the_configured_module(dut):
     dut.configure(module_x=1.0, module_y=0.4, tilt_limit=10.0)
-    dut.set_target(0.5, 0.2)
-    dut.set_target(-0.5, -0.2)
-    dut.refuse(m.SetTarget(f32_above(0.5), 0.0), OUT, 0)
-    dut.refuse(m.SetTarget(0.0, 0.21), OUT, 1)
+    hx, hy = dut.half(1.0, 0.4)
+    dut.set_target(hx, hy)
+    dut.set_target(-hx, -hy)
+    dut.refuse(m.SetTarget(f32_above(hx), 0.0), OUT, 0)
+    dut.refuse(m.SetTarget(0.0, hy + 0.01), OUT, 1)
 
 
 @pytest.mark.parametrize("state", ["idle", "running", "reached", "fault"])

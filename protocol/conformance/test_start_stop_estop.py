@@ -92,7 +92,7 @@ def test_start_forgets_the_camera_history(dut):
 
 
 def test_start_ends_a_jog(dut):
-    dut.command(m.Jog(2, 0.1))
+    dut.command(m.Jog(dut.corners(0)[2], 0.1))
     assert dut.probe().command[2] == pytest.approx(0.1, abs=1e-5)
     dut.set_target(0.1, 0.0)
     dut.start()

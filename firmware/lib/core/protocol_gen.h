@@ -601,7 +601,7 @@ struct Telemetry {
   uint16_t crc_errors;  // Frames dropped for a bad CRC since boot (wraps).
   uint16_t frame_errors;  // Frames dropped for bad COBS, oversize or truncation since boot (wraps).
   uint16_t loop_overruns;  // Actuator-loop runs that started a whole period or more late since boot (saturates at 65535; 0 where the actuators are ideal).
-  uint8_t module;  // The module whose actuators command and measured are (PROTOCOL.md §5): the one the controller drives; 0 on one module.
+  uint8_t module;  // The module whose actuators command and measured are (PROTOCOL.md §5): the one the controller drives; after a jog, the lowest-numbered module the jogged actuator is a corner of; 0 on one module.
   uint8_t fault_actuator;  // The actuator whose stall or encoder fault latched first, 255 if none: on an array it stops every module.
   static constexpr uint8_t kFieldTime = 0;
   static constexpr uint8_t kFieldState = 1;

@@ -172,6 +172,7 @@ ErrorCode Supervisor::jog(const proto::Jog& msg, uint8_t& field) {
     return ErrorCode::kOutOfRange;
   }
   output_.command[msg.actuator] = msg.position;
+  output_.module = lowest_module(msg.actuator);  // telemetry shows the jogged actuator
   return ErrorCode::kOk;
 }
 
