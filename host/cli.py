@@ -4,6 +4,7 @@ host/cli_camera.py)."""
 from __future__ import annotations
 
 import argparse
+import math
 
 from mantaray.arguments import (
     add_controller_arguments,
@@ -23,9 +24,10 @@ from .cli_board import add_port_argument, add_reconnect_argument
 from .ports import check_port
 
 
-def _half_module_m() -> tuple[float, float]:
-    """[m] half the module's sides, as configured on the firmware (protocol defaults)."""
-    return m.Configure.module_x / 2, m.Configure.module_y / 2
+def _half_surface_m(description) -> tuple[float, float]:
+    """[m] half the surface's sides, with the modules as configured on the firmware (protocol defaults): one
+    module's, or the whole array's of the rig file (--rig)."""
+    return description.modules_x * m.Configure.module_x / 2, description.modules_y * m.Configure.module_y / 2
 
 
 _report = reporter("rig")
@@ -35,7 +37,7 @@ def _xy(text: str) -> tuple[float, float]:
     from .rig_run import fabric_point
 
     try:
-        return fabric_point(text, _half_module_m())
+        return fabric_point(text, (math.inf, math.inf))  # on the surface: checked once --rig is known (_course)
     except ValueError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
@@ -86,7 +88,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
                 tracker,
                 log,
                 course,
-                StopRules(args.tolerance, args.hold, args.timeout, _half_module_m()),
+                StopRules(args.tolerance, args.hold, args.timeout, _half_surface_m(args.rig)),
                 reconnect_timeout_s=args.reconnect_timeout,
                 view=view,
                 description=args.rig,
@@ -119,14 +121,17 @@ def _view(recording, live, settings: dict):
 
 
 def _course(args: argparse.Namespace, parser: argparse.ArgumentParser):
-    """--target, or the circle of --path circle about it, which must lie on the fabric."""
+    """--target, or the circle of --path circle about it, which must lie on the fabric (one module's, or the array's
+    of --rig)."""
     from .rig_run import Course
 
+    (cx, cy), (hx, hy) = args.target, _half_surface_m(args.rig)
+    if abs(cx) > hx or abs(cy) > hy:
+        parser.error(f"--target {cx:g},{cy:g} is not on the fabric (|x| <= {hx:g} m, |y| <= {hy:g} m)")
     if args.path is None:
         return Course(args.target)
     if not (args.radius > 0 and args.period > 0):
         parser.error("--path circle needs --radius > 0 and --period > 0")
-    (cx, cy), (hx, hy) = args.target, _half_module_m()
     if abs(cx) + args.radius > hx or abs(cy) + args.radius > hy:
         parser.error(
             f"the circle of radius {args.radius:g} m about {cx:g},{cy:g} is not on the fabric "

@@ -260,11 +260,28 @@ def test_rig_follows_a_circle(tmp_path):
         (("--target", "0.4,0"), "not on the fabric"),
         (("--target", "0,0", "--blob", "1,2:3"), "expected H,S,V:H,S,V"),
         (("--target", "0,0", "--path", "circle", "--radius", "0.3"), "not on the fabric"),
+        (("--rig", "protocol/rigs/array_2x2.toml", "--target", "0.6,0"), "not on the fabric (|x| <= 0.5 m"),
     ],
 )
 def test_rig_refuses_bad_input_in_one_line(args, needle):
     proc = _mantaray("rig", "--port", "/nonexistent", "--camera", "0", *args)
     assert proc.returncode == 2 and needle in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_an_arrays_target_may_lie_in_any_of_its_modules(still_video):
+    """On the 2 x 2 array's 1 x 1 m surface, 0.4 m off centre is on the fabric (one module's is 0.25 m)."""
+    proc = _mantaray(
+        "rig",
+        "--port",
+        "/nonexistent",
+        "--camera",
+        still_video,
+        "--rig",
+        "protocol/rigs/array_2x2.toml",
+        "--target",
+        "0.4,-0.45",
+    )
+    assert "not on the fabric" not in proc.stderr and "no such device" in proc.stderr  # refused for the port only
 
 
 @pytest.mark.parametrize("command", ["rig", "monitor"])

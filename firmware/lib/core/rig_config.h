@@ -22,10 +22,10 @@ constexpr uint8_t corner_actuator(uint8_t module, uint8_t corner) {
 
 // The lowest-numbered module actuator a is a corner of: the one telemetry shows after a jog of a (PROTOCOL.md §5).
 constexpr uint8_t lowest_module(uint8_t actuator) {
-  return kModuleCount == 1 ? 0
-                           : static_cast<uint8_t>(
-                                 (actuator / (kModulesX + 1) > 0 ? actuator / (kModulesX + 1) - 1 : 0) * kModulesX +
-                                 (actuator % (kModulesX + 1) > 0 ? actuator % (kModulesX + 1) - 1 : 0));
+  return kModuleCount == 1
+             ? 0
+             : static_cast<uint8_t>((actuator / (kModulesX + 1) > 0 ? actuator / (kModulesX + 1) - 1 : 0) * kModulesX +
+                                    (actuator % (kModulesX + 1) > 0 ? actuator % (kModulesX + 1) - 1 : 0));
 }
 
 }  // namespace mr
