@@ -53,8 +53,8 @@ class RigDescription:
 
     @property
     def name(self) -> str:
-        """ "module" for the default rig (protocol/rig.toml), else its file's stem: its build's name
-        (firmware/rigs/NAME/, PlatformIO's environment)."""
+        """The name of the rig's builds (firmware/rigs/NAME/, mantaray-vmcu-NAME): "module" for the default rig
+        (protocol/rig.toml), else the file's stem."""
         return "module" if self.path.resolve() == RIG_TOML.resolve() else self.path.stem
 
     @property
