@@ -73,7 +73,8 @@ class StopRules:
     tolerance_m: float  # [m] epsilon about a fixed target
     hold_s: float  # [s] within epsilon this long: reached
     timeout_s: float  # [s] run time after which it gives up
-    half_module_m: tuple[float, float]  # [m] seen beyond twice these (half a module off the fabric): fell off
+    half_surface_m: tuple[float, float]  # [m] half the fabric's sides: targets lie within these
+    half_module_m: tuple[float, float]  # [m] seen farther than this beyond the fabric (half a module): fell off
 
 
 class RigRun:
@@ -166,7 +167,7 @@ class RigRun:
         """The camera's frames, tracked, until Ctrl-C, a key, the end of the video, the timeout or the object off
         the fabric."""
         t0 = wall0 = None
-        half = self.rules.half_module_m
+        reach = [s + m for s, m in zip(self.rules.half_surface_m, self.rules.half_module_m, strict=True)]
         while not self._interrupted and not self._stopped_by_key():
             grabbed = self.source.read()
             if grabbed is None:
@@ -182,7 +183,7 @@ class RigRun:
                 return
             self._image = image
             obs = self._seen = self.tracker.observe(image, capture_s)
-            if obs.visible and (abs(obs.xy_m[0]) > 2 * half[0] or abs(obs.xy_m[1]) > 2 * half[1]):
+            if obs.visible and (abs(obs.xy_m[0]) > reach[0] or abs(obs.xy_m[1]) > reach[1]):
                 self.report(
                     f"the object was seen at {obs.xy_m[0]:+.3f},{obs.xy_m[1]:+.3f} m, off the fabric by "
                     f"more than half a module"
@@ -250,7 +251,7 @@ class RigRun:
             self.report("target refused: the run follows a path, which moves the target itself; the run goes on")
             return False
         try:
-            x, y = fabric_point(text, self.rules.half_module_m)
+            x, y = fabric_point(text, self.rules.half_surface_m)
         except ValueError as exc:
             self.report(f"target refused: {exc}; the run goes on")
             return False

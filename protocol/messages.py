@@ -190,7 +190,7 @@ class ConfigurePid(Message):
 
 @dataclass(frozen=True)
 class SetTarget(Message):
-    """Target position p_d in the fabric frame. Must lie inside the module (|x| <= m/2, |y| <= n/2)."""
+    """Target position p_d in the fabric frame. Must lie on the surface: |x| <= modules_x m/2, |y| <= modules_y n/2 (one module: m/2, n/2)."""
 
     ID: ClassVar[int] = 0x04
     NAME: ClassVar[str] = 'set_target'
@@ -366,8 +366,8 @@ class ObjectPosition(Message):
 
     frame: int = 0  # Camera frame counter, +1 per frame (wraps).
     capture_time: int = 0  # [us] When the frame was captured, host clock; the controller's dt is the difference of these.
-    x: float = 0.0  # [m] Object x in the fabric frame; within +-module_x (the fabric and half a module beside it), else out_of_range.
-    y: float = 0.0  # [m] Object y in the fabric frame; within +-module_y, else out_of_range.
+    x: float = 0.0  # [m] Object x in the fabric frame; on the fabric or at most half a module beside it (one module: within +-module_x), else out_of_range.
+    y: float = 0.0  # [m] Object y in the fabric frame; on the fabric or at most half a module beside it (one module: within +-module_y), else out_of_range.
     flags: PositionFlags = PositionFlags(0)  # not_visible: the camera lost the object; x and y are ignored. (flags position_flags)
 
 

@@ -30,7 +30,23 @@ ONE_OR_PER_ACTUATOR = ("mux_address",)  # one value shared by every actuator, or
 PINS = ("pwm_pin", "dir_pin", "analog_pin", "bench_pin", "probe_controller_pin", "probe_actuator_pin", "probe_loop_pin")
 SIGNS = ("motor_sign", "encoder_sign")
 MUX_CHANNELS = 8  # TCA9548A
+MUX_ADDRESSES = range(0x70, 0x78)  # TCA9548A: 0x70 + its A2 A1 A0 pins
 INTEGER_RANGE = {"u8": (0, 0xFF), "i8": (-0x80, 0x7F), "u16": (0, 0xFFFF), "u32": (0, 0xFFFFFFFF)}
+SCALARS = (  # the other entries this module and the generator read
+    "modules_x",
+    "modules_y",
+    "actuator_count",
+    "actuator_range_m",
+    "module_size_x_m",
+    "module_size_y_m",
+    "encoder_counts",
+    "pulley_circumference_m",
+    "motor_speed_rpm",
+    "actuator_period_us",
+    "pwm_max",
+    "encoder_address",
+    "encoder_angle_register",
+)
 MAX_ACTUATORS = 16  # jog.actuator and zero.actuators (a 16-bit mask) address actuators 0..15 (schema.toml)
 
 
@@ -158,7 +174,12 @@ def _well_formed(where: str, key: str, entry: dict) -> None:
     """An entry has a value of its type (each of a list's values), a doc and a known type."""
     if not isinstance(entry, dict) or entry.get("type") not in TYPES or "doc" not in entry or "value" not in entry:
         raise RigDescriptionError(f"{where} {key}: needs value, doc and a type of {', '.join(TYPES)}")
-    for v in entry["value"] if isinstance(entry["value"], list) else [entry["value"]]:
+    listed = isinstance(entry["value"], list)
+    if key in PER_ACTUATOR and not listed:
+        raise RigDescriptionError(f"{where} {key}: needs a list, one value per actuator")
+    if listed and key not in PER_ACTUATOR + ONE_OR_PER_ACTUATOR:
+        raise RigDescriptionError(f"{where} {key}: one value, not a list")
+    for v in entry["value"] if listed else [entry["value"]]:
         if entry["type"] == "f32":
             ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
         else:
@@ -186,16 +207,19 @@ def _entries(where: str, section: dict, template: dict | None) -> dict:
             raise RigDescriptionError(
                 f"{where} {key}: a {template[key]['type']} (protocol/rig.toml), not {value['type']}"
             )
-        out[key] = value if isinstance(value, dict) else {**template[key], "value": value}
+        out[key] = {**template[key], **value} if isinstance(value, dict) else {**template[key], "value": value}
     return out
 
 
 def check(rig: dict, path: Path) -> Board:
     """Raises RigDescriptionError on the first disagreement found in a rig of whole entries; returns its board."""
     where = path.name
-    board = BOARDS.get(rig.get("arduino"))
+    board = BOARDS.get(rig.get("arduino")) if isinstance(rig.get("arduino"), str) else None
     if board is None:
         raise RigDescriptionError(f"{where} arduino: {rig.get('arduino')!r} is not one of {', '.join(BOARDS)}")
+    missing = [k for k in (*SCALARS, *PER_ACTUATOR, *ONE_OR_PER_ACTUATOR, *PINS) if k not in rig["core"] | rig["board"]]
+    if missing:
+        raise RigDescriptionError(f"{where}: lacks {', '.join(dict.fromkeys(missing))}")
     for section in ("core", "board"):
         for key, entry in rig[section].items():
             _well_formed(where, key, entry)
@@ -206,7 +230,14 @@ def check(rig: dict, path: Path) -> Board:
     for key in ("modules_x", "modules_y"):
         if v(key) < 1:
             raise RigDescriptionError(f"{where} {key}: {v(key)} modules; a rig has at least 1 along each axis")
-    for key in ("module_size_x_m", "module_size_y_m", "actuator_range_m", "pulley_circumference_m"):
+    for key in (
+        "module_size_x_m",
+        "module_size_y_m",
+        "actuator_range_m",
+        "pulley_circumference_m",
+        "encoder_counts",
+        "actuator_period_us",
+    ):
         if v(key) <= 0:
             raise RigDescriptionError(f"{where} {key}: {v(key)} must be positive")
     count = (v("modules_x") + 1) * (v("modules_y") + 1)
@@ -249,6 +280,11 @@ def check(rig: dict, path: Path) -> Board:
     if any(not 0 <= c < MUX_CHANNELS for c in channels):
         raise RigDescriptionError(f"{where} mux_channel: a TCA9548A has channels 0..{MUX_CHANNELS - 1}, got {channels}")
     addresses = v("mux_address") if isinstance(v("mux_address"), list) else [v("mux_address")] * count
+    for address in addresses:
+        if address not in MUX_ADDRESSES or address == v("encoder_address"):
+            raise RigDescriptionError(
+                f"{where} mux_address: 0x{address:02X} is no TCA9548A's (0x70..0x77) or is the encoders' address"
+            )
     seen: dict[tuple[int, int], int] = {}
     for actuator, encoder in enumerate(zip(addresses, channels, strict=True)):
         if encoder in seen:

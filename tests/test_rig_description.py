@@ -66,6 +66,14 @@ def _edited(tmp_path, source, old: str, new: str):
         (r"^actuator_range_m = .*", 'actuator_range_m = "far"', "actuator_range_m: 'far' is not a f32"),
         (r"^\[board\]", "[boards]", "needs a [board] table"),
         (r"^modules_x = 2", "modules_x = [2", "not a readable TOML file"),
+        (r"^modules_x = 2", "modules_x = [2]", "modules_x: one value, not a list"),
+        (r"^bench_pin = .*", "bench_pin = [31, 35]", "bench_pin: one value, not a list"),
+        (r"^motor_sign = .*", "motor_sign = 1", "motor_sign: needs a list, one value per actuator"),
+        (r"^arduino = .*", 'arduino = ["mega2560"]', "arduino: ['mega2560'] is not one of"),
+        (r"^mux_address = .*", "mux_address = [0x70, 0x70, 0x70, 0x70, 0x70, 0x70, 0x70, 0x70, 0x20]", "0x20 is no"),
+        (r"^mux_address = .*", "mux_address = 0x36", "mux_address: 0x36 is no TCA9548A's (0x70..0x77) or is the"),
+        (r"^encoder_counts = .*", "encoder_counts = 0", "encoder_counts: 0 must be positive"),
+        (r"^actuator_period_us = .*", "actuator_period_us = 0", "actuator_period_us: 0 must be positive"),
     ],
 )
 def test_an_array_file_that_contradicts_itself_or_its_board_is_refused_naming_the_field(tmp_path, old, new, needle):
@@ -80,13 +88,28 @@ def test_an_array_file_that_contradicts_itself_or_its_board_is_refused_naming_th
     [
         (r"^pwm_pin = \{ value = \[3, 5, 6, 9\]", "pwm_pin = { value = [3, 5, 6, 7]", "pin 7 has no PWM on the uno"),
         (r"^bench_pin = \{ value = 2,", "bench_pin = { value = 19,", "pin 19 is I2C (SCL) on the uno"),
-        (r"^motor_speed_rpm = \{ value = 120.0, type = \"f32\",", "motor_speed_rpm = { value = 120.0,", "needs value"),
+        (
+            r"^motor_speed_rpm = \{ value = 120.0, type = \"f32\"",
+            'motor_speed_rpm = { value = 120, type = "u8"',
+            "a f32 (protocol/rig.toml), not u8",
+        ),
         (r"^modules_x = \{ value = 1,", "modules_x = { value = 3,", "3 x 1 modules stand on 8 actuators"),
     ],
 )
 def test_the_default_file_is_checked_the_same_way(tmp_path, old, new, needle):
     with pytest.raises(rig.RigDescriptionError, match=re.escape(needle)):
         rig.load(_edited(tmp_path, rig.RIG_TOML, old, new))
+
+
+def test_an_entry_given_whole_keeps_what_the_default_reports_at_identify(tmp_path):
+    """A rig file may give an entry whole (as a copy of protocol/rig.toml would); it cannot drop what the host checks."""
+    path = _edited(tmp_path, ARRAY, r"^modules_x = 2", 'modules_x = { value = 2, type = "u8", doc = "x" }')
+    assert rig.load(path).reported["modules_x"] == 2
+
+
+def test_the_default_file_without_an_entry_names_it(tmp_path):
+    with pytest.raises(rig.RigDescriptionError, match="lacks modules_y"):
+        rig.load(_edited(tmp_path, rig.RIG_TOML, r"^modules_y = .*", ""))
 
 
 def test_a_missing_rig_file_is_one_clear_error(tmp_path):

@@ -277,3 +277,21 @@ def test_the_mega_build_drives_the_arrays_nine_actuators_through_two_multiplexer
     stats = mega.stats
     assert stats["actuator_loops"]["count"] > 100
     assert stats["actuator_loops"]["max_cycles"] < LOOP_PERIOD_CYCLES  # nine loops fit their period
+
+
+def test_the_mega_reads_its_encoders_after_a_reset_that_left_a_multiplexer_channel_on(mega_elf):
+    """A reset keeps the multiplexers powered, with the second one's channel on (the loops read actuator 8 last):
+    at boot the firmware turns every multiplexer off before it reads, so no two encoders answer at once."""
+    array = rig.load(rig.RIGS / "array_2x2.toml")
+    with SimulatedUno(mega_elf, bench=False, realtime=True, harness="mantaray-simavr-array_2x2") as mega:
+        link = Link(SerialTransport(mega.path), ack_timeout_s=1.0, description=array)
+        link.identify()
+        link.command(m.Configure(telemetry_period=0))
+        assert Probe(link)().faults == 0
+        mega.process.send_signal(signal.SIGUSR1)  # the reset pin
+        assert next_boot(link).reset_cause == m.ResetCause.EXTERNAL
+        link.identify()
+        link.command(m.Configure(telemetry_period=0))
+        t = Probe(link)()
+        assert t.faults == 0 and t.fault_actuator == 255
+        link.close()

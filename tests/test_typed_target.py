@@ -34,7 +34,7 @@ class _Session:
 
 
 def _run(course: Course = FIXED) -> RigRun:
-    run = RigRun("/dev/null", None, None, None, _Log(), course, StopRules(0.02, 1.0, 10.0, HALF_M))
+    run = RigRun("/dev/null", None, None, None, _Log(), course, StopRules(0.02, 1.0, 10.0, HALF_M, HALF_M))
     run.session = _Session()
     return run
 

@@ -56,6 +56,9 @@ void ArduinoActuatorIo::begin() {
     Wire.begin();
     Wire.setClock(kI2cClockHz);
     Wire.setWireTimeout(kI2cTimeoutUs, true);
+    if (kMuxAddressCount > 1) {  // a reset that kept power left a channel on: two encoders would answer at once
+      for (uint8_t i = 0; i < kActuatorCount; ++i) write_mux(mux_address(i), 0);
+    }
   }
 }
 

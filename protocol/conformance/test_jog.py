@@ -54,8 +54,8 @@ def test_jogs_add_up_across_actuators(dut):
 
 def _bad(count: int) -> list:
     return [
-        ((count, 0.1), OUT, 0),  # the first index past the rig's actuators
-        ((15, 0.1), OUT, 0),
+        ((count, 0.1), OUT, 0),  # the first index past the rig's actuators (16 on a rig of 16)
+        ((16, 0.1), OUT, 0),  # past the protocol's 16
         ((255, 0.1), OUT, 0),
         ((0, math.nan), NOT_FINITE, 1),
         ((1, math.inf), NOT_FINITE, 1),

@@ -27,7 +27,14 @@ def test_zero_makes_the_masked_actuators_hold_at_zero(dut, corners):
 
 
 @pytest.mark.parametrize(
-    "mask", [lambda n: 0, lambda n: 1 << n, lambda n: 0xFFFF & ~((1 << n) - 1), lambda n: 1 << 15, lambda n: 0xFFFF]
+    "mask",
+    [
+        lambda n: 0,  # no actuator
+        lambda n: (1 << n) & 0xFFFF,  # the first the rig lacks (none on a rig of 16: then no actuator either)
+        lambda n: 0xFFFF & ~((1 << n) - 1),  # every one it lacks
+        lambda n: (1 << n | 1) if n < 16 else 0,  # one it has and the first it lacks
+    ],
+    ids=["none", "first past", "all past", "one with the first past"],
 )
 def test_a_mask_naming_no_actuator_or_one_the_rig_lacks_is_refused(dut, mask):
     jog_module_0(dut)

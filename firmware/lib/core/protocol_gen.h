@@ -235,7 +235,7 @@ inline ErrorCode validate(const ConfigurePid& m, uint8_t& field) {
   return ErrorCode::kOk;
 }
 
-// Target position p_d in the fabric frame. Must lie inside the module (|x| <= m/2, |y| <= n/2).
+// Target position p_d in the fabric frame. Must lie on the surface: |x| <= modules_x m/2, |y| <= modules_y n/2 (one module: m/2, n/2).
 struct SetTarget {
   static constexpr uint8_t kId = 0x04;
   static constexpr uint8_t kSize = 8;  // [bytes] payload
@@ -445,8 +445,8 @@ struct ObjectPosition {
   static constexpr uint8_t kSize = 15;  // [bytes] payload
   uint16_t frame;  // Camera frame counter, +1 per frame (wraps).
   uint32_t capture_time;  // [us] When the frame was captured, host clock; the controller's dt is the difference of these.
-  float x;  // [m] Object x in the fabric frame; within +-module_x (the fabric and half a module beside it), else out_of_range.
-  float y;  // [m] Object y in the fabric frame; within +-module_y, else out_of_range.
+  float x;  // [m] Object x in the fabric frame; on the fabric or at most half a module beside it (one module: within +-module_x), else out_of_range.
+  float y;  // [m] Object y in the fabric frame; on the fabric or at most half a module beside it (one module: within +-module_y), else out_of_range.
   uint8_t flags;  // not_visible: the camera lost the object; x and y are ignored. (flags position_flags)
   static constexpr uint8_t kFieldFrame = 0;
   static constexpr uint8_t kFieldCaptureTime = 1;

@@ -180,7 +180,7 @@ ErrorCode Supervisor::zero(const proto::Zero& msg, uint8_t& field) {
   field = proto::kNoField;
   const ErrorCode local = proto::validate(msg, field);
   if (local != ErrorCode::kOk) return local;
-  if (msg.actuators >> kActuatorCount) {  // a bit for an actuator this rig does not have
+  if (kActuatorCount < 16 && (msg.actuators >> (kActuatorCount % 16))) {  // a bit for an actuator this rig lacks
     field = proto::Zero::kFieldActuators;
     return ErrorCode::kOutOfRange;
   }
