@@ -18,6 +18,7 @@ from mantaray.arguments import (
 from mantaray.outputs import writable_dir
 from mantaray.protocol import messages as m
 from mantaray.protocol.codec import bounds_text
+from mantaray.protocol.rig import Grid
 
 from . import cli_board, cli_camera
 from .cli_board import add_port_argument, add_reconnect_argument
@@ -27,7 +28,7 @@ from .ports import check_port
 def _half_surface_m(description) -> tuple[float, float]:
     """[m] half the surface's sides, with the modules as configured on the firmware (protocol defaults): one
     module's, or the whole array's of the rig file (--rig)."""
-    return description.modules_x * m.Configure.module_x / 2, description.modules_y * m.Configure.module_y / 2
+    return Grid(description.modules_x, description.modules_y, m.Configure.module_x, m.Configure.module_y).half_extent_m
 
 
 _report = reporter("rig")

@@ -55,6 +55,80 @@ class RigDescriptionError(ValueError):
 
 
 @dataclass(frozen=True)
+class Grid:
+    """The shape of a rig, PROTOCOL.md §5: modules_x x modules_y modules of module_x_m x module_y_m, one actuator on
+    every node of their grid. Lengths [m] in the fabric frame (origin at the surface's centre); actuator i and
+    module k numbered as §5. The one place this geometry is written, for the host, the simulation and the
+    conformance suite."""
+
+    modules_x: int = 1
+    modules_y: int = 1
+    module_x_m: float = 0.5  # [m]
+    module_y_m: float = 0.5  # [m]
+
+    @property
+    def module_count(self) -> int:
+        return self.modules_x * self.modules_y
+
+    @property
+    def actuator_count(self) -> int:
+        return (self.modules_x + 1) * (self.modules_y + 1)
+
+    @property
+    def half_extent_m(self) -> tuple[float, float]:
+        """[m] Half the whole surface's size along x and y: the surface spans ±these about its centre."""
+        return self.modules_x * self.module_x_m / 2, self.modules_y * self.module_y_m / 2
+
+    def describe(self) -> str:
+        size = f"{self.module_x_m:g} x {self.module_y_m:g} m"
+        if self.module_count == 1:
+            return f"one {size} module on {self.actuator_count} actuators"
+        return f"a {self.modules_x} x {self.modules_y} array of {size} modules on {self.actuator_count} actuators"
+
+    def actuator_xy(self, actuator: int) -> tuple[float, float]:
+        """[m] Where actuator i stands."""
+        if not 0 <= actuator < self.actuator_count:
+            raise ValueError(f"actuator {actuator}: {self.describe()} has actuators 0..{self.actuator_count - 1}")
+        i, j = actuator % (self.modules_x + 1), actuator // (self.modules_x + 1)
+        hx, hy = self.half_extent_m
+        return i * self.module_x_m - hx, j * self.module_y_m - hy
+
+    def module_corners(self, module: int) -> tuple[int, int, int, int]:
+        """Module k's four actuators, in a single module's order: (−x, −y), (+x, −y), (−x, +y), (+x, +y)."""
+        if not 0 <= module < self.module_count:
+            raise ValueError(f"module {module}: {self.describe()} has modules 0..{self.module_count - 1}")
+        p, q = module % self.modules_x, module // self.modules_x
+        row = self.modules_x + 1
+        first = q * row + p
+        return first, first + 1, first + row, first + row + 1
+
+    def module_centre(self, module: int) -> tuple[float, float]:
+        """[m] Module k's centre: (0, 0) on one module."""
+        corners = self.module_corners(module)
+        (x0, y0), (x1, y1) = self.actuator_xy(corners[0]), self.actuator_xy(corners[3])
+        return (x0 + x1) / 2, (y0 + y1) / 2
+
+    def modules_of(self, actuator: int) -> tuple[int, ...]:
+        """The modules actuator i is a corner of: 1, 2 or 4 of them, lowest first."""
+        return tuple(k for k in range(self.module_count) if actuator in self.module_corners(k))
+
+    def shown(self, actuator: int) -> tuple[int, int]:
+        """(module, corner) where telemetry shows actuator i after a jog: the lowest-numbered module it is a corner
+        of (PROTOCOL.md, telemetry.module)."""
+        module = self.modules_of(actuator)[0]
+        return module, self.module_corners(module).index(actuator)
+
+    def module_at(self, x_m: float, y_m: float) -> int | None:
+        """The module over (x, y) [m] (on a shared edge: the one at larger x, y), or None outside the surface."""
+        hx, hy = self.half_extent_m
+        if not (-hx <= x_m <= hx and -hy <= y_m <= hy):
+            return None
+        p = min(int((x_m + hx) / self.module_x_m), self.modules_x - 1)
+        q = min(int((y_m + hy) / self.module_y_m), self.modules_y - 1)
+        return q * self.modules_x + p
+
+
+@dataclass(frozen=True)
 class RigDescription:
     """One rig file, checked. Lengths [m]; actuator i and module k numbered as PROTOCOL.md §5."""
 
@@ -110,9 +184,9 @@ class RigDescription:
         return self.core["pulley_circumference_m"]["value"]
 
     @property
-    def half_extent_m(self) -> tuple[float, float]:
-        """[m] Half the whole surface's size along x and y: the array spans ±these about its centre."""
-        return self.modules_x * self.module_size_x_m / 2, self.modules_y * self.module_size_y_m / 2
+    def grid(self) -> Grid:
+        """The shape alone: the modules and where their actuators stand."""
+        return Grid(self.modules_x, self.modules_y, self.module_size_x_m, self.module_size_y_m)
 
     @property
     def reported(self) -> dict:
@@ -124,41 +198,7 @@ class RigDescription:
         return {e["identify"]: e.get("unit", "") for e in self.core.values() if "identify" in e}
 
     def describe(self) -> str:
-        size = f"{self.module_size_x_m:g} x {self.module_size_y_m:g} m"
-        if self.module_count == 1:
-            return f"one {size} module on {self.actuator_count} actuators"
-        return f"a {self.modules_x} x {self.modules_y} array of {size} modules on {self.actuator_count} actuators"
-
-    def actuator_xy(self, actuator: int) -> tuple[float, float]:
-        """[m] Where actuator i stands, in the fabric frame (origin at the surface's centre)."""
-        if not 0 <= actuator < self.actuator_count:
-            raise ValueError(f"actuator {actuator}: {self.describe()} has actuators 0..{self.actuator_count - 1}")
-        i, j = actuator % (self.modules_x + 1), actuator // (self.modules_x + 1)
-        hx, hy = self.half_extent_m
-        return i * self.module_size_x_m - hx, j * self.module_size_y_m - hy
-
-    def module_corners(self, module: int) -> tuple[int, int, int, int]:
-        """Module k's four actuators, in a single module's order: (−x, −y), (+x, −y), (−x, +y), (+x, +y)."""
-        if not 0 <= module < self.module_count:
-            raise ValueError(f"module {module}: {self.describe()} has modules 0..{self.module_count - 1}")
-        p, q = module % self.modules_x, module // self.modules_x
-        row = self.modules_x + 1
-        first = q * row + p
-        return first, first + 1, first + row, first + row + 1
-
-    def modules_of(self, actuator: int) -> tuple[int, ...]:
-        """The modules actuator i is a corner of: 1, 2 or 4 of them."""
-        return tuple(k for k in range(self.module_count) if actuator in self.module_corners(k))
-
-    def module_at(self, x_m: float, y_m: float) -> int | None:
-        """The module over (x, y) [m] (on a shared edge: the one at larger x, y), or None outside the surface."""
-        hx, hy = self.half_extent_m
-        if not (-hx <= x_m <= hx and -hy <= y_m <= hy):
-            return None
-        p = min(int((x_m + hx) / self.module_size_x_m), self.modules_x - 1)
-        q = min(int((y_m + hy) / self.module_size_y_m), self.modules_y - 1)
-        return q * self.modules_x + p
-
+        return self.grid.describe()
 
 def _read(path: Path) -> dict:
     try:

@@ -32,7 +32,7 @@ def test_the_committed_descriptions_pass_their_checks_and_agree_with_the_schema(
     one, array = rigs
     assert (one.modules_x, one.modules_y, one.actuator_count, one.board.name) == (1, 1, 4, "uno")
     assert (array.modules_x, array.modules_y, array.actuator_count, array.board.name) == (2, 2, 9, "mega2560")
-    assert array.half_extent_m == (0.5, 0.5)  # 1 x 1 m on 9 posts
+    assert array.grid.half_extent_m == (0.5, 0.5)  # 1 x 1 m on 9 posts
 
 
 def _edited(tmp_path, source, old: str, new: str):
@@ -142,17 +142,15 @@ def test_a_schema_that_contradicts_a_rig_is_refused(edit, needle):
 @given(st.integers(1, 3), st.integers(1, 3), st.floats(0.2, 1.0), st.floats(0.2, 1.0))
 def test_the_grid_numbers_actuators_and_modules_as_the_protocol_says(nx, ny, mx, my):
     """PROTOCOL.md §5: each module's corners stand ±m/2, ±n/2 about its centre in one module's order, each actuator
-    is a corner of exactly the modules that list it, and a module's centre lies in that module."""
-    core = {k: dict(v) for k, v in rig.default().core.items()}
-    for key, value in (("modules_x", nx), ("modules_y", ny), ("module_size_x_m", mx), ("module_size_y_m", my)):
-        core[key]["value"] = value
-    core["actuator_count"]["value"] = (nx + 1) * (ny + 1)
-    d = rig.RigDescription(rig.RIG_TOML, rig.default().board, core, rig.default().board_entries)
+    is a corner of exactly the modules that list it, a module's centre lies in that module, and telemetry shows an
+    actuator in the lowest-numbered of its modules."""
+    d = rig.Grid(nx, ny, mx, my)
     hx, hy = d.half_extent_m
     for k in range(d.module_count):
         corners = [d.actuator_xy(a) for a in d.module_corners(k)]
         cx = sum(x for x, _ in corners) / 4
         cy = sum(y for _, y in corners) / 4
+        assert d.module_centre(k) == pytest.approx((cx, cy))
         for c, (x, y) in enumerate(corners):
             assert x == pytest.approx(cx + (mx / 2 if c & 1 else -mx / 2))
             assert y == pytest.approx(cy + (my / 2 if c & 2 else -my / 2))
@@ -162,11 +160,24 @@ def test_the_grid_numbers_actuators_and_modules_as_the_protocol_says(nx, ny, mx,
         assert -hx - 1e-9 <= x <= hx + 1e-9 and -hy - 1e-9 <= y <= hy + 1e-9
         assert d.modules_of(a) == tuple(k for k in range(d.module_count) if a in d.module_corners(k))
         assert 1 <= len(d.modules_of(a)) <= 4
+        module, corner = d.shown(a)
+        assert module == min(d.modules_of(a)) and d.module_corners(module)[corner] == a
     assert d.module_at(hx + 0.01, 0.0) is None
 
 
+def test_a_description_has_the_shape_of_its_entries():
+    for description in rig.committed():
+        g = description.grid
+        assert (g.modules_x, g.modules_y, g.actuator_count) == (
+            description.modules_x,
+            description.modules_y,
+            description.actuator_count,
+        )
+        assert (g.module_x_m, g.module_y_m) == (description.module_size_x_m, description.module_size_y_m)
+
+
 def test_one_module_is_the_paper_numbering():
-    one = rig.default()
+    one = rig.default().grid
     assert [one.actuator_xy(i) for i in range(4)] == [(-0.25, -0.25), (0.25, -0.25), (-0.25, 0.25), (0.25, 0.25)]
     assert one.module_corners(0) == (0, 1, 2, 3)
 

@@ -106,28 +106,17 @@ class Dut:
     def actuator_count(self) -> int:
         return self.identity.actuator_count
 
+    def grid(self, module_x: float = 0.5, module_y: float = 0.5) -> rig.Grid:
+        """The rig's shape as identify reports it, for modules of module_x x module_y [m] (as configured)."""
+        return rig.Grid(self.identity.modules_x, self.identity.modules_y, module_x, module_y)
+
     def half(self, module_x: float = 0.5, module_y: float = 0.5) -> tuple[float, float]:
         """[m] Half the surface along x and y for modules of module_x x module_y: targets live within it."""
-        return self.identity.modules_x * module_x / 2, self.identity.modules_y * module_y / 2
-
-    def centre(self, module: int, module_x: float = 0.5, module_y: float = 0.5) -> tuple[float, float]:
-        """[m] Module k's centre: (0, 0) on one module."""
-        nx, ny = self.identity.modules_x, self.identity.modules_y
-        return (module % nx - (nx - 1) / 2) * module_x, (module // nx - (ny - 1) / 2) * module_y
+        return self.grid(module_x, module_y).half_extent_m
 
     def corners(self, module: int = 0) -> tuple[int, int, int, int]:
         """Module k's four actuators in telemetry's order (PROTOCOL.md §5): on one module, 0 1 2 3."""
-        row = self.identity.modules_x + 1
-        first = (module // self.identity.modules_x) * row + module % self.identity.modules_x
-        return first, first + 1, first + row, first + row + 1
-
-    def shown(self, actuator: int) -> tuple[int, int]:
-        """(module, corner) where telemetry shows actuator i after a jog: the lowest-numbered module it is a corner
-        of (PROTOCOL.md, telemetry.module)."""
-        row = self.identity.modules_x + 1
-        i, j = actuator % row, actuator // row
-        module = max(j - 1, 0) * self.identity.modules_x + max(i - 1, 0)
-        return module, self.corners(module).index(actuator)
+        return self.grid().module_corners(module)
 
     # ---------------------------------------------------------------------------------- commands
     def command(self, msg: Message) -> Message:

@@ -227,7 +227,7 @@ def test_refused_controller_keeps_manhattan(dut):
         NOT_FINITE,
         CONFIGURE_FIELD["module_x"],
     )
-    cx, cy = dut.centre(0)  # object and target in one module: no route between modules
+    cx, cy = dut.grid().module_centre(0)  # object and target in one module: no route between modules
     dut.set_target(cx + 0.2, cy + 0.2)
     dut.start()
     t = dut.position(cx - 0.2, cy - 0.2)

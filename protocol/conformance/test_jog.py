@@ -40,7 +40,7 @@ def test_every_actuator_of_the_rig_jogs_and_telemetry_shows_it(dut):
     """On an array, telemetry shows the four actuators of the lowest-numbered module the jogged one is a corner of."""
     for actuator in range(dut.actuator_count):
         dut.command(m.Jog(actuator, 0.01 * (actuator + 1)))
-        module, corner = dut.shown(actuator)
+        module, corner = dut.grid().shown(actuator)
         t = dut.probe()
         assert t.module == module
         assert t.command[corner] == pytest.approx(0.01 * (actuator + 1), abs=COMMAND_TOL)
