@@ -9,7 +9,7 @@ from typing import ClassVar
 from .codec import FieldSpec, Message
 
 PROTOCOL_VERSION = 2
-SCHEMA_HASH = 0xCED7188B
+SCHEMA_HASH = 0x3DC51A84
 MAX_PACKET = 44  # [bytes] id + seq + payload + CRC
 MAX_WIRE = 46  # [bytes] COBS packet + delimiter
 NO_FIELD = 255
@@ -500,6 +500,23 @@ class Telemetry(Message):
 
 
 @dataclass(frozen=True)
+class ArrayCommands(Message):
+    """An array's commands to every actuator, sent just before each telemetry by a firmware of more than one module (one module's telemetry shows all four): the driven module's plane goes on over the others (PROTOCOL.md §5, Arrays)."""
+
+    ID: ClassVar[int] = 0x86
+    NAME: ClassVar[str] = 'array_commands'
+    DIRECTION: ClassVar[str] = 'mcu_to_host'
+    REPLY: ClassVar[str | None] = None
+    SIZE: ClassVar[int] = 32  # [bytes] payload
+    STATES: ClassVar[frozenset[int]] = frozenset()
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('command', 'h', 16, 1e-05, None, None, None, 'm'),
+    )
+
+    command: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # [m] Command a_i of actuator i (PROTOCOL.md §5's numbering), + lowers it; 0 past actuator_count. (wire = value / 1e-05)
+
+
+@dataclass(frozen=True)
 class Boot(Message):
     """Sent once when the firmware starts, so the host notices a reset."""
 
@@ -516,7 +533,7 @@ class Boot(Message):
     reset_cause: ResetCause = ResetCause.POWER_ON  # Why it started. (enum reset_cause)
 
 
-MESSAGES: dict[int, type[Message]] = {m.ID: m for m in (Identify, Configure, ConfigurePid, SetTarget, Start, Stop, EmergencyStop, Jog, SimClock, Zero, ConfigureSchedule, ConfigureCascade, ObjectPosition, IdentifyReply, Ack, Nack, Telemetry, Boot)}
+MESSAGES: dict[int, type[Message]] = {m.ID: m for m in (Identify, Configure, ConfigurePid, SetTarget, Start, Stop, EmergencyStop, Jog, SimClock, Zero, ConfigureSchedule, ConfigureCascade, ObjectPosition, IdentifyReply, Ack, Nack, Telemetry, ArrayCommands, Boot)}
 
 STATE_ERROR = ErrorCode.BAD_STATE  # nack.code outside a message's STATES
 

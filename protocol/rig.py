@@ -148,6 +148,11 @@ class RigDescription:
         return "module" if self.path.resolve() == RIG_TOML.resolve() else self.path.stem
 
     @property
+    def vmcu_program(self) -> str:
+        """The virtual MCU built for this rig."""
+        return "mantaray-vmcu" if self.name == "module" else f"mantaray-vmcu-{self.name}"
+
+    @property
     def modules_x(self) -> int:
         return self.core["modules_x"]["value"]
 
@@ -199,6 +204,7 @@ class RigDescription:
 
     def describe(self) -> str:
         return self.grid.describe()
+
 
 def _read(path: Path) -> dict:
     try:
@@ -359,3 +365,8 @@ def committed() -> list[RigDescription]:
 def default() -> RigDescription:
     """The default rig, protocol/rig.toml: what the host and the simulation assume unless given another."""
     return load()
+
+
+def named(name: str) -> RigDescription:
+    """The committed rig whose builds are called name (RigDescription.name): "module", or a file's stem in rigs/."""
+    return default() if name == "module" else load(RIGS / f"{name}.toml")

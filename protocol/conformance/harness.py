@@ -88,14 +88,22 @@ class Dut:
         self.link = link
         self.identity = identity
         self.clock = m.Clock(identity.clock)
-        self.log: list[Message] = []  # every message received, in arrival order
-        link.on_message = self.log.append
+        self.log: list[Message] = []  # every message received, in arrival order, but an array's array_commands ...
+        # ... which go here with the index in log of the message that came next (their telemetry)
+        self.array_commands: list[tuple[int, m.ArrayCommands]] = []
+        link.on_message = self._received
         self.sim_now_us = 0  # simulated clock: the firmware's time as last set (u32, wraps at 71.6 min)
         self.sim_total_us = 0  # ... and the same unwrapped: what telemetry's millisecond clock counts
         self.frame = 0  # camera frame counter of the last frame sent
         self.capture_us = 0  # capture time of the last frame sent [us]
         self.first_start: m.ErrorCode | None = None  # what start answered before any test set a target
         self.cache: dict = {}  # per-session results of deterministic reference runs
+
+    def _received(self, msg: Message) -> None:
+        if isinstance(msg, m.ArrayCommands):
+            self.array_commands.append((len(self.log), msg))
+        else:
+            self.log.append(msg)
 
     @property
     def simulated(self) -> bool:

@@ -77,9 +77,8 @@ class Connection:
             if port is None:
                 from mantaray.host.vmcu import VirtualMcu
 
-                program = "mantaray-vmcu" if description.name == "module" else f"mantaray-vmcu-{description.name}"
                 try:
-                    self.vmcu = VirtualMcu(clock=config.getoption("vmcu_clock"), program=program)
+                    self.vmcu = VirtualMcu(clock=config.getoption("vmcu_clock"), program=description.vmcu_program)
                 except (NotBuilt, RuntimeError, OSError) as exc:
                     raise ConnectError(f"cannot start the virtual MCU: {exc}") from None
                 port = self.vmcu.path

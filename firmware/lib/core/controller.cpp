@@ -122,15 +122,15 @@ float TiltController::step(const ControllerConfig& config, float target_x, float
       normal = manhattan_normal(out.tilt_zx, out.tilt_zy);
       break;
   }
-  float corner[kCorners];
-  plane_commands(normal, config.module_x, config.module_y, corner);
-  if (kModuleCount > 1) {
-    for (float& a : out.command) a = 0.0f;  // the other modules' actuators hold level
-  }
+  // Every actuator on the driven module's plane, turned about that module's centre: on one module, its corners (the
+  // paper's transform). On an array the plane goes on over the other modules, each actuator clamped to its travel,
+  // so the edges the module shares are neither a ridge nor a valley for the object to stick on (sim/README.md, Arrays).
+  const float centre_x = module_centre_x(module, config.module_x);
+  const float centre_y = module_centre_y(module, config.module_y);
   out.module = module;
-  for (uint8_t c = 0; c < kCorners; ++c) {
-    out.command[corner_actuator(module, c)] =
-        clamp_symmetric(corner[c] + config.noise_amplitude * noise_.uniform_pm1(), kActuatorRangeM);
+  for (uint8_t i = 0; i < kActuatorCount; ++i) {
+    const float a = plane_command(normal, node_x(i, config.module_x) - centre_x, node_y(i, config.module_y) - centre_y);
+    out.command[i] = clamp_symmetric(a + config.noise_amplitude * noise_.uniform_pm1(), kActuatorRangeM);
   }
   prev_x_ = x;
   prev_y_ = y;

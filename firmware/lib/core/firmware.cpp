@@ -192,6 +192,13 @@ void Firmware::send_identify_reply() {
 void Firmware::send_telemetry(uint32_t now_us) {
   using T = proto::Telemetry;
   const ControllerOutput& out = supervisor_.output();
+  if (kModuleCount > 1) {  // every actuator's command first: telemetry shows one module's four
+    proto::ArrayCommands all{};
+    for (uint8_t i = 0; i < kActuatorCount; ++i) all.command[i] = to_wire_i16(out.command[i], T::kCommandScale);
+    uint8_t payload[proto::ArrayCommands::kSize];
+    proto::encode(all, payload);
+    send(proto::ArrayCommands::kId, payload, sizeof payload);
+  }
   float measured[kActuatorCount];
   hal_.actuators_measured(measured);
   T t;

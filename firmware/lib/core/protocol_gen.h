@@ -9,7 +9,7 @@ namespace mr {
 namespace proto {
 
 constexpr uint16_t kProtocolVersion = 2;
-constexpr uint32_t kSchemaHash = 0xCED7188Bu;
+constexpr uint32_t kSchemaHash = 0x3DC51A84u;
 constexpr uint8_t kMaxPacket = 44;  // [bytes] id + seq + payload + CRC
 constexpr uint8_t kMaxWire = 46;  // [bytes] COBS packet + delimiter
 constexpr uint8_t kNoField = 255;  // nack.field when no single field is at fault
@@ -667,6 +667,51 @@ inline void decode(const uint8_t* in, Telemetry& m) {
   m.fault_actuator = get_u8(in + 38);
 }
 
+// An array's commands to every actuator, sent just before each telemetry by a firmware of more than one module (one module's telemetry shows all four): the driven module's plane goes on over the others (PROTOCOL.md §5, Arrays).
+struct ArrayCommands {
+  static constexpr uint8_t kId = 0x86;
+  static constexpr uint8_t kSize = 32;  // [bytes] payload
+  int16_t command[16];  // [m] Command a_i of actuator i (PROTOCOL.md §5's numbering), + lowers it; 0 past actuator_count. (wire = value / 1e-05)
+  static constexpr uint8_t kFieldCommand = 0;
+  static constexpr float kCommandScale = 1e-05f;  // [m] per wire unit
+};
+inline void encode(const ArrayCommands& m, uint8_t* out) {
+  put_i16(out + 0, m.command[0]);
+  put_i16(out + 2, m.command[1]);
+  put_i16(out + 4, m.command[2]);
+  put_i16(out + 6, m.command[3]);
+  put_i16(out + 8, m.command[4]);
+  put_i16(out + 10, m.command[5]);
+  put_i16(out + 12, m.command[6]);
+  put_i16(out + 14, m.command[7]);
+  put_i16(out + 16, m.command[8]);
+  put_i16(out + 18, m.command[9]);
+  put_i16(out + 20, m.command[10]);
+  put_i16(out + 22, m.command[11]);
+  put_i16(out + 24, m.command[12]);
+  put_i16(out + 26, m.command[13]);
+  put_i16(out + 28, m.command[14]);
+  put_i16(out + 30, m.command[15]);
+}
+inline void decode(const uint8_t* in, ArrayCommands& m) {
+  m.command[0] = get_i16(in + 0);
+  m.command[1] = get_i16(in + 2);
+  m.command[2] = get_i16(in + 4);
+  m.command[3] = get_i16(in + 6);
+  m.command[4] = get_i16(in + 8);
+  m.command[5] = get_i16(in + 10);
+  m.command[6] = get_i16(in + 12);
+  m.command[7] = get_i16(in + 14);
+  m.command[8] = get_i16(in + 16);
+  m.command[9] = get_i16(in + 18);
+  m.command[10] = get_i16(in + 20);
+  m.command[11] = get_i16(in + 22);
+  m.command[12] = get_i16(in + 24);
+  m.command[13] = get_i16(in + 26);
+  m.command[14] = get_i16(in + 28);
+  m.command[15] = get_i16(in + 30);
+}
+
 // Sent once when the firmware starts, so the host notices a reset.
 struct Boot {
   static constexpr uint8_t kId = 0x85;
@@ -708,6 +753,7 @@ inline int8_t mcu_to_host_size(uint8_t id) {
     case Ack::kId: return Ack::kSize;
     case Nack::kId: return Nack::kSize;
     case Telemetry::kId: return Telemetry::kSize;
+    case ArrayCommands::kId: return ArrayCommands::kSize;
     case Boot::kId: return Boot::kSize;
     default: return -1;
   }

@@ -39,6 +39,14 @@ float module_centre_y(uint8_t module, float module_y) {
   return kModulesY == 1 ? 0.0f : centre(static_cast<uint8_t>(module / kModulesX), module_y, kModulesY);
 }
 
+float node_x(uint8_t actuator, float module_x) {
+  return (static_cast<float>(actuator % (kModulesX + 1)) - 0.5f * static_cast<float>(kModulesX)) * module_x;
+}
+
+float node_y(uint8_t actuator, float module_y) {
+  return (static_cast<float>(actuator / (kModulesX + 1)) - 0.5f * static_cast<float>(kModulesY)) * module_y;
+}
+
 Leg route(float x, float y, float target_x, float target_y, float module_x, float module_y, float band) {
   if (kModuleCount == 1) return Leg{0, target_x, target_y};
   uint8_t col = cell(x, module_x, kModulesX);

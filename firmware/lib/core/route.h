@@ -18,6 +18,14 @@ struct Leg {
 float module_centre_x(uint8_t module, float module_x);
 float module_centre_y(uint8_t module, float module_y);
 
+// Where actuator i stands [m], the node of the modules' grid PROTOCOL.md §5 numbers it as: on one module, its corner.
+float node_x(uint8_t actuator, float module_x);
+float node_y(uint8_t actuator, float module_y);
+
+// Where actuator i stands [m], the node of the modules' grid PROTOCOL.md §5 numbers it as: on one module, its corner.
+float node_x(uint8_t actuator, float module_x);
+float node_y(uint8_t actuator, float module_y);
+
 // The leg for an object at (x, y) [m] and the target (target_x, target_y) [m] on modules of module_x x module_y [m].
 // On one module it is the target. On an array the object goes module by module toward the target's module, along x
 // first and then along y (the follow-up paper's Manhattan order over modules). A module drives it to the midpoint of

@@ -1,5 +1,5 @@
 // The core built for the 2 x 2 array (protocol/rigs/array_2x2.toml): the route across modules, the hand-over, and the
-// supervisor driving one module's corners while the other actuators hold level.
+// supervisor driving one module's plane, which every other actuator follows within its travel.
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
 
@@ -8,7 +8,9 @@
 #include <cmath>   // std::fabs, std::hypot
 #include <random>  // std::mt19937, seeded cases
 
-#include "route.h"       // route, Leg, module_centre_x, module_centre_y
+#include "plane.h"       // manhattan_normal, plane_command
+#include "rig_gen.h"     // kActuatorRangeM
+#include "route.h"       // route, Leg, module_centre_x, module_centre_y, node_x, node_y
 #include "supervisor.h"  // Supervisor
 
 namespace {
@@ -111,9 +113,27 @@ TEST_CASE("array: the supervisor takes targets anywhere on the 1 x 1 m surface, 
   CHECK(field == proto::SetTarget::kFieldY);
 }
 
+// Every actuator on the plane of the tilts out shows, turned about module k's centre, within its travel.
+void check_on_the_plane(const mr::ControllerOutput& out, uint8_t module) {
+  const mr::Normal n = mr::manhattan_normal(out.tilt_zx, out.tilt_zy);
+  const float cx = mr::module_centre_x(module, kModule), cy = mr::module_centre_y(module, kModule);
+  for (uint8_t i = 0; i < mr::kActuatorCount; ++i) {
+    float a = mr::plane_command(n, mr::node_x(i, kModule) - cx, mr::node_y(i, kModule) - cy);
+    a = a > mr::kActuatorRangeM ? mr::kActuatorRangeM : (a < -mr::kActuatorRangeM ? -mr::kActuatorRangeM : a);
+    CHECK(out.command[i] == doctest::Approx(a).epsilon(1e-6));
+  }
+}
+
+TEST_CASE("array: actuators stand on the grid's nodes, numbered as PROTOCOL.md §5") {
+  for (uint8_t i = 0; i < mr::kActuatorCount; ++i) {
+    CHECK(mr::node_x(i, kModule) == doctest::Approx(0.5f * static_cast<float>(i % 3) - 0.5f));
+    CHECK(mr::node_y(i, kModule) == doctest::Approx(0.5f * static_cast<float>(i / 3) - 0.5f));
+  }
+}
+
 TEST_CASE(
-    "array: the driven module's corners move, every other actuator holds level, and the module changes at "
-    "the hand-over") {
+    "array: every actuator follows the driven module's plane within its travel, and the module changes at the "
+    "hand-over") {
   Supervisor s;
   uint8_t field = 0;
   REQUIRE(s.set_target(proto::SetTarget{0.3f, -0.25f}, field) == ErrorCode::kOk);
@@ -122,14 +142,15 @@ TEST_CASE(
   const mr::ControllerOutput& out = s.output();
   CHECK(out.module == 0);
   CHECK(s.state() == State::kRunning);
-  CHECK(out.tilt_zx > 0.0f);                                    // toward +x, the waypoint at the edge
-  for (int i : {2, 5, 6, 7, 8}) CHECK(out.command[i] == 0.0f);  // not module 0's
-  CHECK(out.command[1] > 0.0f);                                 // module 0's +x corners lower ...
+  CHECK(out.tilt_zx > 0.0f);     // toward +x, the waypoint at the edge
+  CHECK(out.command[1] > 0.0f);  // module 0's +x corners lower ...
   CHECK(out.command[4] > 0.0f);
-  CHECK(out.command[0] < 0.0f);                                                         // ... its -x corners rise
+  CHECK(out.command[0] < 0.0f);            // ... its -x corners rise ...
+  CHECK(out.command[2] > out.command[1]);  // ... and the plane goes on down over module 1
+  check_on_the_plane(out, 0);
   REQUIRE(s.position(pos(2, 84000, -0.005f, -0.25f), 84000, field) == ErrorCode::kOk);  // within the band
   CHECK(out.module == 1);
-  for (int i : {0, 3, 6, 7, 8}) CHECK(out.command[i] == 0.0f);  // not module 1's
+  check_on_the_plane(out, 1);
   REQUIRE(s.position(pos(3, 168000, 0.295f, -0.25f), 168000, field) == ErrorCode::kOk);
   CHECK(s.state() == State::kReached);  // judged against the target, not a waypoint
 }
