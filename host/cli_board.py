@@ -13,27 +13,22 @@ from mantaray.arguments import number
 from mantaray.protocol import messages as m
 from mantaray.protocol import rig
 
+from .board_state import state_text
 from .ports import PortError, check_port
 
 
 # ------------------------------------------------------------------------------------------- the board's state
-def _board_state(telemetry: m.Telemetry) -> str:
-    """The state telemetry reports, with its faults: IDLE, FAULT (position_timeout), ESTOP."""
-    faults = [f.name.lower() for f in m.Faults if telemetry.faults & f and f != m.Faults.ESTOP]  # its own state
-    return m.State(telemetry.state).name + (f" ({', '.join(faults)})" if faults else "")
-
-
-def _leaving(telemetry: m.Telemetry, port: str) -> str:
+def _leaving(telemetry: m.Telemetry, session) -> str:
     """The board's state, for a command that only an idle board takes, and the command that leaves it."""
-    stop = f"`mantaray stop --port {shlex.quote(port)}`"
-    state = m.State(telemetry.state)
+    stop = f"`mantaray stop --port {shlex.quote(session.port)}`"
+    state, text = m.State(telemetry.state), state_text(telemetry, session.identity)
     if state == m.State.FAULT:
-        return f"the board is in {_board_state(telemetry)}: clear it with {stop} first (it levels the surface)"
+        return f"the board is in {text}: clear it with {stop} first (it levels the surface)"
     if state == m.State.ESTOP:
-        return f"the board is in {_board_state(telemetry)}, the emergency stop (latched): clear it with {stop} first"
+        return f"the board is in {text}, the emergency stop (latched): clear it with {stop} first"
     if state in (m.State.RUNNING, m.State.REACHED):
-        return f"the board is {_board_state(telemetry)}: a run is going on (mantaray rig?); end it, or {stop}, first"
-    return f"the board is {_board_state(telemetry)}"
+        return f"the board is {text}: a run is going on (mantaray rig?); end it, or {stop}, first"
+    return f"the board is {text}"
 
 
 def _refused(name: str, session, refused) -> int:
@@ -41,7 +36,7 @@ def _refused(name: str, session, refused) -> int:
     and how to leave it."""
     text = str(refused)
     if refused.code == m.ErrorCode.BAD_STATE:
-        text = f"{refused.command.NAME} refused: {_leaving(session.probe(), session.port)}"
+        text = f"{refused.command.NAME} refused: {_leaving(session.probe(), session)}"
     print(f"mantaray {name}: {text}", file=sys.stderr)
     return 2
 
@@ -154,7 +149,7 @@ def _stop(args: argparse.Namespace, parser: argparse.ArgumentParser, emergency: 
         session.close()
     state = m.State(telemetry.state)
     clear = f": `mantaray stop --port {shlex.quote(args.port)}` clears it" if state == m.State.ESTOP else ""
-    print(f"{args.port}: the board is in {_board_state(telemetry)}{clear}")
+    print(f"{args.port}: the board is in {state_text(telemetry, session.identity)}{clear}")
     return 0 if state == (m.State.ESTOP if emergency else m.State.IDLE) else 1
 
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from mantaray.protocol import messages as m
 from mantaray.protocol.rig import RigDescription
 
+from .board_state import state_text
 from .keys import Keys
 from .link import LinkError
 from .loop import STOPPED_REACHED, CameraFrame, ClosedLoop, Tolerance
@@ -32,6 +33,7 @@ TARGET_KEY, ENTER, ESCAPE = "t", ("\r", "\n"), "\x1b"  # typing a target: t, the
 TARGET_CHARACTERS = set("0123456789.,+-")  # what a typed target is made of: any other key keeps its own meaning
 BACKSPACE = ("\x7f", "\b")
 EXIT_STATUS = {"reached": 0, "interrupted": 130}  # every other outcome: 1
+FAULT = "fault"  # the outcome when the board's supervisor shut down (a deadman, a stall, an encoder fault)
 
 
 def fabric_point(text: str, half_m: tuple[float, float]) -> tuple[float, float]:
@@ -168,7 +170,7 @@ class RigRun:
         the fabric."""
         t0 = wall0 = None
         reach = [s + m for s, m in zip(self.rules.half_surface_m, self.rules.half_module_m, strict=True)]
-        while not self._interrupted and not self._stopped_by_key():
+        while not self._interrupted and self.outcome != FAULT and not self._stopped_by_key():
             grabbed = self.source.read()
             if grabbed is None:
                 self.outcome = "camera stopped"
@@ -287,6 +289,9 @@ class RigRun:
                     for k, v in vars(telemetry).items()
                 },
             )
+        if telemetry is not None and telemetry.state == m.State.FAULT:  # the supervisor shut every actuator down
+            self.report(f"the board stopped: {state_text(telemetry, self.session.identity)}")
+            self.outcome = FAULT
         if self.view is not None:
             self._show(frame, telemetry, obs)
 

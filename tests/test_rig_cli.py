@@ -26,6 +26,7 @@ from mantaray.host.transport import SerialTransport
 from mantaray.host.vmcu import VirtualMcu
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
+from mantaray.protocol import rig as rig_description
 
 FPS = 12.0
 
@@ -707,3 +708,31 @@ def test_monitor_ends_in_one_line_when_the_board_does_not_come_back(tmp_path):
         out, err = monitor.communicate(timeout=60)
     assert monitor.returncode == 1 and "mantaray monitor: board lost: " in err and "Traceback" not in err, err
     assert time.monotonic() - t0 < 15
+
+
+def test_an_object_lost_on_an_array_ends_the_run_in_the_deadmans_safe_stop(tmp_path):
+    """On the 2 x 2 array as on one module: the object seen for 1 s, then not at all; after the deadman (0.5 s) the
+    firmware shuts every actuator down (telemetry: FAULT, position_timeout, level), and the run ends there saying
+    so, with its log."""
+    video = _video(tmp_path / "lost.avi", lambda k: (0.1, -0.05) if k < FPS else None, int(4 * FPS))
+    with VirtualMcu(clock="wall", program="mantaray-vmcu-array_2x2") as vmcu:
+        proc = _mantaray(
+            "rig", "--port", vmcu.path, "--rig", "protocol/rigs/array_2x2.toml", "--camera", video,
+            "--target", "0.3,0.3", "--timeout", "10", "--out", str(tmp_path),
+        )  # fmt: skip
+        t = _state_of(vmcu.path)
+    assert proc.returncode == 1 and proc.stdout.startswith("fault"), (proc.stdout, proc.stderr)
+    assert "the board stopped: FAULT (position_timeout)" in proc.stderr and "Traceback" not in proc.stderr
+    log = _log(tmp_path)
+    faulted = [r for r in log if r["kind"] == "telemetry" and r["state"] == int(m.State.FAULT)]
+    assert faulted and faulted[0]["faults"] == int(m.Faults.POSITION_TIMEOUT) and faulted[0]["command"] == [0.0] * 4
+    assert log[-1]["kind"] == "end" and t.command == (0.0,) * 4  # the run's end leaves the surface level
+
+
+def _state_of(port: str) -> m.Telemetry:
+    link = Link(SerialTransport(port), description=rig_description.named("array_2x2"))
+    try:
+        link.identify()
+        return link.position(m.ObjectPosition(frame=60000, capture_time=1, flags=m.PositionFlags.NOT_VISIBLE))
+    finally:
+        link.close()
