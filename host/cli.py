@@ -119,12 +119,11 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 def _view(recording, live, settings: dict):
     """The run's view: its recording, and the live server's stream when --live started one. It plots the four
     actuators telemetry reports (the driven module's)."""
-    from .view import RunView
+    from .view import REPORTED_ACTUATORS, RunView
 
     grpc_url = None if live is None else live.options.grpc_url
     module_m = (m.Configure.module_x, m.Configure.module_y)
-    reported = next(f.count for f in m.Telemetry.FIELDS if f.name == "command")
-    return RunView("mantaray_rig", recording, grpc_url, settings, reported, module_m, _report)
+    return RunView("mantaray_rig", recording, grpc_url, settings, REPORTED_ACTUATORS, module_m, _report)
 
 
 def _course(args: argparse.Namespace, parser: argparse.ArgumentParser):

@@ -73,6 +73,7 @@ class ClosedLoop:
     command_m: list = field(default_factory=list)  # [m] a_0..a_3 from telemetry
     measured_m: list = field(default_factory=list)  # [m] the actuators' measured positions from telemetry
     state: list = field(default_factory=list)  # supervisor state (-1: no answer)
+    module: list = field(default_factory=list)  # the driven module, telemetry.module (-1: no answer)
 
     def step(self, capture_s: float, measured_xy_m, target_m) -> m.Telemetry | None:
         """One camera frame captured at trial time capture_s: measured_xy_m None (or NaN) is sent as not visible."""
@@ -137,15 +138,17 @@ class ClosedLoop:
             self.command_m.append((math.nan,) * 4)
             self.measured_m.append((math.nan,) * 4)
             self.state.append(-1)
+            self.module.append(-1)
         else:
             self.tilt_deg.append((telemetry.tilt_zx, telemetry.tilt_zy))
             self.command_m.append(tuple(telemetry.command))
             self.measured_m.append(tuple(telemetry.measured))
             self.state.append(int(telemetry.state))
+            self.module.append(int(telemetry.module))
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The rows as arrays: t_s (n,), measured_xy_m (n, 2), target_m (n, 2), tilt_deg (n, 2), command_m (n, 4),
-        measured_m (n, 4), state (n,)."""
+        measured_m (n, 4), state (n,), module (n,): the driven module (-1: no answer)."""
         return {
             "t_s": np.asarray(self.t_s, dtype=float),
             "measured_xy_m": np.asarray(self.measured_xy_m, dtype=float).reshape(-1, 2),
@@ -154,4 +157,5 @@ class ClosedLoop:
             "command_m": np.asarray(self.command_m, dtype=float).reshape(-1, 4),
             "measured_m": np.asarray(self.measured_m, dtype=float).reshape(-1, 4),
             "state": np.asarray(self.state, dtype=int),
+            "module": np.asarray(self.module, dtype=int),
         }

@@ -48,8 +48,9 @@ class InProcessTransport:
     process; it is freed with the transport (close() only ends the host's end, as closing a board's port does).
     """
 
-    def __init__(self, simulated_clock: bool = True) -> None:
-        self._lib = _capi()
+    def __init__(self, simulated_clock: bool = True, build: str = "module") -> None:
+        """build: the rig's firmware build (RigDescription.name; "array_2x2" is the 2 x 2 array's)."""
+        self._lib = _capi(build)
         self.simulated_clock = simulated_clock
         self._handle = self._lib.mr_vmcu_new(1 if simulated_clock else 0)
         self._buf = ctypes.create_string_buffer(4096)
@@ -79,9 +80,11 @@ class InProcessTransport:
 
 
 @functools.cache
-def _capi() -> ctypes.CDLL:
-    """The C library of the virtual MCU, its signatures declared (loaded once per process)."""
-    lib = ctypes.CDLL(str(native_artifact("libmantaray_capi.so")))
+def _capi(build: str) -> ctypes.CDLL:
+    """The C library of a rig's virtual MCU, its signatures declared (loaded once per process)."""
+    lib = ctypes.CDLL(
+        str(native_artifact("libmantaray_capi.so" if build == "module" else f"libmantaray_capi_{build}.so"))
+    )
     lib.mr_vmcu_new.argtypes, lib.mr_vmcu_new.restype = [ctypes.c_int], ctypes.c_void_p
     lib.mr_vmcu_free.argtypes, lib.mr_vmcu_free.restype = [ctypes.c_void_p], None
     handle_bytes: list = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_size_t]

@@ -211,6 +211,9 @@ def _in_foreground() -> bool:
         return False
 
 
+REPORTED_ACTUATORS = next(f.count for f in m.Telemetry.FIELDS if f.name == "command")  # the driven module's corners
+
+
 class RunView:
     """One run's streams: to a recording file (unless None) and to a live server at live_url (unless None: a
     LiveOptions.grpc_url).

@@ -25,13 +25,16 @@ def path_phase_figure(
     t_s=None,
     command_m=None,
     range_m: float | None = None,
+    modules: tuple[int, int] = (1, 1),
+    handovers_m=None,
 ) -> Path:
     """Save the object's path (start, targets with their tolerance circles, the module's outline) above the
     phase plot theta_zx vs theta_zy with the tilt-limit square, as the paper's Fig. 3 draws them. targets_m
     is one target, or each frame's target along a path. With t_s [s] (one per row of xy_m and tilt_deg; NaN rows
     are frames without a measurement), a column beside them shows over time the distance to the target against
     epsilon, both tilts against the limit and, with command_m, the four actuator commands [m] against +-range_m.
-    Returns the file written."""
+    On an array (modules along x, y, of module_m each) the surface is outlined with the modules' borders dashed,
+    and handovers_m marks where the firmware passed the object to another module. Returns the file written."""
     if t_s is None:
         fig, (top, bottom) = plt.subplots(2, 1, figsize=(4.2, 8.0))
     else:
@@ -50,7 +53,10 @@ def path_phase_figure(
             command_m,
             range_m,
         )
-    _draw_paths(top, [(xy_m, start_m, targets_m)], tolerance_m, module_m)
+    _draw_paths(top, [(xy_m, start_m, targets_m)], tolerance_m, module_m, modules)
+    if handovers_m is not None and len(handovers_m):
+        points = np.asarray(handovers_m, dtype=float).reshape(-1, 2)
+        top.plot(points[:, 0], points[:, 1], "D", color="tab:orange", ms=4, label="hand-over")
     top.set_title(title, fontsize=9)
     top.legend(fontsize=7, loc="upper right")
     _draw_phase(bottom, [tilt_deg], tilt_limit_deg)
@@ -125,10 +131,17 @@ def fig3_figure(
     return _save(fig, path)
 
 
-def _draw_paths(ax, runs: list[tuple], tolerance_m: float, module_m: tuple[float, float]) -> None:
-    """The module's outline and, per run (xy_m, start_m or None, one target or a path of targets), its path."""
-    hx, hy = module_m[0] / 2, module_m[1] / 2
+def _draw_paths(
+    ax, runs: list[tuple], tolerance_m: float, module_m: tuple[float, float], modules: tuple[int, int] = (1, 1)
+) -> None:
+    """The surface's outline (an array's module borders dashed) and, per run (xy_m, start_m or None, one target or a
+    path of targets), its path."""
+    hx, hy = modules[0] * module_m[0] / 2, modules[1] * module_m[1] / 2
     ax.add_patch(Rectangle((-hx, -hy), 2 * hx, 2 * hy, fill=False, lw=1.2, color="0.3"))
+    for i in range(1, modules[0]):
+        ax.axvline(-hx + i * module_m[0], ls="--", lw=0.8, color="0.5")
+    for j in range(1, modules[1]):
+        ax.axhline(-hy + j * module_m[1], ls="--", lw=0.8, color="0.5")
     for i, (xy_m, start_m, targets_m) in enumerate(runs):
         first = i == 0
         targets = np.asarray(targets_m, dtype=float).reshape(-1, 2)

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mantaray.host.controller_settings import ControllerSettings
+from mantaray.host.controller_settings import ControllerSettings, max_tilt_deg
 from mantaray.host.link import Link, LinkError
 from mantaray.host.loop import U32, US_PER_S, CameraFrame, ClosedLoop, Tolerance
 from mantaray.host.session import Setup
@@ -90,6 +90,8 @@ class TrialSpec:
             controller=m.Controller[self.controller.upper()],
             module_x=module_m[0],
             module_y=module_m[1],
+            tilt_limit=min(m.Configure.tilt_limit, max_tilt_deg(*module_m)),  # a module larger than the paper's
+            # tilts less: its steepest keeps every corner in range (PROTOCOL.md §5)
             tolerance=self.tolerance_m,
             noise_amplitude=self.alpha_m,
             noise_seed=self.seed or 1,
@@ -154,6 +156,7 @@ class TrialResult:
     command_m: np.ndarray  # [m] a_0..a_3 from telemetry
     measured_m: np.ndarray  # [m] the actuators' measured positions from telemetry
     state: np.ndarray  # supervisor state per frame (-1: no answer)
+    module: np.ndarray  # the module the firmware drove per frame (-1: no answer)
     watch: LinkWatch
 
     def summary(self) -> dict:
@@ -176,7 +179,24 @@ class TrialResult:
             "camera_frames": len(self.t_s),
             "unseen_frames": self.watch.unseen_frames,
             "dropped_frames": self.watch.dropped_frames,
+            "handovers": self.handovers,
         }
+
+    @property
+    def handovers(self) -> int:
+        """How often the firmware passed the object to another module (an array's hand-overs; 0 on one module)."""
+        return len(self.handover_rows)
+
+    @property
+    def handover_rows(self) -> np.ndarray:
+        """The rows (camera frames) of the hand-overs: each the first answer from another module than the last."""
+        answered = np.flatnonzero(self.module >= 0)
+        return answered[1:][np.diff(self.module[answered]) != 0]
+
+    @property
+    def handover_xy_m(self) -> np.ndarray:
+        """[m] Where the object was at each hand-over."""
+        return self.true_xy_m[self.handover_rows].reshape(-1, 2)
 
     @property
     def physics_share(self) -> float:
@@ -200,6 +220,12 @@ class Bridge:
                 f"the firmware was built for actuators of +-{identity.actuator_range:g} m, the simulated "
                 f"rig's travel +-{rig.actuators.range_m:g} m: the commands would not mean the same"
             )
+        shape = (rig.module.modules_x, rig.module.modules_y)
+        if (identity.modules_x, identity.modules_y) != shape:
+            raise LinkError(
+                f"the firmware was built for {identity.modules_x} x {identity.modules_y} modules, the simulated rig "
+                f"has {shape[0]} x {shape[1]}: run the build for its rig file (mantaray-vmcu-{rig.module.build})"
+            )
         simulated = identity.clock == m.Clock.SIMULATED
         if lockstep and not simulated:
             raise LinkError(
@@ -222,6 +248,7 @@ class Bridge:
             self.frame = 1
             probe = link.position(m.ObjectPosition(frame=self.frame, capture_time=0, flags=m.PositionFlags.NOT_VISIBLE))
             self.clock_us = (probe.time + 1) * 1000  # telemetry truncates to whole ms
+        self._array_commands: m.ArrayCommands | None = None  # an array's, the last the firmware sent
         self.link.on_message = self._watch_message
         self._watch = LinkWatch()
         self._answered: set[int] = set()
@@ -230,7 +257,9 @@ class Bridge:
         self.view = None  # a trial_view.TrialView: sees every camera frame with its answer
 
     def _watch_message(self, msg) -> None:
-        if isinstance(msg, m.Boot):
+        if isinstance(msg, m.ArrayCommands):
+            self._array_commands = msg
+        elif isinstance(msg, m.Boot):
             self._watch.firmware_resets += 1
             self._watch.report(f"firmware reset ({msg.reset_cause.name.lower()}) during the trial")
         elif isinstance(msg, m.Telemetry) and self.lockstep:
@@ -266,7 +295,7 @@ class Bridge:
             lambda msg: self._send(msg, trial),
             time_base_us=trial.base_us,
             frame=self.frame,
-            on_telemetry=lambda reply: M.set_commands(self.model, self.data, reply.command),
+            on_telemetry=lambda reply: M.set_commands(self.model, self.data, self._commands(reply)),
         )
         judge = Tolerance(spec.tolerance_m)  # on the true position: where the object really is
         true_xy_rows = []
@@ -282,6 +311,17 @@ class Bridge:
         self.frame = loop.frame
         self._stop(trial, resets0, lost0)
         return self._result(spec, trial, loop.arrays(), np.asarray(true_xy_rows).reshape(-1, 2), judge, trial.fell)
+
+    def _commands(self, reply: m.Telemetry) -> np.ndarray:
+        """[m] Every actuator's command: one module's telemetry shows all four; an array's firmware sends them all
+        in array_commands just before its telemetry."""
+        count = self.rig.module.grid.actuator_count
+        if count == len(reply.command):
+            return np.asarray(reply.command, dtype=float)
+        if self._array_commands is None:
+            raise LinkError("an array's firmware sent telemetry without array_commands before it (PROTOCOL.md §5)")
+        commands, self._array_commands = self._array_commands.command[:count], None
+        return np.asarray(commands, dtype=float)
 
     def _frames(self, spec: TrialSpec, trial: _Trial):
         """The camera's frames at its rate over T, the physics stepped to each; ends early if the object falls off.
@@ -412,6 +452,7 @@ class Bridge:
             command_m=rows["command_m"],
             measured_m=rows["measured_m"],
             state=rows["state"],
+            module=rows["module"],
             watch=self._watch,
         )
 

@@ -6,6 +6,7 @@ import argparse
 import importlib
 
 from mantaray.arguments import add_view_arguments, number
+from mantaray.host.cli_board import rig_file
 from mantaray.protocol import messages as m
 from mantaray.protocol.codec import choices
 
@@ -116,6 +117,13 @@ def _add_run(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None:
     run.add_argument("--start", type=O.point, default=(0.05, -0.05), metavar="X,Y", help="object start [m]")
     run.add_argument("--target", type=O.point, default=(-0.05, 0.05), metavar="X,Y", help="target p_d [m]")
     run.add_argument("--seed", type=int, default=1, help="seed of the actuator noise and the camera model")
+    run.add_argument(
+        "--rig",
+        type=rig_file,
+        metavar="FILE",
+        help="the rig to simulate: its rig file (none: protocol/rig.toml, one module; protocol/rigs/array_2x2.toml: "
+        "a 2 x 2 array on 9 actuators, its firmware build in the loop); each module's fabric has the mesh of one",
+    )
     run.add_argument("--rate", type=float, help="camera rate [Hz] (default the plant's: the paper's 12)")
     run.add_argument("--latency", type=float, help="camera latency [s], below one frame period (default the plant's)")
     run.add_argument("--noise", type=float, default=0.0, help="camera noise, standard deviation [m] per axis")

@@ -10,6 +10,7 @@ import os
 from mantaray.arguments import controller_settings, reporter, start_live
 from mantaray.outputs import writable_dir
 from mantaray.protocol import messages as m
+from mantaray.protocol import rig as rig_description
 
 from .cli_common import output, plant_for_settings
 
@@ -55,10 +56,15 @@ def _trial(args: argparse.Namespace, parser: argparse.ArgumentParser):
     settings = controller_settings(parser, args)
     args.plant = plant_for_settings(parser, settings, args.plant)
     plant = Plant(args.plant).set(dict(args.set))
-    rig = plant.rig(args.object)
+    try:
+        rig = plant.rig(args.object).with_description(args.rig or rig_description.default())
+    except ValueError as exc:  # a rig file whose actuators the simulated rig does not have
+        parser.error(f"--rig: {exc}")
     if args.vision:
+        if rig.module.grid.module_count > 1:
+            parser.error("--vision tracks on one module's camera and markers; an array (--rig) runs on the truth")
         rig = rig.with_vision(args.vision)
-    half = (rig.module.size_x_m / 2, rig.module.size_y_m / 2)
+    half = rig.module.grid.half_extent_m
     _inside(parser, "--start", args.start, half)
     _inside(parser, "--target", args.target, half)
     if args.video and not FPS_RANGE[0] <= args.video_fps <= FPS_RANGE[1]:
@@ -158,7 +164,8 @@ _report = reporter("sim run")
 def _settings(args: argparse.Namespace) -> dict:
     """What the trial was: every argument but where its outputs go and how it is watched."""
     watching = ("out", "json", "video", "video_fps", "viewer", "live", "live_port", "bind", "linger")
-    return {k: v for k, v in sorted(vars(args).items()) if k not in (*watching, "func", "command", "sim_command")}
+    settings = {k: v for k, v in sorted(vars(args).items()) if k not in (*watching, "func", "command", "sim_command")}
+    return {**settings, "rig": (args.rig or rig_description.default()).name}  # the rig by its build's name
 
 
 def _trial_stem(args: argparse.Namespace) -> str:

@@ -94,9 +94,8 @@ class TrialRunner:
 
     def _show(self, bridge, experiment: Experiment, trial: Trial):
         """The trial's view, attached to the bridge: a TrialView the caller closes."""
-        from mantaray.host.view import RunView
+        from mantaray.host.view import REPORTED_ACTUATORS, RunView
 
-        from .mjcf import N_ACTUATORS
         from .trial_view import TrialView
 
         assert self.watch is not None
@@ -112,7 +111,7 @@ class TrialRunner:
                 "start_m": trial.start_m,
                 "seed": trial.seed,
             },
-            N_ACTUATORS,
+            REPORTED_ACTUATORS,
             (frame.size_x_m, frame.size_y_m),
             lambda text: print(f"mantaray sim: {text}", file=sys.stderr),
             world=True,

@@ -23,10 +23,8 @@ OBJECT_TURN = "object_turn"
 REST_KEY = "rest"  # the scene's keyframe, filled by model.load(): fabric settled, commands zero, object parked
 MARKER = "marker"  # site on top of the object: the point the overhead camera tracks
 OVERHEAD = "overhead"  # the scene's camera looking straight down at the fabric
-N_ACTUATORS = 4
-# Corner signs (x, y) of actuators 0..3, PROTOCOL.md §5: 0 (-x,-y), 1 (+x,-y), 2 (-x,+y), 3 (+x,+y).
-CORNERS = ((-1, -1), (1, -1), (-1, 1), (1, 1))
-POST_OFFSET_M = 0.03  # [m] visual frame posts stand this far outboard of each corner (no collisions)
+POST_OFFSET_M = 0.03  # [m] visual frame posts stand this far outboard of each actuator on the frame (no collisions)
+UNDER_TRAVEL_M = 0.05  # [m] an actuator inside an array stands on a post this far below its travel's end
 CARRIAGE_HALF_SIZE_M = (0.02, 0.02, 0.03)  # [m] visual carriage block (no collisions; mass from the rig)
 VERTEX_INERTIA_BOX_M = 0.01  # [m] side of the box whose inertia each fabric vertex is given (as flexcomp's default)
 HIDDEN_GROUP = 3  # visual group MuJoCo's renderer hides by default: the threads and their vertices' sites
@@ -43,46 +41,54 @@ def _exact(*values: float) -> str:
     return " ".join(repr(float(x)) for x in values)
 
 
-def corner_vertex(resolution: int, actuator: int) -> int:
-    """Flex vertex id at actuator's corner: vertices are numbered ix * N + iy (ix along x, grid_points)."""
-    sx, sy = CORNERS[actuator]
-    ix = 0 if sx < 0 else resolution - 1
-    iy = 0 if sy < 0 else resolution - 1
-    return ix * resolution + iy
+def sheet_vertices(rig: Rig) -> tuple[int, int]:
+    """Vertices of the whole sheet along x and y: each module's patch has fabric.resolution a side, and neighbouring
+    patches share the vertices of their common edge."""
+    n = rig.fabric.resolution
+    return rig.module.modules_x * (n - 1) + 1, rig.module.modules_y * (n - 1) + 1
 
 
-def clamped_vertices(
-    resolution: int, spacing_m: float, clamp_m: float, actuator: int
-) -> list[tuple[int, float, float]]:
-    """(vertex id, x, y [m] relative to the carriage) of the edge vertices the corner's clamp holds, corner excluded.
+def node_vertex(rig: Rig, actuator: int) -> tuple[int, int]:
+    """(ix, iy) of the flex vertex actuator i holds (PROTOCOL.md §5's node (i, j)); vertex ids are ix * Ny + iy."""
+    row, step = rig.module.modules_x + 1, rig.fabric.resolution - 1
+    return actuator % row * step, actuator // row * step
 
-    The clamp holds clamp_m of both edges from the corner straight, at the fabric's own spacing, pointing along
-    the frame's edges toward the neighbouring corners.
+
+def vertex_id(rig: Rig, ix: int, iy: int) -> int:
+    return ix * sheet_vertices(rig)[1] + iy
+
+
+def clamped_vertices(rig: Rig, actuator: int) -> list[tuple[int, float, float]]:
+    """(vertex id, x, y [m] relative to the carriage) of the sheet vertices actuator i's clamp holds, its own excluded.
+
+    The clamp holds fabric.corner_clamp_m of the sheet straight from the actuator's vertex, at the fabric's own
+    spacing, along every grid line the sheet goes on in (two at a frame's corner, three on its edge, four inside).
     """
-    sx, sy = CORNERS[actuator]
+    nx, ny = sheet_vertices(rig)
+    ix0, iy0 = node_vertex(rig, actuator)
+    spacing, n = rig.fabric.spacing_m, rig.fabric.resolution
+    along_x = [d for d in (1, -1) if 0 <= ix0 + d < nx]
+    along_y = [d for d in (1, -1) if 0 <= iy0 + d < ny]
     held = []
-    for k in range(1, resolution // 2):
-        if k * spacing_m > clamp_m + 1e-9:
+    for k in range(1, n // 2):
+        if k * spacing > rig.fabric.corner_clamp_m + 1e-9:
             break
-        ix0 = 0 if sx < 0 else resolution - 1
-        iy0 = 0 if sy < 0 else resolution - 1
-        held.append(((ix0 - sx * k) * resolution + iy0, -sx * k * spacing_m, 0.0))  # along the x edge
-        held.append((ix0 * resolution + iy0 - sy * k, 0.0, -sy * k * spacing_m))  # along the y edge
+        held += [(vertex_id(rig, ix0 + d * k, iy0), d * k * spacing, 0.0) for d in along_x]
+        held += [(vertex_id(rig, ix0, iy0 + d * k), 0.0, d * k * spacing) for d in along_y]
     return held
 
 
-def alternating_elements(resolution: int) -> np.ndarray:
-    """Triangles (counter-clockwise seen from +z) of an N x N grid with diagonals alternating cell by cell.
+def alternating_elements(nx: int, ny: int) -> np.ndarray:
+    """Triangles (counter-clockwise seen from +z) of an Nx x Ny grid with diagonals alternating cell by cell.
 
     flexcomp puts every diagonal the same way, which makes corners 1 and 2 behave differently from
-    0 and 3 (SIM-NOTES). With a checkerboard of diagonals and an odd N, the corner cells' diagonals all
+    0 and 3 (SIM-NOTES). With a checkerboard of diagonals and odd Nx, Ny, the corner cells' diagonals all
     touch their corner vertex and the mesh is symmetric under both mirror planes.
     """
-    n = resolution
     tris = []
-    for ix in range(n - 1):
-        for iy in range(n - 1):
-            v00, v10 = ix * n + iy, (ix + 1) * n + iy
+    for ix in range(nx - 1):
+        for iy in range(ny - 1):
+            v00, v10 = ix * ny + iy, (ix + 1) * ny + iy
             v01, v11 = v00 + 1, v10 + 1
             if (ix + iy) % 2 == 0:
                 tris += [(v00, v10, v11), (v00, v11, v01)]
@@ -91,32 +97,33 @@ def alternating_elements(resolution: int) -> np.ndarray:
     return np.array(tris, dtype=np.int32)
 
 
-def grid_points(resolution: int, spacing_m: float) -> np.ndarray:
-    """(N*N, 3) vertex positions [m] of the flat sheet around its centre, numbered ix * N + iy (ix along x).
+def grid_points(nx: int, ny: int, spacing_m: float) -> np.ndarray:
+    """(Nx*Ny, 3) vertex positions [m] of the flat sheet around its centre, numbered ix * Ny + iy (ix along x).
 
     The spacing is taken as written to 6 digits, like every length in these files.
     """
     spacing = float(_v(spacing_m))
-    along = [spacing * (i - (resolution - 1) / 2) for i in range(resolution)]
-    return np.array([(x, y, 0.0) for x in along for y in along])
+    along_x = [spacing * (i - (nx - 1) / 2) for i in range(nx)]
+    along_y = [spacing * (i - (ny - 1) / 2) for i in range(ny)]
+    return np.array([(x, y, 0.0) for x in along_x for y in along_y])
 
 
-def threads(resolution: int, spacing_m: float) -> list[tuple[int, int, float]]:
+def threads(nx: int, ny: int, spacing_m: float) -> list[tuple[int, int, float]]:
     """(vertex, vertex, rest length [m]) of the sheet's threads (Fabric.stretch "threads"): every edge of the grid and
     both diagonals of every cell. Each is a tension-only length limit: it holds the sheet's stretch and shear, and
     lets it buckle under compression as cloth does (sim/README.md, Convergence, item 7)."""
-    n, spacing = resolution, float(_v(spacing_m))
+    spacing = float(_v(spacing_m))
     diagonal = float(_v(spacing * np.sqrt(2.0)))
     out = []
-    for ix in range(n):
-        for iy in range(n):
-            v = ix * n + iy
-            if ix + 1 < n:
-                out.append((v, v + n, spacing))
-            if iy + 1 < n:
+    for ix in range(nx):
+        for iy in range(ny):
+            v = ix * ny + iy
+            if ix + 1 < nx:
+                out.append((v, v + ny, spacing))
+            if iy + 1 < ny:
                 out.append((v, v + 1, spacing))
-            if ix + 1 < n and iy + 1 < n:
-                out += [(v, v + n + 1, diagonal), (v + 1, v + n, diagonal)]
+            if ix + 1 < nx and iy + 1 < ny:
+                out += [(v, v + ny + 1, diagonal), (v + 1, v + ny, diagonal)]
     return out
 
 
@@ -128,8 +135,9 @@ def _fabric_xml(rig: Rig) -> tuple[str, str]:
     tension-only tendon per thread. Either way each vertex is a point mass on three slides, the whole sheet's mass
     shared evenly, and the flex's triangles carry the contacts and the bending."""
     fab, c = rig.fabric, rig.contact
-    n, z0 = fab.resolution, rig.module.z0_m
-    elements = " ".join(map(str, alternating_elements(n).ravel()))
+    (nx, ny), z0 = sheet_vertices(rig), rig.module.z0_m
+    sheet_kg = fab.mass_kg * rig.module.grid.module_count  # [kg] every module's patch weighs one module's sheet
+    elements = " ".join(map(str, alternating_elements(nx, ny).ravel()))
     contact = (
         f'<contact condim="{c.condim}" friction="{_v(*c.friction)}" solref="{_v(*c.solref)}"\n'
         f'               solimp="{_v(*c.solimp)}" selfcollide="none"/>'
@@ -142,33 +150,33 @@ def _fabric_xml(rig: Rig) -> tuple[str, str]:
     if fab.stretch == "edges":
         return (
             f"""    <flexcomp name="{FABRIC}" type="direct" dim="2" dof="full" pos="{_v(0, 0, z0)}"
-              point="{_exact(*grid_points(n, fab.spacing_m).ravel())}"
+              point="{_exact(*grid_points(nx, ny, fab.spacing_m).ravel())}"
               element="{elements}"
-              radius="{_v(fab.radius_m)}" mass="{_v(fab.mass_kg)}" rgba="0.25 0.45 0.85 1">
+              radius="{_v(fab.radius_m)}" mass="{_v(sheet_kg)}" rgba="0.25 0.45 0.85 1">
       {contact}
       <edge equality="true" solref="{solref}" solimp="{_v(*fab.edge_solimp)}"/>
       {elasticity}
     </flexcomp>""",
             "",
         )
-    mass = fab.mass_kg / n**2
+    mass = sheet_kg / (nx * ny)
     inertia = mass * VERTEX_INERTIA_BOX_M**2 / 6  # [kg m^2] required by MuJoCo, unused: a vertex only slides
     bodies = "\n".join(
         f'    <body name="{FABRIC}_{i}" pos="{_exact(x, y, z0 + z)}">\n'
         f'      <inertial pos="0 0 0" mass="{_v(mass)}" diaginertia="{_v(inertia, inertia, inertia)}"/>\n'
         f'      <joint type="slide" axis="1 0 0"/>\n      <joint type="slide" axis="0 1 0"/>\n'
         f'      <joint type="slide" axis="0 0 1"/>\n      <site name="{FABRIC}_{i}" group="{HIDDEN_GROUP}"/>\n    </body>'
-        for i, (x, y, z) in enumerate(grid_points(n, fab.spacing_m))
+        for i, (x, y, z) in enumerate(grid_points(nx, ny, fab.spacing_m))
     )
     limit = f'solreflimit="{solref}" solimplimit="{_v(*fab.edge_solimp)}" group="{HIDDEN_GROUP}"'
     tendons = "\n".join(
         f'    <spatial range="0 {_v(length)}" {limit}><site site="{FABRIC}_{a}"/><site site="{FABRIC}_{b}"/></spatial>'
-        for a, b, length in threads(n, fab.spacing_m)
+        for a, b, length in threads(nx, ny, fab.spacing_m)
     )
     return bodies, (
         f"""  <deformable>
     <flex name="{FABRIC}" dim="2" radius="{_v(fab.radius_m)}" rgba="0.25 0.45 0.85 1"
-          body="{" ".join(f"{FABRIC}_{i}" for i in range(n * n))}"
+          body="{" ".join(f"{FABRIC}_{i}" for i in range(nx * ny))}"
           element="{elements}">
       {contact}
       {elasticity}
@@ -182,17 +190,20 @@ def _fabric_xml(rig: Rig) -> tuple[str, str]:
 
 
 def model_xml(rig: Rig) -> str:
-    """The rig alone: options, frame, four actuated carriages, the fabric and its corner welds."""
+    """The rig alone: options, frame, an actuated carriage on every node of the modules' grid, the fabric and its
+    welds to the carriages."""
     f, a, fab, s = rig.module, rig.actuators, rig.fabric, rig.solver
-    hx, hy, z0 = f.size_x_m / 2, f.size_y_m / 2, f.z0_m
+    grid = f.grid
+    (hx, hy), z0 = grid.half_extent_m, f.z0_m
     post_top = z0 + a.range_m + 0.05
     posts, carriages, welds, actuators = [], [], [], []
-    for i, (sx, sy) in enumerate(CORNERS):
-        x, y = sx * hx, sy * hy
-        px, py = sx * (hx + POST_OFFSET_M), sy * (hy + POST_OFFSET_M)
-        posts.append(
-            f'    <geom class="frame" type="box" size="0.01 0.01 {post_top / 2:.6g}" pos="{_v(px, py, post_top / 2)}"/>'
-        )
+    for i in range(grid.actuator_count):
+        x, y = grid.actuator_xy(i)
+        sx = (x > hx - 1e-9) - (x < -hx + 1e-9)  # -1, 0, 1: on the frame's -x edge, inside, on its +x edge
+        sy = (y > hy - 1e-9) - (y < -hy + 1e-9)
+        px, py = x + sx * POST_OFFSET_M, y + sy * POST_OFFSET_M
+        top = post_top if sx or sy else z0 - a.range_m - UNDER_TRAVEL_M  # inside an array: a post from below
+        posts.append(f'    <geom class="frame" type="box" size="0.01 0.01 {top / 2:.6g}" pos="{_v(px, py, top / 2)}"/>')
         carriages.append(
             f'    <body name="carriage{i}" pos="{_v(x, y, z0)}" gravcomp="1">\n'
             f'      <joint name="lift{i}" type="slide" axis="0 0 -1" range="{_v(-a.range_m, a.range_m)}"/>\n'
@@ -203,10 +214,10 @@ def model_xml(rig: Rig) -> str:
         )
         welds.append(
             f'    <weld name="corner{i}" body1="carriage{i}" '
-            f'body2="{FABRIC}_{corner_vertex(fab.resolution, i)}" relpose="0 0 0 1 0 0 0" '
+            f'body2="{FABRIC}_{vertex_id(rig, *node_vertex(rig, i))}" relpose="0 0 0 1 0 0 0" '
             f'solref="{_v(*fab.corner_weld_solref)}"/>'
         )
-        for k, (vertex, dx, dy) in enumerate(clamped_vertices(fab.resolution, fab.spacing_m, fab.corner_clamp_m, i)):
+        for k, (vertex, dx, dy) in enumerate(clamped_vertices(rig, i)):
             welds.append(
                 f'    <weld name="clamp{i}_{k}" body1="carriage{i}" body2="{FABRIC}_{vertex}" '
                 f'relpose="{_v(dx, dy, 0)} 1 0 0 0" solref="{_v(*fab.corner_weld_solref)}"/>'
@@ -346,6 +357,7 @@ def write_marker_textures(directory: Path) -> None:
 def scene_xml(rig: Rig) -> str:
     """The scene: includes the model file, adds floor, light, the overhead camera and the object."""
     z0, cam = rig.module.z0_m, rig.camera
+    zoom_out = max(rig.module.modules_x, rig.module.modules_y)  # an array is seen as the camera sees one module
     marker_assets, marker_geoms, object_marker = _marker_xml(rig)
     asset, body = _object_xml(rig, object_marker)
     return f"""<!-- MANTA-RAY scene with the {rig.object.name}, generated by mantaray.sim.mjcf: do not edit by hand. -->
@@ -366,7 +378,7 @@ def scene_xml(rig: Rig) -> str:
   <worldbody>
     <light pos="{_v(0, 0, z0 + 2)}" dir="0 0 -1" directional="true"/>
     <geom name="floor" type="plane" size="0 0 0.05" material="floor"/>
-    <camera name="{OVERHEAD}" pos="{_v(0, 0, z0 + cam.height_above_z0_m)}" xyaxes="1 0 0 0 1 0"
+    <camera name="{OVERHEAD}" pos="{_v(0, 0, z0 + cam.height_above_z0_m * zoom_out)}" xyaxes="1 0 0 0 1 0"
             fovy="{_v(cam.fovy_deg)}"/>
 {marker_geoms}
 {body}

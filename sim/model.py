@@ -7,7 +7,7 @@ import tempfile
 import mujoco
 import numpy as np
 
-from .mjcf import FABRIC, MARKER, N_ACTUATORS, OBJECT, OBJECT_SLIDES, REST_KEY, write_model
+from .mjcf import FABRIC, MARKER, OBJECT, OBJECT_SLIDES, REST_KEY, write_model
 from .rig import FallRule, Rig
 
 ANY_FALL = FallRule()  # the fall rule's defaults, for callers that pass no rig's
@@ -50,7 +50,7 @@ def load(rig: Rig, fabric_settle_s: float = 2.0) -> tuple[mujoco.MjModel, mujoco
         model = mujoco.MjModel.from_xml_path(str(write_model(rig, tmp)))
     data = mujoco.MjData(model)
     qadr = _object_qpos_adr(model)
-    park_x_m = rig.module.size_x_m / 2 + PARK_OFFSET_M
+    park_x_m = rig.module.grid.half_extent_m[0] + PARK_OFFSET_M
     data.qpos[qadr : qadr + 7] = [park_x_m, 0.0, rig.object.half_height_m + 0.01, 1, 0, 0, 0]  # dropped 1 cm
     diverged = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]  # a live view of MuJoCo's counter
     for _ in range(round(fabric_settle_s / model.opt.timestep)):
@@ -84,12 +84,12 @@ def step_until(model: mujoco.MjModel, data: mujoco.MjData, until_s: float, after
 
 
 def set_commands(model: mujoco.MjModel, data: mujoco.MjData, a_m) -> None:
-    """Set the four actuator commands a_i [m] (+ = corner lowered, PROTOCOL.md §5), clipped to ±range."""
+    """Set every actuator's command a_i [m] (+ = lowered, PROTOCOL.md §5), clipped to ±range."""
     a = np.asarray(a_m, dtype=float)
-    if a.shape != (N_ACTUATORS,) or not np.all(np.isfinite(a)):
-        raise ValueError(f"need 4 finite commands in metres, got {a_m!r}")
-    lo, hi = model.actuator_ctrlrange[:N_ACTUATORS].T
-    data.ctrl[:N_ACTUATORS] = np.clip(a, lo, hi)
+    if a.shape != (model.nu,) or not np.all(np.isfinite(a)):
+        raise ValueError(f"need {model.nu} finite commands in metres, got {a_m!r}")
+    lo, hi = model.actuator_ctrlrange.T
+    data.ctrl[:] = np.clip(a, lo, hi)
 
 
 def _flex_id(model: mujoco.MjModel) -> int:
@@ -146,12 +146,12 @@ def fell_off(model: mujoco.MjModel, data: mujoco.MjData, rule: FallRule = ANY_FA
     """Whether the object has left the fabric, by rule (pass rig.fall); any one of:
 
     - its marker is outside the frame by more than rule.outside_margin_m in x or y (the frame's
-      half-sizes are read from the carriages' positions);
+      half-sizes are read from the outermost carriages' positions);
     - its centre is more than rule.below_fabric_m below the fabric's lowest vertex (it went over an
       edge or through the cloth);
     - its centre is below rule.floor_z_m (on the floor).
     """
-    half = np.abs(model.body("carriage3").pos[:2])
+    half = np.abs(model.body_pos[[model.body(f"carriage{i}").id for i in range(model.nu)], :2]).max(axis=0)
     x, y = object_xy(model, data)
     z = data.body(OBJECT).xpos[2]
     lowest = fabric_vertices(model, data)[:, 2].min()

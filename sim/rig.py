@@ -20,11 +20,21 @@ from .parameters import lookup
 
 @dataclass(frozen=True)
 class Module:
-    """The module: actuators at its corners (±size_x/2, ±size_y/2), fabric frame origin at its centre."""
+    """The module, or an array of them: modules_x x modules_y modules of size_x x size_y, an actuator on every node of
+    their grid (PROTOCOL.md §5; one module: actuators at (±size_x/2, ±size_y/2)), fabric frame origin at the surface's
+    centre."""
 
     size_x_m: float = _rig.default().module_size_x_m  # [m] the paper's m (frame and actuator spacing along x)
     size_y_m: float = _rig.default().module_size_y_m  # [m] the paper's n
     z0_m: float = 1.5  # [m] reference height: corners at a_i = 0 (paper)
+    modules_x: int = 1  # modules along x (protocol/rigs/: an array)
+    modules_y: int = 1  # modules along y
+    build: str = "module"  # the firmware build for this shape (RigDescription.name: mantaray-vmcu-NAME)
+
+    @property
+    def grid(self) -> _rig.Grid:
+        """The shape: the modules and where each actuator stands."""
+        return _rig.Grid(self.modules_x, self.modules_y, self.size_x_m, self.size_y_m)
 
 
 @dataclass(frozen=True)
@@ -213,6 +223,24 @@ class Rig:
     camera: Camera = field(default_factory=Camera)
     fall: FallRule = field(default_factory=FallRule)
     object: ObjectSpec = OBJECTS["sphere"]
+
+    def with_description(self, description: _rig.RigDescription) -> Rig:
+        """The same plant on the rig a rig file describes (an array: protocol/rigs/): its modules, each with the
+        fabric patch, mesh spacing and camera view of one module here, and the firmware built for it."""
+        if description.actuator_range_m != self.actuators.range_m:
+            raise ValueError(
+                f"{description.path.name} gives the actuators +-{description.actuator_range_m:g} m of travel, the "
+                f"simulated rig +-{self.actuators.range_m:g} m"
+            )
+        module = dataclasses.replace(
+            self.module,
+            size_x_m=description.module_size_x_m,
+            size_y_m=description.module_size_y_m,
+            modules_x=description.modules_x,
+            modules_y=description.modules_y,
+            build=description.name,
+        )
+        return dataclasses.replace(self, module=module)
 
     def with_object(self, name: str) -> Rig:
         """The same rig carrying another of the paper's objects (a key of objects.OBJECTS)."""

@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from mantaray.protocol import rig as rig_description
+
 from .bridge import Bridge, TrialResult, TrialSpec
 from .rig import Rig
 from .tracking import Tracking
@@ -46,23 +48,24 @@ def run_trial(
     ValueError."""
     from mantaray.host.link import Link
     from mantaray.host.transport import SerialTransport
-    from mantaray.host.view import RunView
+    from mantaray.host.view import REPORTED_ACTUATORS, RunView
     from mantaray.host.vmcu import VirtualMcu
 
-    from .mjcf import N_ACTUATORS
     from .trial_view import TrialView
 
     live = outputs.live
-    module_m = (rig.module.size_x_m, rig.module.size_y_m)
+    hx, hy = rig.module.grid.half_extent_m
+    description = rig_description.named(rig.module.build)
     with contextlib.ExitStack() as stack:
-        port = port or stack.enter_context(VirtualMcu(clock="wall" if realtime else "sim")).path
-        link = Link(SerialTransport(port))
+        program = description.vmcu_program
+        port = port or stack.enter_context(VirtualMcu(clock="wall" if realtime else "sim", program=program)).path
+        link = Link(SerialTransport(port), description=description)
         stack.callback(link.close)
         bridge = Bridge(link, rig, tracking, lockstep=not realtime)
         grpc_url = None if live is None else live.options.grpc_url
         view = RunView(
-            "mantaray_sim_run", outputs.out / f"{outputs.stem}.rrd", grpc_url, outputs.metadata, N_ACTUATORS,
-            module_m, report, world=True,
+            "mantaray_sim_run", outputs.out / f"{outputs.stem}.rrd", grpc_url, outputs.metadata, REPORTED_ACTUATORS,
+            (2 * hx, 2 * hy), report, world=True,
         )  # fmt: skip
         trial_view = bridge.view = TrialView(view, bridge.model, bridge.data, rig, link, lockstep=not realtime)
         if outputs.viewer:
@@ -72,7 +75,7 @@ def run_trial(
         if outputs.video_fps is not None:
             from .video import Recorder
 
-            bridge.recorder = Recorder(bridge.model, fps=outputs.video_fps)
+            bridge.recorder = Recorder(bridge.model, fps=outputs.video_fps, grid=rig.module.grid)
         try:
             result = bridge.run(spec, progress=progress)
         finally:
@@ -118,6 +121,8 @@ def _figure(result: TrialResult, rig: Rig, outputs: TrialOutputs) -> Path:
         t_s=result.t_s,
         command_m=result.command_m,
         range_m=rig.actuators.range_m,
+        modules=(rig.module.modules_x, rig.module.modules_y),
+        handovers_m=result.handover_xy_m,
     )
 
 
@@ -133,6 +138,7 @@ def save_trajectory(result: TrialResult, path: Path) -> Path:
         command_m=result.command_m,
         measured_m=result.measured_m,
         state=result.state,
+        module=result.module,
         start_m=result.spec.start_m,
         target_m=result.spec.target_m,
     )

@@ -14,14 +14,19 @@ FPS_RANGE = (1.0, 240.0)  # [1/s] video frame rates a recorder takes
 
 TARGET_RGBA = (1.0, 0.0, 1.0, 0.5)  # the target's tolerance disk in the video: translucent magenta
 DISK_HALF_THICKNESS_M = 0.0005  # [m]
+BORDER_RGBA = (1.0, 1.0, 1.0, 0.6)  # an array's module borders: translucent white lines
+BORDER_HALF_WIDTH_M = 0.003  # [m]
 
 
 class Recorder:
     """Renders the overhead camera every 1/fps simulated seconds; attach to Bridge.recorder, then save().
 
-    With mark_target(), every frame also shows the target's tolerance disk and the trial's time."""
+    With mark_target(), every frame also shows the target's tolerance disk and the trial's time; on an array, the
+    borders between its modules (grid, a protocol Grid)."""
 
-    def __init__(self, model: mujoco.MjModel, fps: float = 30.0, width: int = 480, height: int = 480) -> None:
+    def __init__(
+        self, model: mujoco.MjModel, fps: float = 30.0, width: int = 480, height: int = 480, grid=None
+    ) -> None:
         if not FPS_RANGE[0] <= fps <= FPS_RANGE[1]:
             raise ValueError(f"video fps must be {FPS_RANGE[0]:g}..{FPS_RANGE[1]:g}, got {fps}")
         self.fps = fps
@@ -29,6 +34,7 @@ class Recorder:
         self.frames: list = []
         self.next_s: float | None = None
         self._target: tuple[np.ndarray, float, float] | None = None  # (centre [m, world], radius [m], t0 [s])
+        self._borders = _borders(grid) if grid is not None else []  # ((x, y) centre, (half x, half y)) [m]
 
     def mark_target(self, target_m, tolerance_m: float, z_m: float, t0_s: float) -> None:
         """Show the target as a disk of radius tolerance_m at height z_m [m, world], and the time since t0_s [s]."""
@@ -49,6 +55,17 @@ class Recorder:
 
         centre, radius, t0 = self._target
         scene = self.renderer.scene
+        for (x, y), (half_x, half_y) in self._borders:
+            if scene.ngeom < scene.maxgeom:
+                mujoco.mjv_initGeom(
+                    scene.geoms[scene.ngeom],
+                    mujoco.mjtGeom.mjGEOM_BOX,
+                    np.array([half_x, half_y, DISK_HALF_THICKNESS_M]),
+                    np.array([x, y, centre[2]]),
+                    np.eye(3).ravel(),
+                    np.array(BORDER_RGBA, dtype=np.float32),
+                )
+                scene.ngeom += 1
         if scene.ngeom < scene.maxgeom:
             mujoco.mjv_initGeom(
                 scene.geoms[scene.ngeom],
@@ -73,3 +90,10 @@ class Recorder:
             for frame in self.frames:
                 writer.append_data(frame)
         return path
+
+
+def _borders(grid) -> list[tuple[tuple[float, float], tuple[float, float]]]:
+    """The lines between an array's modules as thin boxes: (centre (x, y), half sizes (x, y)) [m]; none on one module."""
+    hx, hy = grid.half_extent_m
+    lines = [((-hx + i * grid.module_x_m, 0.0), (BORDER_HALF_WIDTH_M, hy)) for i in range(1, grid.modules_x)]
+    return lines + [((0.0, -hy + j * grid.module_y_m), (hx, BORDER_HALF_WIDTH_M)) for j in range(1, grid.modules_y)]

@@ -116,7 +116,7 @@ def test_the_corner_clamp_holds_its_edge_vertices_at_the_carriage():
     rig = plant.rig(resolution=11, timestep_s=0.002)
     model, data = M.load(rig)
     for i in range(4):
-        held = J.clamped_vertices(11, rig.fabric.spacing_m, 0.08, i)
+        held = J.clamped_vertices(rig, i)
         assert len(held) == 2 * int(0.08 // rig.fabric.spacing_m)
         for vertex, dx, dy in held:
             offset = data.body(f"{J.FABRIC}_{vertex}").xpos - data.body(f"carriage{i}").xpos

@@ -19,7 +19,6 @@ from mantaray.protocol import messages as m
 from mantaray.protocol.framing import Frame, FrameDecoder, encode_packet
 from mantaray.sim import experiment as E
 from mantaray.sim import findings as F
-from mantaray.sim import mjcf as J
 from mantaray.sim import model as M
 from mantaray.sim.bridge import Bridge, TrialSpec
 from mantaray.sim.model import SimulationUnstable
@@ -88,7 +87,7 @@ def test_commands_from_telemetry_reach_the_simulated_actuators(sphere_bridge):
     commanded = result.command_m[-1]
     assert result.tilt_deg[-1, 0] > 0 and commanded[1] > 0  # target at +x: the +x corners lowered
     M.step_until(model, data, data.time + 3.0)  # time for the belts at their speed to get there
-    lifts = np.array([data.joint(f"lift{i}").qpos[0] for i in range(J.N_ACTUATORS)])
+    lifts = np.array([data.joint(f"lift{i}").qpos[0] for i in range(model.nu)])
     assert np.allclose(lifts, commanded, atol=1e-3), (lifts, commanded)  # [m] within a servo's steady error
 
 

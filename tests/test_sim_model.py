@@ -14,6 +14,7 @@ from mantaray.sim.objects import OBJECTS
 from mantaray.sim.rig import STRETCH_MODELS, Rig
 
 RIG = Rig()
+GRID = RIG.module.grid  # one module: actuators 0..3 at its corners (PROTOCOL.md §5)
 REST_SPEED_M_PER_S = 0.02  # [m/s] "at rest" for the test: well below rolling, above the fabric's jitter
 REST_SPIN_RAD_PER_S = 0.5  # [rad/s]
 STEP_S = 2.0  # [s] each scene is stepped this long after the object is placed
@@ -27,15 +28,15 @@ def _warnings(data: mujoco.MjData) -> dict[str, int]:
 
 def test_alternating_mesh_is_mirror_symmetric():
     n = RIG.fabric.resolution
-    tris = J.alternating_elements(n)
+    tris = J.alternating_elements(n, n)
     assert tris.shape == (2 * (n - 1) ** 2, 3)
     xy = np.array([divmod(v, n) for v in range(n * n)], dtype=float)
     edges = {tuple(sorted((t[i], t[(i + 1) % 3]))) for t in tris for i in range(3)}
     for mirror in (lambda p: (n - 1 - p[0], p[1]), lambda p: (p[0], n - 1 - p[1])):
         mapped = {tuple(sorted(int(q[0] * n + q[1]) for q in (mirror(xy[a]), mirror(xy[b])))) for a, b in edges}
         assert mapped == edges
-    for i in range(J.N_ACTUATORS):  # every corner cell's diagonal ends on the corner vertex
-        assert sum(J.corner_vertex(n, i) in t for t in tris) == 2
+    for i in range(GRID.actuator_count):  # every corner cell's diagonal ends on the corner vertex
+        assert sum(J.vertex_id(RIG, *J.node_vertex(RIG, i)) in t for t in tris) == 2
 
 
 @pytest.mark.parametrize("name", OBJECTS)
@@ -44,9 +45,9 @@ def test_written_scene_compiles_as_plain_xml(tmp_path, name):
     model = mujoco.MjModel.from_xml_path(str(scene))
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
-    assert model.nu == J.N_ACTUATORS and model.nflex == 1
+    assert model.nu == GRID.actuator_count == 4 and model.nflex == 1
     assert np.allclose(data.cam("overhead").xmat.reshape(3, 3)[:, 2], [0, 0, 1])  # looks straight down (-z)
-    for i, (sx, sy) in enumerate(J.CORNERS):
+    for i, (sx, sy) in enumerate(((-1, -1), (1, -1), (-1, 1), (1, 1))):
         assert np.allclose(
             data.body(f"carriage{i}").xpos,
             [sx * RIG.module.size_x_m / 2, sy * RIG.module.size_y_m / 2, RIG.module.z0_m],
@@ -58,7 +59,7 @@ def _seeded_steps(model: mujoco.MjModel, data: mujoco.MjData, seed: int, steps: 
     rng, out = np.random.default_rng(seed), []
     for k in range(steps):
         if k % round(0.25 / model.opt.timestep) == 0:
-            M.set_commands(model, data, rng.uniform(-0.15, 0.15, J.N_ACTUATORS))
+            M.set_commands(model, data, rng.uniform(-0.15, 0.15, model.nu))
         mujoco.mj_step(model, data)
         out.append(data.qpos.copy())
     return np.array(out)
@@ -138,12 +139,12 @@ def test_object_comes_to_rest_on_the_fabric(name, sphere_scene):
     assert data.body(J.OBJECT).xpos[2] > M.fabric_height(model, data, x, y)
 
 
-@pytest.mark.parametrize("corner", range(J.N_ACTUATORS))
+@pytest.mark.parametrize("corner", range(GRID.actuator_count))
 def test_lowering_a_corner_rolls_the_sphere_toward_it(corner, sphere_scene):
     model, data = sphere_scene
     M.place_object(model, data, 0.0, 0.0, rule=RIG.fall)
     start_xy, start_s = M.object_xy(model, data), data.time
-    commands = np.zeros(J.N_ACTUATORS)
+    commands = np.zeros(model.nu)
     commands[corner] = CORNER_DROP_M
     M.set_commands(model, data, commands)
     lift = model.jnt_qposadr[model.joint(f"lift{corner}").id]
@@ -155,9 +156,9 @@ def test_lowering_a_corner_rolls_the_sphere_toward_it(corner, sphere_scene):
         mujoco.mj_step(model, data)
     carriage = data.body(f"carriage{corner}").xpos
     assert carriage[2] == pytest.approx(RIG.module.z0_m - CORNER_DROP_M, abs=2e-3)  # + command lowers
-    vertex = data.flexvert_xpos[J.corner_vertex(RIG.fabric.resolution, corner)]
+    vertex = data.flexvert_xpos[J.vertex_id(RIG, *J.node_vertex(RIG, corner))]
     assert np.linalg.norm(vertex - carriage) < 2e-3  # corner stays welded
-    toward = np.array(J.CORNERS[corner], dtype=float) / np.sqrt(2)
+    toward = np.array(GRID.actuator_xy(corner)) / np.hypot(*GRID.actuator_xy(corner))
     assert (M.object_xy(model, data) - start_xy) @ toward > 0.01  # sim/README.md: 0.235 m in 4 s
     assert _warnings(data) == {} and not M.fell_off(model, data, RIG.fall)
 

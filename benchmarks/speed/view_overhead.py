@@ -20,10 +20,9 @@ from pathlib import Path
 
 from mantaray.host.link import Link
 from mantaray.host.transport import SerialTransport
-from mantaray.host.view import LiveOptions, LiveServer, RunView
+from mantaray.host.view import REPORTED_ACTUATORS, LiveOptions, LiveServer, RunView
 from mantaray.host.vmcu import VirtualMcu
 from mantaray.sim.bridge import Bridge, TrialSpec
-from mantaray.sim.mjcf import N_ACTUATORS
 from mantaray.sim.rig import Rig
 from mantaray.sim.trial_view import TrialView
 
@@ -56,7 +55,7 @@ def main() -> int:
                             path,
                             live.options.grpc_url if setup == "live view" else None,
                             {"setup": setup},
-                            N_ACTUATORS,
+                            REPORTED_ACTUATORS,
                             (rig.module.size_x_m, rig.module.size_y_m),
                             print,
                         )
