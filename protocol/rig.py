@@ -47,6 +47,7 @@ SCALARS = (  # the other entries this module and the generator read
     "encoder_address",
     "encoder_angle_register",
 )
+PIO_BOARD_PREFIX = {"uno": "uno", "mega2560": "mega"}  # a board's PlatformIO environments start with this
 MAX_ACTUATORS = 16  # jog.actuator and zero.actuators (a 16-bit mask) address actuators 0..15 (schema.toml)
 
 
@@ -149,8 +150,19 @@ class RigDescription:
 
     @property
     def vmcu_program(self) -> str:
-        """The virtual MCU built for this rig."""
+        """The virtual MCU built for this rig (CMakeLists.txt)."""
         return "mantaray-vmcu" if self.name == "module" else f"mantaray-vmcu-{self.name}"
+
+    @property
+    def simavr_harness(self) -> str:
+        """The simavr harness that plays this rig's board and hardware (CMakeLists.txt)."""
+        return "mantaray-simavr" if self.name == "module" else f"mantaray-simavr-{self.name}"
+
+    @property
+    def pio_env(self) -> str:
+        """The PlatformIO environment that builds this rig's board image (platformio.ini; scripts/avr_build.py
+        writes it to build/avr for the Uno's, build/avr-ENV for any other)."""
+        return "uno" if self.name == "module" else f"{PIO_BOARD_PREFIX[self.board.name]}_{self.name}"
 
     @property
     def modules_x(self) -> int:

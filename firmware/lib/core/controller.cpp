@@ -122,15 +122,33 @@ float TiltController::step(const ControllerConfig& config, float target_x, float
       normal = manhattan_normal(out.tilt_zx, out.tilt_zy);
       break;
   }
-  // Every actuator on the driven module's plane, turned about that module's centre: on one module, its corners (the
-  // paper's transform). On an array the plane goes on over the other modules, each actuator clamped to its travel,
-  // so the edges the module shares are neither a ridge nor a valley for the object to stick on (sim/README.md, Arrays).
-  const float centre_x = module_centre_x(module, config.module_x);
-  const float centre_y = module_centre_y(module, config.module_y);
+  // Every actuator on the driven module's plane, turned about that module's centre. On one module these are its
+  // corners, by the paper's transform as written (plane.h). On an array the plane goes on over the other modules,
+  // each actuator clamped to its travel, so the edges the module shares are neither a ridge nor a valley for the
+  // object to stick on (sim/README.md, Arrays); its slopes are taken once for the nine, and no noise is drawn without
+  // noise (the Mega's frame budget).
   out.module = module;
-  for (uint8_t i = 0; i < kActuatorCount; ++i) {
-    const float a = plane_command(normal, node_x(i, config.module_x) - centre_x, node_y(i, config.module_y) - centre_y);
-    out.command[i] = clamp_symmetric(a + config.noise_amplitude * noise_.uniform_pm1(), kActuatorRangeM);
+  if (kModuleCount == 1) {
+    float corner[kCorners];
+    plane_commands(normal, config.module_x, config.module_y, corner);
+    for (uint8_t c = 0; c < kCorners; ++c) {
+      out.command[c] = clamp_symmetric(corner[c] + config.noise_amplitude * noise_.uniform_pm1(), kActuatorRangeM);
+    }
+  } else {
+    // The plane's part along x of each column of nodes, and along y of each row: a_i is a column's plus a row's.
+    constexpr uint8_t kColumns = kModulesX + 1, kRows = kModulesY + 1;
+    const float slope_x = normal.x / normal.z, slope_y = normal.y / normal.z;  // [m/m] a_i per metre along x, y
+    const float centre_x = module_centre_x(module, config.module_x);
+    const float centre_y = module_centre_y(module, config.module_y);
+    float along_x[kColumns], along_y[kRows];  // [m]
+    for (uint8_t p = 0; p < kColumns; ++p) along_x[p] = slope_x * (node_x(p, config.module_x) - centre_x);
+    for (uint8_t q = 0; q < kRows; ++q) along_y[q] = slope_y * (node_y(q * kColumns, config.module_y) - centre_y);
+    const bool noisy = config.noise_amplitude != 0.0f;  // without noise no draw: the same commands, a shorter frame
+    for (uint8_t i = 0; i < kActuatorCount; ++i) {
+      const float a = along_x[i % kColumns] + along_y[i / kColumns];
+      out.command[i] =
+          clamp_symmetric(a + (noisy ? config.noise_amplitude * noise_.uniform_pm1() : 0.0f), kActuatorRangeM);
+    }
   }
   prev_x_ = x;
   prev_y_ = y;

@@ -192,8 +192,8 @@ void Firmware::send_identify_reply() {
 void Firmware::send_telemetry(uint32_t now_us) {
   using T = proto::Telemetry;
   const ControllerOutput& out = supervisor_.output();
-  if (kModuleCount > 1) {  // every actuator's command first: telemetry shows one module's four
-    proto::ArrayCommands all{};
+  proto::ArrayCommands all{};  // an array's: every actuator's command, sent first (telemetry shows one module's four)
+  if (kModuleCount > 1) {
     for (uint8_t i = 0; i < kActuatorCount; ++i) all.command[i] = to_wire_i16(out.command[i], T::kCommandScale);
     uint8_t payload[proto::ArrayCommands::kSize];
     proto::encode(all, payload);
@@ -212,7 +212,7 @@ void Firmware::send_telemetry(uint32_t now_us) {
   t.module = out.module;
   for (uint8_t c = 0; c < kCorners; ++c) {
     const uint8_t i = corner_actuator(t.module, c);
-    t.command[c] = to_wire_i16(out.command[i], T::kCommandScale);
+    t.command[c] = kModuleCount > 1 ? all.command[i] : to_wire_i16(out.command[i], T::kCommandScale);
     t.measured[c] = to_wire_i16(measured[i], T::kMeasuredScale);
   }
   t.crc_errors = decoder_.crc_errors();

@@ -23,11 +23,10 @@ Normal euclidean_normal(float theta_deg, float error_x, float error_y) {
 float actuator_x(uint8_t i, float module_x) { return (i & 1u) ? 0.5f * module_x : -0.5f * module_x; }
 float actuator_y(uint8_t i, float module_y) { return (i & 2u) ? 0.5f * module_y : -0.5f * module_y; }
 
-float plane_command(const Normal& n, float x, float y) { return (n.x * x + n.y * y) / n.z; }
-
 void plane_commands(const Normal& n, float module_x, float module_y, float (&command)[kCorners]) {
-  for (uint8_t i = 0; i < kCorners; ++i)
-    command[i] = plane_command(n, actuator_x(i, module_x), actuator_y(i, module_y));
+  for (uint8_t i = 0; i < kCorners; ++i) {
+    command[i] = (n.x * actuator_x(i, module_x) + n.y * actuator_y(i, module_y)) / n.z;
+  }
 }
 
 float max_tilt_deg(float module_x, float module_y, float range) {

@@ -31,9 +31,6 @@ Normal euclidean_normal(float theta_deg, float error_x, float error_y);
 // z0 cancels, so it is not an input. module_x, module_y [m] are the module's m and n.
 void plane_commands(const Normal& n, float module_x, float module_y, float (&command)[kCorners]);
 
-// The same plane's command [m] for an actuator at (x, y) [m] from the point it turns about: (n_x x + n_y y) / n_z.
-float plane_command(const Normal& n, float x, float y);
-
 // Largest tilt [deg] on both axes at once that keeps every corner within +-range [m]:
 // atan(range / ((m + n) / 2)); 26.57 deg for the paper's 0.5 x 0.5 m module and +-0.25 m.
 float max_tilt_deg(float module_x, float module_y, float range);

@@ -14,6 +14,6 @@ constexpr float kModuleSizeYM = 0.5f;  // [m] Each module's size n along y: one 
 constexpr uint16_t kEncoderCounts = 4096;  // Counts per revolution of the 12-bit magnetic encoder (AS5600). (identify_reply.encoder_counts)
 constexpr float kPulleyCircumferenceM = 0.04f;  // [m/rev] Belt travel per motor revolution: a GT2 20-tooth pulley. Measure yours (docs/BRINGUP.md). (identify_reply.pulley_circumference)
 constexpr float kMotorSpeedRpm = 120.0f;  // [rev/min] Motor shaft speed at full drive: RS Pro 834-7590, 12 V, no load (the paper).
-constexpr uint32_t kActuatorPeriodUs = 4000;  // [us] Period of the actuator position loops (250 Hz). (identify_reply.actuator_period)
+constexpr uint32_t kActuatorPeriodUs = 6000;  // [us] Period of the actuator position loops (250 Hz). (identify_reply.actuator_period)
 
 }  // namespace mr

@@ -8,7 +8,7 @@
 #include <cmath>   // std::fabs, std::hypot
 #include <random>  // std::mt19937, seeded cases
 
-#include "plane.h"       // manhattan_normal, plane_command
+#include "plane.h"       // manhattan_normal
 #include "rig_gen.h"     // kActuatorRangeM
 #include "route.h"       // route, Leg, module_centre_x, module_centre_y, node_x, node_y
 #include "supervisor.h"  // Supervisor
@@ -118,9 +118,9 @@ void check_on_the_plane(const mr::ControllerOutput& out, uint8_t module) {
   const mr::Normal n = mr::manhattan_normal(out.tilt_zx, out.tilt_zy);
   const float cx = mr::module_centre_x(module, kModule), cy = mr::module_centre_y(module, kModule);
   for (uint8_t i = 0; i < mr::kActuatorCount; ++i) {
-    float a = mr::plane_command(n, mr::node_x(i, kModule) - cx, mr::node_y(i, kModule) - cy);
+    float a = (n.x * (mr::node_x(i, kModule) - cx) + n.y * (mr::node_y(i, kModule) - cy)) / n.z;
     a = a > mr::kActuatorRangeM ? mr::kActuatorRangeM : (a < -mr::kActuatorRangeM ? -mr::kActuatorRangeM : a);
-    CHECK(out.command[i] == doctest::Approx(a).epsilon(1e-6));
+    CHECK(std::fabs(out.command[i] - a) < 1e-6f);
   }
 }
 
