@@ -235,3 +235,22 @@ def test_the_simulation_and_the_references_take_the_rig_from_the_description():
     assert Actuators().motor_speed_rpm == one.motor_speed_rpm
     pulley = P.lookup("actuators.pulley_circumference_m")
     assert pulley.low <= one.pulley_circumference_m <= pulley.high  # the board's pulley is a plausible plant
+
+
+def test_every_committed_rig_has_its_builds_under_the_names_the_description_gives():
+    """The board image's PlatformIO environment puts the rig's headers on the include path; the virtual MCU and the
+    simavr harness of the rig are built (CMakeLists.txt builds one of each per rig file)."""
+    import configparser
+
+    from mantaray.paths import REPO, native_artifact
+
+    ini = configparser.ConfigParser(inline_comment_prefixes=(";",))
+    ini.read(REPO / "platformio.ini")
+    for description in rig.committed():
+        flags = ini.get(f"env:{description.pio_env}", "build_flags")
+        assert f"-Ifirmware/rigs/{description.name}" in flags.split()
+        assert ini.get(f"env:{description.pio_env}", "board").startswith(
+            {"uno": "uno", "mega2560": "megaatmega2560"}[description.board.name]
+        )
+        assert native_artifact(description.vmcu_program).exists()
+        assert native_artifact(description.simavr_harness).exists()

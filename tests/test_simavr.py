@@ -14,7 +14,7 @@ from conformance_result import assert_suite_passed
 
 from mantaray.host.controller_settings import ControllerSettings
 from mantaray.host.link import CommandRefused, Link
-from mantaray.host.simavr import DEFAULT_ELF, SimulatedUno
+from mantaray.host.simavr import DEFAULT_ELF, SimulatedUno, elf_for
 from mantaray.host.transport import SerialTransport
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
@@ -22,6 +22,7 @@ from mantaray.protocol import rig
 
 RX_BUFFER_CYCLES = 64 * 10 * 16_000_000 // 115_200  # [cycles] 64 bytes of 10 bits at 115200 baud: 5.6 ms
 LOOP_PERIOD_CYCLES = 4000 * 16  # [cycles] the 250 Hz actuator loop period
+ARRAY_RIG = rig.named("array_2x2")  # the Mega 2560 and its nine actuators
 
 
 @pytest.fixture(scope="module")
@@ -242,48 +243,50 @@ def test_positions_as_fast_as_the_link_allows_lose_no_byte_while_the_loops_run(e
 @pytest.fixture(scope="module")
 def mega_elf():
     proc = subprocess.run(
-        [sys.executable, str(REPO / "scripts" / "avr_build.py"), "--env", "mega_array_2x2"],
+        [sys.executable, str(REPO / "scripts" / "avr_build.py"), "--env", ARRAY_RIG.pio_env],
         capture_output=True,
         text=True,
         timeout=900,
     )
     assert proc.returncode == 0, proc.stderr
-    return REPO / "build" / "avr-mega_array_2x2" / "firmware.elf"
+    return elf_for(ARRAY_RIG)
 
 
 def test_the_protocol_conformance_suite_passes_against_the_mega_binary(mega_elf):
     """The 2 x 2 array's image on the bench side (simulated clock), with the array's rig file."""
-    with SimulatedUno(mega_elf, bench=True, harness="mantaray-simavr-array_2x2") as mega:
+    with SimulatedUno(mega_elf, bench=True, harness=ARRAY_RIG.simavr_harness) as mega:
         proc = _conformance(mega.path, "--rig", "protocol/rigs/array_2x2.toml", "--", "-rs")
     assert_suite_passed(proc, "simulated")
 
 
 def test_the_mega_build_drives_the_arrays_nine_actuators_through_two_multiplexers(mega_elf):
     """The 2 x 2 array's image in the ATmega2560 harness: it reports the array's shape, reads all nine encoders (eight
-    on one multiplexer, the ninth on another) without a fault, and drives the centre actuator, a corner of every
-    module, which telemetry shows as module 0's corner 3."""
+    on one multiplexer, the ninth on another) without a fault, and drives all nine at once within the rig's loop
+    period; the centre actuator, a corner of every module, shows in telemetry as module 0's corner 3."""
     array = rig.load(rig.RIGS / "array_2x2.toml")
-    with SimulatedUno(mega_elf, bench=False, realtime=True, harness="mantaray-simavr-array_2x2") as mega:
+    with SimulatedUno(mega_elf, bench=False, realtime=True, harness=ARRAY_RIG.simavr_harness) as mega:
         link = Link(SerialTransport(mega.path), ack_timeout_s=1.0, description=array)
         reply = link.identify()
         assert (reply.modules_x, reply.modules_y, reply.actuator_count) == (2, 2, 9)
         assert link.rig_differences == []
         link.command(m.Configure(telemetry_period=0))
+        for actuator in (0, 1, 2, 3, 5, 6, 7, 8):
+            link.command(m.Jog(actuator=actuator, position=-0.02))
         link.command(m.Jog(actuator=4, position=0.03))
         t = Probe(link).until(lambda t: abs(t.measured[3] - 0.03) < 1e-3)
         assert t.faults == 0 and t.fault_actuator == 255 and t.module == 0
-        assert t.measured[:3] == pytest.approx((0.0, 0.0, 0.0), abs=1e-3)  # actuators 0, 1, 3 hold
+        assert t.measured[:3] == pytest.approx((-0.02,) * 3, abs=1e-3)  # actuators 0, 1, 3 where jogged
         link.close()
     stats = mega.stats
     assert stats["actuator_loops"]["count"] > 100
-    assert stats["actuator_loops"]["max_cycles"] < LOOP_PERIOD_CYCLES  # nine loops fit their period
+    assert stats["actuator_loops"]["max_cycles"] < ARRAY_RIG.value("actuator_period_us") * 16  # [cycles] fit the period
 
 
 def test_the_mega_reads_its_encoders_after_a_reset_that_left_a_multiplexer_channel_on(mega_elf):
     """A reset keeps the multiplexers powered, with the second one's channel on (the loops read actuator 8 last):
     at boot the firmware turns every multiplexer off before it reads, so no two encoders answer at once."""
     array = rig.load(rig.RIGS / "array_2x2.toml")
-    with SimulatedUno(mega_elf, bench=False, realtime=True, harness="mantaray-simavr-array_2x2") as mega:
+    with SimulatedUno(mega_elf, bench=False, realtime=True, harness=ARRAY_RIG.simavr_harness) as mega:
         link = Link(SerialTransport(mega.path), ack_timeout_s=1.0, description=array)
         link.identify()
         link.command(m.Configure(telemetry_period=0))
