@@ -5,11 +5,12 @@ namespace mr {
 
 namespace {
 
-// The column (or row) among count modules of size [m] whose span holds p [m], clamped to the array.
+// The column (or row) among count modules of size [m] whose span holds p [m], clamped to the array; on an edge, the
+// one beyond it. Compared with the edges rather than divided by the size: no division in the Mega's frame.
 uint8_t cell(float p, float size, uint8_t count) {
-  const float cells = (p + 0.5f * size * static_cast<float>(count)) / size;
-  if (!(cells > 0.0f)) return 0;
-  return cells >= static_cast<float>(count) ? static_cast<uint8_t>(count - 1) : static_cast<uint8_t>(cells);
+  uint8_t at = 0;
+  while (at + 1 < count && p >= (static_cast<float>(at + 1) - 0.5f * static_cast<float>(count)) * size) ++at;
+  return at;
 }
 
 float centre(uint8_t cell_index, float size, uint8_t count) {
