@@ -18,10 +18,6 @@ s on the array here, too slow for this many trials on 2 cores; its numbers are p
 --array-tilt-limit DEG runs the array at the big module's gentler tilt limit (14.04 deg: --array-tilt-limit 14.036).
 --array-others level measures the first design: the actuators outside the driven module held level (0) instead of
 on its plane (the simulated carriages take 0 for them; the firmware, its route and its corners are the same).
---handover fresh measures the other way to hand over: the host restarts the controller (stop, then start: fresh PIDs,
-velocity filter and noise generator) at the first telemetry from a new module, before the next camera frame; in
-lock-step the stop moves nothing, since the simulated actuators take commands from telemetry alone. The default,
-inherit, is the firmware's own: the PIDs carry on. Run it on the sphere (alpha 0: no noise generator to restart).
 --speed instead measures how fast each rig simulates, in this one process, one after the other: the paper's 0.5 m
 module, the array and the 1 m module each run the same three trials (starts and targets within 0.2 m of the
 centre, so that each stays on every rig), and it prints simulated seconds per wall second and trials per wall
@@ -30,7 +26,8 @@ Per trial it appends a line to OUT/results.jsonl (a rerun skips the trials there
 prints it; at the end it prints per rig and object: success (within epsilon at T), reached (within epsilon at any
 frame), median time to reach, median final error of successes, falls, the array's hand-overs and how its failed trials
 failed, and trials per wall second of each rig in this run; and it writes OUT/array_vs_module.png (rates by rig and
-object) and OUT/success_by_target.png (success by target cell over the 1 x 1 m workspace, each rig).
+object) and OUT/success_by_target.png (success by target cell over the 1 x 1 m workspace, each rig), each name with the
+array's variant after it where it is not the default.
 """
 
 from __future__ import annotations
@@ -40,6 +37,7 @@ import concurrent.futures
 import dataclasses
 import json
 import math
+import re
 import sys
 import time
 from pathlib import Path
@@ -55,6 +53,7 @@ from mantaray.sim.experiment import controller_gains
 from mantaray.sim.fidelity import parse_fidelity
 from mantaray.sim.findings import FIG3_ALPHA_M
 from mantaray.sim.objects import OBJECTS
+from mantaray.sim.paired import discordance
 from mantaray.sim.plant import Plant
 from mantaray.sim.rig import Rig
 
@@ -121,21 +120,12 @@ def simulated_rig(which: str, object_name: str, resolution: int, timestep_s: flo
 
 
 class Variant(Bridge):
-    """The bridge with the controller restarted at each hand-over (--handover fresh), or the actuators outside the
-    driven module held level (--array-others level)."""
+    """The bridge with the actuators outside the driven module held level (--array-others level)."""
 
-    fresh, level = False, False
-
-    def run(self, spec, progress=None):
-        self._module = None
-        return super().run(spec, progress)
+    level = False
 
     def _commands(self, reply: m.Telemetry) -> np.ndarray:
         commands = super()._commands(reply)
-        if self.fresh and self._module is not None and reply.module != self._module:
-            self.link.command(m.Stop())
-            self.link.command(m.Start())
-        self._module = reply.module
         if self.level:
             driven = list(self.rig.module.grid.module_corners(reply.module))
             commands = np.where(np.isin(np.arange(len(commands)), driven), commands, 0.0)
@@ -145,13 +135,18 @@ class Variant(Bridge):
 _bridges: dict = {}  # (rig, object, fidelity, hand-over) -> Bridge, one per worker process
 
 
-def variant(which: str, handover: str, array_tilt_limit_deg: float | None, others: str = "plane") -> str:
-    """What else than the rig and the trial decides an outcome: the array's hand-over, tilt limit and other actuators
-    (none for the module, which runs the paper's controller as it is)."""
+DEFAULT_VARIANT = "the firmware's"  # the array as its firmware drives it
+
+
+def variant(which: str, array_tilt_limit_deg: float | None, others: str = "plane") -> str:
+    """What else than the rig and the trial decides an outcome: the array's tilt limit and other actuators (none for
+    the module, which runs the paper's controller as it is)."""
     if which == "module":
         return ""
-    tilt = "" if array_tilt_limit_deg is None else f", tilt limit {array_tilt_limit_deg:g} deg"
-    return handover + tilt + ("" if others == "plane" else f", others {others}")
+    parts = ([] if array_tilt_limit_deg is None else [f"tilt limit {array_tilt_limit_deg:g} deg"]) + (
+        [] if others == "plane" else [f"others {others}"]
+    )
+    return ", ".join(parts) or DEFAULT_VARIANT
 
 
 def run_trial(
@@ -160,17 +155,16 @@ def run_trial(
     resolution: int,
     timestep_s: float,
     duration_s: float,
-    handover: str,
     array_tilt_limit_deg: float | None,
     others: str = "plane",
 ) -> dict:
-    key = (which, case.object_name, resolution, timestep_s, handover, others)
+    key = (which, case.object_name, resolution, timestep_s, others)
     if key not in _bridges:
         rig = simulated_rig(which, case.object_name, resolution, timestep_s)
         description = ARRAY if which == "array" else rig_description.default()
         link = Link(InProcessTransport(True, build=rig.module.build), description=description)
         bridge = _bridges[key] = Variant(link, rig, Plant(PLANT).tracking())
-        bridge.fresh, bridge.level = which == "array" and handover == "fresh", which == "array" and others == "level"
+        bridge.level = which == "array" and others == "level"
     bridge = _bridges[key]
     spec = TrialSpec(
         case.start_m,
@@ -202,7 +196,7 @@ def run_trial(
         "peak_speed_m_per_s": round(peak_speed_m_per_s(result.t_s, result.true_xy_m), 4),
         "handover_s": [float(t) for t in result.t_s[result.handover_rows]],
         "handovers": result.handovers,
-        "variant": variant(which, handover, array_tilt_limit_deg, others),
+        "variant": variant(which, array_tilt_limit_deg, others),
     }
 
 
@@ -286,7 +280,35 @@ def summarise(records: list[dict], objects: list[str]) -> dict:
     return out
 
 
-def figures(records: list[dict], summary: dict, objects: list[str], out: Path) -> list[Path]:
+def paired(records: list[dict]) -> None:
+    """Every object's trials pooled, the array against the module on the same trials: each rule's count on both, and
+    McNemar's exact test on the trials where they differ (sim/paired.py)."""
+    by_rig = {which: {(r["object"], r["k"]): r for r in records if r["rig"] == which} for which in RIGS}
+    both = sorted(set(by_rig["array"]) & set(by_rig["module"]))
+    if not both:
+        return
+    rules = {
+        "success": lambda r: r["success"],
+        "reached": lambda r: r["reached_s"] is not None,
+        "fell": lambda r: r["fell_off"],
+    }
+    for rule, holds in rules.items():
+        a = [holds(by_rig["array"][key]) for key in both]
+        b = [holds(by_rig["module"][key]) for key in both]
+        d = discordance(a, b)
+        ratio = f"{sum(a) / sum(b):.2f}x" if sum(b) else "inf"
+        print(
+            f"all objects, {rule}: array {sum(a)}/{len(both)}, module {sum(b)}/{len(both)} ({ratio}); "
+            f"array alone {d.only_a}, module alone {d.only_b}, McNemar p = {d.p_two_sided:.3g}"
+        )
+
+
+def figures(records: list[dict], summary: dict, objects: list[str], out: Path, variant_name: str) -> list[Path]:
+    """The rates by rig and object, and success by target cell; their names carry the array's variant (none for the
+    firmware's own: the paper's tilt limit, the others on the plane)."""
+    suffix = (
+        "" if variant_name == DEFAULT_VARIANT else "_" + re.sub(r"[^a-z0-9.]+", "_", variant_name.lower()).strip("_")
+    )
     import matplotlib
 
     matplotlib.use("Agg")
@@ -308,9 +330,9 @@ def figures(records: list[dict], summary: dict, objects: list[str], out: Path) -
         ax.set_ylim(0, 1)
         ax.set_title(label, fontsize=10)
     axes[0].legend(fontsize=8)
-    fig.suptitle("2 × 2 array (9 actuators) vs one 1 × 1 m module (4): the same trials", fontsize=10)
+    fig.suptitle(f"2 × 2 array (9 actuators; {variant_name}) vs one 1 × 1 m module (4): the same trials", fontsize=10)
     fig.tight_layout()
-    rates = out / "array_vs_module.png"
+    rates = out / f"array_vs_module{suffix}.png"
     fig.savefig(rates, dpi=120)
     plt.close(fig)
 
@@ -342,11 +364,11 @@ def figures(records: list[dict], summary: dict, objects: list[str], out: Path) -
                     )
         ax.axvline(0, color="w", lw=0.8, ls="--")
         ax.axhline(0, color="w", lw=0.8, ls="--")
-        ax.set_title(f"{which}: success by target cell", fontsize=10)
+        ax.set_title(f"{which}: success by target cell\n({', '.join(objects)})", fontsize=10)
         ax.set_xlabel("target x [m]")
     axes[0].set_ylabel("target y [m]")
     fig.colorbar(image, ax=axes, shrink=0.8, label="success share")
-    cells = out / "success_by_target.png"
+    cells = out / f"success_by_target{suffix}.png"
     fig.savefig(cells, dpi=120)
     plt.close(fig)
     return [rates, cells]
@@ -361,9 +383,6 @@ def main() -> int:
     parser.add_argument("--duration", type=float, default=20.0, help="T [s]: twice the paper's, for twice its span")
     parser.add_argument("--jobs", type=int, default=2, help="worker processes")
     parser.add_argument("--out", type=Path, default=Path("out/array_vs_module"))
-    parser.add_argument(
-        "--handover", choices=("inherit", "fresh"), default="inherit", help="PIDs at a hand-over (see above)"
-    )
     parser.add_argument("--rigs", default="array,module", help="comma-separated, of: " + ", ".join(RIGS))
     parser.add_argument("--speed", action="store_true", help="measure each rig's simulation speed instead (above)")
     parser.add_argument(
@@ -393,7 +412,7 @@ def main() -> int:
         for line in path.read_text().splitlines():
             r = json.loads(line)
             done[(r["rig"], r["object"], r["k"], r["variant"])] = r
-    wanted = {w: variant(w, args.handover, args.array_tilt_limit, args.array_others) for w in RIGS}
+    wanted = {w: variant(w, args.array_tilt_limit, args.array_others) for w in RIGS}
     todo = [
         (w, c)
         for c in cases(objects, args.trials, args.seed)
@@ -414,7 +433,6 @@ def main() -> int:
                 fidelity.resolution,
                 fidelity.timestep_s,
                 args.duration,
-                args.handover,
                 args.array_tilt_limit,
                 args.array_others,
             )
@@ -455,7 +473,8 @@ def main() -> int:
             print(
                 f"{name}: array / module success {ratio['success']:.2f}x, reached {ratio['reached']:.2f}x; falls {a['falls']} vs {m['falls']}"
             )
-    for figure in figures(records, summary, objects, args.out):
+    paired(records)
+    for figure in figures(records, summary, objects, args.out, wanted["array"]):
         print(f"figure {figure}")
     return 0
 

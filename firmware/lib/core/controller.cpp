@@ -57,14 +57,22 @@ float cascade_axis(Pid& pid, const PidGains& gains, const CascadeConfig& c, floa
 }  // namespace
 
 void TiltController::reset(uint32_t noise_seed) {
-  for (Pid& pid : pid_) pid.reset();
+  restart();
   noise_.seed(noise_seed);
+}
+
+void TiltController::restart() {
+  for (Pid& pid : pid_) pid.reset();
   has_prev_ = false;
   vx_ = vy_ = 0.0f;
 }
 
 float TiltController::step(const ControllerConfig& config, float target_x, float target_y, float x, float y, float dt,
                            ControllerOutput& out, uint8_t module) {
+  if (kModuleCount > 1 && module != module_) {  // a hand-over: the next module starts afresh (sim/README.md, Arrays)
+    restart();
+    module_ = module;
+  }
   const bool rate_known = has_prev_ && dt > 0.0f;
   if (!rate_known) dt = 0.0f;
   const float ex = target_x - x;

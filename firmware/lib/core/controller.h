@@ -49,8 +49,8 @@ struct ControllerOutput {
   float tilt_zx;                  // [deg] Euclidean: theta resolved along x
   float tilt_zy;                  // [deg] Euclidean: theta resolved along y
   uint8_t module;                 // the module whose corners drive the object (0 on one module)
-  float command[kActuatorCount];  // [m] a_i, + lowers the corner, within +-kActuatorRangeM; on an array the
-                                  // actuators that are not the module's corners hold level (0)
+  float command[kActuatorCount];  // [m] a_i, + lowers the corner, within +-kActuatorRangeM; on an array every
+                                  // actuator on the driven module's plane
 };
 
 class TiltController {
@@ -60,8 +60,9 @@ class TiltController {
 
   // One control step at a measured object position (x, y) [m] for the target (target_x, target_y) [m], driven by
   // module k's plane (route.h; 0 on one module). dt [s] is the time since the previous step's measurement; dt <= 0
-  // marks a first step (proportional only). Returns the distance to the target [m]. The PIDs carry on across a
-  // change of module (a hand-over): the error and the velocity are the same in every module's frame.
+  // marks a first step (proportional only). Returns the distance to the target [m]. A change of module (a
+  // hand-over) starts the PIDs and the velocity afresh, as a first step: carried on, the integral wound up toward
+  // the last leg's waypoint threw the object on (sim/README.md, Arrays). The noise runs on.
   float step(const ControllerConfig& config, float target_x, float target_y, float x, float y, float dt,
              ControllerOutput& out, uint8_t module = 0);
 
@@ -73,6 +74,9 @@ class TiltController {
   float vx_ = 0.0f;      // [m/s] filtered velocity (0 until a rate is known)
   float vy_ = 0.0f;      // [m/s]
   bool has_prev_ = false;
+  uint8_t module_ = 0;  // the module of the last step (arrays)
+
+  void restart();  // the PIDs, the previous position and the velocity forgotten; the noise runs on
 };
 
 }  // namespace mr

@@ -155,6 +155,30 @@ TEST_CASE(
   CHECK(s.state() == State::kReached);  // judged against the target, not a waypoint
 }
 
+TEST_CASE("array: a hand-over starts the next module's PIDs afresh, as a first step would") {
+  // Ten frames in module 0 wind its integral up toward the edge; the frame that hands over to module 1 must tilt as a
+  // supervisor that starts at that very position does on its first frame (proportional only).
+  Supervisor carried, fresh;
+  uint8_t field = 0;
+  for (Supervisor* s : {&carried, &fresh}) {
+    REQUIRE(s->set_target(proto::SetTarget{0.3f, -0.3f}, field) == ErrorCode::kOk);
+    REQUIRE(s->start(0) == ErrorCode::kOk);
+  }
+  uint32_t t = 0;
+  for (uint16_t frame = 1; frame <= 10; ++frame) {
+    t += 83333;
+    REQUIRE(carried.position(pos(frame, t, -0.3f + 0.02f * frame, -0.3f), t, field) == ErrorCode::kOk);
+  }
+  CHECK(carried.output().module == 0);
+  t += 83333;
+  REQUIRE(carried.position(pos(11, t, -0.01f, -0.3f), t, field) == ErrorCode::kOk);
+  REQUIRE(fresh.position(pos(1, t, -0.01f, -0.3f), t, field) == ErrorCode::kOk);
+  CHECK(carried.output().module == 1);
+  CHECK(fresh.output().module == 1);
+  CHECK(carried.output().tilt_zx == fresh.output().tilt_zx);
+  CHECK(carried.output().tilt_zy == fresh.output().tilt_zy);
+}
+
 TEST_CASE("array: an object beside the surface by up to half a module is still a measurement") {
   Supervisor s;
   uint8_t field = 0;
