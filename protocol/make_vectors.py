@@ -135,6 +135,11 @@ FRAMES = [
         4,
     ),
     ("boot after watchdog", m.Boot(m.ResetCause.WATCHDOG), 0),
+    (
+        "array_commands of a 2 x 2 array",
+        m.ArrayCommands(command=(0.125, -0.25, 0.25, 0.0, -0.0625, 0.1, 0.00001, -0.00001, 0.2) + (0.0,) * 7),
+        5,
+    ),
 ]
 
 

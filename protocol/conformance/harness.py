@@ -345,13 +345,15 @@ def config_fingerprint(dut: Dut) -> tuple:
     for every field of BASE_CONFIG vs ALT_CONFIG: module sizes (set_target bounds), controller,
     tilt_limit, noise and seed (first step's tilts and commands), tolerance (reached or not),
     telemetry_period (unsolicited telemetry), deadman (fault after 50 ms) and velocity_filter (the cascade's second
-    step's tilts). Ends in idle."""
+    step's tilts). The run stays in module 0, about its centre: a hand-over would start the controller afresh.
+    Ends in idle."""
     r1 = dut.result(m.SetTarget(0.22, 0.0))
     r2 = dut.result(m.SetTarget(0.2, 0.2))
-    dut.set_target(0.18, 0.12)
+    cx, cy = dut.grid().module_centre(0)
+    dut.set_target(cx + 0.18, cy + 0.12)
     dut.start()
-    t1 = dut.position(-0.2, -0.12)
-    t2 = dut.position(0.13, 0.12)
+    t1 = dut.position(cx - 0.2, cy - 0.12)
+    t2 = dut.position(cx + 0.13, cy + 0.12)
     periodic = dut.advance(0.05)
     t3 = dut.probe()
     dut.stop()

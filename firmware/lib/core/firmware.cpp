@@ -9,9 +9,10 @@ namespace {
 
 using proto::ErrorCode;
 
-// Physical value -> scaled int16 wire value, rounded, saturated; NaN -> 0.
-int16_t to_wire_i16(float value, float scale) {
-  const float raw = value / scale;
+// Physical value -> int16 wire value: times per_unit (1 / the field's scale: a product, not a division, in every
+// frame), rounded, saturated; NaN -> 0.
+int16_t to_wire_i16(float value, float per_unit) {
+  const float raw = value * per_unit;
   if (!(raw == raw)) return 0;
   if (raw >= 32767.0f) return 32767;
   if (raw <= -32768.0f) return -32768;
@@ -194,7 +195,7 @@ void Firmware::send_telemetry(uint32_t now_us) {
   const ControllerOutput& out = supervisor_.output();
   proto::ArrayCommands all{};  // an array's: every actuator's command, sent first (telemetry shows one module's four)
   if (kModuleCount > 1) {
-    for (uint8_t i = 0; i < kActuatorCount; ++i) all.command[i] = to_wire_i16(out.command[i], T::kCommandScale);
+    for (uint8_t i = 0; i < kActuatorCount; ++i) all.command[i] = to_wire_i16(out.command[i], 1.0f / T::kCommandScale);
     uint8_t payload[proto::ArrayCommands::kSize];
     proto::encode(all, payload);
     send(proto::ArrayCommands::kId, payload, sizeof payload);
@@ -207,13 +208,13 @@ void Firmware::send_telemetry(uint32_t now_us) {
   t.faults = supervisor_.faults();
   t.position_frame = supervisor_.last_frame();
   t.position_age = supervisor_.position_age_ms(now_us);
-  t.tilt_zx = to_wire_i16(out.tilt_zx, T::kTiltZxScale);
-  t.tilt_zy = to_wire_i16(out.tilt_zy, T::kTiltZyScale);
+  t.tilt_zx = to_wire_i16(out.tilt_zx, 1.0f / T::kTiltZxScale);
+  t.tilt_zy = to_wire_i16(out.tilt_zy, 1.0f / T::kTiltZyScale);
   t.module = out.module;
   for (uint8_t c = 0; c < kCorners; ++c) {
     const uint8_t i = corner_actuator(t.module, c);
-    t.command[c] = kModuleCount > 1 ? all.command[i] : to_wire_i16(out.command[i], T::kCommandScale);
-    t.measured[c] = to_wire_i16(measured[i], T::kMeasuredScale);
+    t.command[c] = kModuleCount > 1 ? all.command[i] : to_wire_i16(out.command[i], 1.0f / T::kCommandScale);
+    t.measured[c] = to_wire_i16(measured[i], 1.0f / T::kMeasuredScale);
   }
   t.crc_errors = decoder_.crc_errors();
   t.frame_errors = decoder_.frame_errors();

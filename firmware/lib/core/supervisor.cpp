@@ -1,7 +1,7 @@
 // Supervisor state machine and validation.
 #include "supervisor.h"
 
-#include <math.h>  // fabsf, hypotf
+#include <math.h>  // fabsf
 
 #include "plane.h"  // max_tilt_deg
 #include "route.h"  // route, Leg
@@ -241,9 +241,13 @@ ErrorCode Supervisor::position(const proto::ObjectPosition& msg, uint32_t now_us
   has_step_ = true;
   last_step_capture_us_ = msg.capture_time;
   const Leg leg = route(msg.x, msg.y, target_x_, target_y_, config_.module_x, config_.module_y, config_.tolerance);
-  float distance = controller_.step(control_, leg.target_x, leg.target_y, msg.x, msg.y, dt, output_, leg.module);
-  if (kModuleCount > 1) distance = hypotf(target_x_ - msg.x, target_y_ - msg.y);  // to the target, not a waypoint
-  state_ = distance < config_.tolerance ? State::kReached : State::kRunning;
+  const float distance = controller_.step(control_, leg.target_x, leg.target_y, msg.x, msg.y, dt, output_, leg.module);
+  bool reached = distance < config_.tolerance;
+  if (kModuleCount > 1) {  // to the target, not a waypoint; squared: no square root in the Mega's frame
+    const float ex = target_x_ - msg.x, ey = target_y_ - msg.y;
+    reached = ex * ex + ey * ey < config_.tolerance * config_.tolerance;
+  }
+  state_ = reached ? State::kReached : State::kRunning;
   return ErrorCode::kOk;
 }
 
