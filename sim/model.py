@@ -146,12 +146,12 @@ def fell_off(model: mujoco.MjModel, data: mujoco.MjData, rule: FallRule = ANY_FA
     """Whether the object has left the fabric, by rule (pass rig.fall); any one of:
 
     - its marker is outside the frame by more than rule.outside_margin_m in x or y (the frame's
-      half-sizes are read from the outermost carriages' positions);
+      half-sizes are read from the last carriage's position: PROTOCOL.md §5 numbers it at the (+x, +y) corner);
     - its centre is more than rule.below_fabric_m below the fabric's lowest vertex (it went over an
       edge or through the cloth);
     - its centre is below rule.floor_z_m (on the floor).
     """
-    half = np.abs(model.body_pos[[model.body(f"carriage{i}").id for i in range(model.nu)], :2]).max(axis=0)
+    half = np.abs(model.body(f"carriage{model.nu - 1}").pos[:2])
     x, y = object_xy(model, data)
     z = data.body(OBJECT).xpos[2]
     lowest = fabric_vertices(model, data)[:, 2].min()
