@@ -10,6 +10,7 @@ from typing import Protocol
 import serial
 
 from mantaray.paths import native_artifact
+from mantaray.protocol.rig import build_of
 
 
 class Transport(Protocol):
@@ -82,9 +83,7 @@ class InProcessTransport:
 @functools.cache
 def _capi(build: str) -> ctypes.CDLL:
     """The C library of a rig's virtual MCU, its signatures declared (loaded once per process)."""
-    lib = ctypes.CDLL(
-        str(native_artifact("libmantaray_capi.so" if build == "module" else f"libmantaray_capi_{build}.so"))
-    )
+    lib = ctypes.CDLL(str(native_artifact(f"{build_of(build, 'libmantaray_capi', '_')}.so")))
     lib.mr_vmcu_new.argtypes, lib.mr_vmcu_new.restype = [ctypes.c_int], ctypes.c_void_p
     lib.mr_vmcu_free.argtypes, lib.mr_vmcu_free.restype = [ctypes.c_void_p], None
     handle_bytes: list = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_size_t]

@@ -150,13 +150,13 @@ class RigDescription:
 
     @property
     def vmcu_program(self) -> str:
-        """The virtual MCU built for this rig (CMakeLists.txt)."""
-        return "mantaray-vmcu" if self.name == "module" else f"mantaray-vmcu-{self.name}"
+        """The virtual MCU built for this rig."""
+        return build_of(self.name, "mantaray-vmcu")
 
     @property
     def simavr_harness(self) -> str:
-        """The simavr harness that plays this rig's board and hardware (CMakeLists.txt)."""
-        return "mantaray-simavr" if self.name == "module" else f"mantaray-simavr-{self.name}"
+        """The simavr harness that plays this rig's board and hardware."""
+        return build_of(self.name, "mantaray-simavr")
 
     @property
     def pio_env(self) -> str:
@@ -377,6 +377,12 @@ def committed() -> list[RigDescription]:
 def default() -> RigDescription:
     """The default rig, protocol/rig.toml: what the host and the simulation assume unless given another."""
     return load()
+
+
+def build_of(name: str, base: str, joiner: str = "-") -> str:
+    """A rig's build of base, as CMakeLists.txt names it: base for the default rig ("module"), else base, joiner and
+    the rig's name (mantaray-vmcu-array_2x2, libmantaray_capi_array_2x2)."""
+    return base if name == "module" else f"{base}{joiner}{name}"
 
 
 def named(name: str) -> RigDescription:

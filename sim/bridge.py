@@ -224,7 +224,8 @@ class Bridge:
         if (identity.modules_x, identity.modules_y) != shape:
             raise LinkError(
                 f"the firmware was built for {identity.modules_x} x {identity.modules_y} modules, the simulated rig "
-                f"has {shape[0]} x {shape[1]}: run the build for its rig file (mantaray-vmcu-{rig.module.build})"
+                f"has {shape[0]} x {shape[1]}: run the build for its rig file "
+                f"({rig_description.build_of(rig.module.build, 'mantaray-vmcu')})"
             )
         simulated = identity.clock == m.Clock.SIMULATED
         if lockstep and not simulated:
