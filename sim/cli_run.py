@@ -56,8 +56,9 @@ def _trial(args: argparse.Namespace, parser: argparse.ArgumentParser):
     settings = controller_settings(parser, args)
     args.plant = plant_for_settings(parser, settings, args.plant)
     plant = Plant(args.plant).set(dict(args.set))
+    args.rig = args.rig or rig_description.default()
     try:
-        rig = plant.rig(args.object).with_description(args.rig or rig_description.default())
+        rig = plant.rig(args.object).with_description(args.rig)
     except ValueError as exc:  # a rig file whose actuators the simulated rig does not have
         parser.error(f"--rig: {exc}")
     if args.vision:
@@ -165,7 +166,7 @@ def _settings(args: argparse.Namespace) -> dict:
     """What the trial was: every argument but where its outputs go and how it is watched."""
     watching = ("out", "json", "video", "video_fps", "viewer", "live", "live_port", "bind", "linger")
     settings = {k: v for k, v in sorted(vars(args).items()) if k not in (*watching, "func", "command", "sim_command")}
-    return {**settings, "rig": (args.rig or rig_description.default()).name}  # the rig by its build's name
+    return {**settings, "rig": args.rig.name}  # the rig by its build's name
 
 
 def _trial_stem(args: argparse.Namespace) -> str:
