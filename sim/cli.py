@@ -45,17 +45,24 @@ should hold. Writes OUT/settings.toml (for mantaray rig --settings, sim run and 
 scores, beside the paper's Manhattan on the same sample) and history.png; the final check's trials go to
 OUT/final/results.jsonl (resumable too), its heatmaps under both rules beside them."""
 
-FIDELITY = """The fidelity gate: does a cheaper physics configuration (the candidate) keep a finer one's trial
-outcomes?
+FIDELITY = """The fidelity gate: does a cheaper physics configuration (the candidate) give a finer one's answers?
 
-It runs one paired sample (a stratified draw of the paper's cells, every controller on each) at the candidate, at the
-finer fidelity, and at the finer one with every start moved 0.1 mm (the noise floor), and tests each outcome (within ε
-at T, reached, fell off, time to reach, final error) for a bias and for more flips than the floor. The verdict: the
-candidate "keeps the finer one's outcomes" or "changes them", with the numbers. Trials go to --trials-dir as they
-finish, shared by every gate that needs the same run: interrupt it and the same command continues. --runs compares
-three existing heatmap results files instead. The trials go round the three runs in an order whose every prefix is a
-stratified sample, so Ctrl-C writes the report of the trials paired so far (no verdict; exit 130). Exit status: 0
-keeps, 1 changes, 2 a usage error, 3 no verdict (the sample is incomplete, or the physics diverged)."""
+It runs one paired sample (a stratified draw of the paper's cells, every controller on each) at the candidate and at
+the finer fidelity (by default `finer`: 6 vertices a side more at half the step), and judges, controller by
+controller, the answers a user reads: the rates reached, within ε at T and fell off, the mean time to reach and the
+median final error. Each is the paired difference candidate − finer with its 90 % interval: inside ±5 percentage
+points (±0.5 s, ±5 mm) the two agree, wholly outside they differ (two one-sided tests at 5 %); the same for the
+contrast of every two controllers, which a claim that one beats another rests on. Verdict: the candidate "keeps the
+finer one's answers" (all agree), "changes the finer one's answers" (any differs), or is undecided, with the pairs
+per controller that would decide it; --until-decided grows the sample (more trials per cell) until it is decided or
+--max-pairs is reached. Reported beside it, not judged: each rate per zone of the workspace (centre, axes, diagonals, edges,
+corners), and the flips (trials whose outcome the candidate changes) against a floor: the finer run with every start
+moved by the rig's repeatability (2 mm; --shift, repeatable: --shift 0.002 --shift 0.0001 adds the 0.1 mm diagnostic
+of chaos). Trials go to --trials-dir as they finish, shared by every gate that needs the same run: interrupt it and
+the same command continues. --runs compares existing heatmap results files instead. The trials go round the runs in
+an order whose every prefix is a stratified sample, so Ctrl-C writes the report of the trials paired so far (no
+verdict; exit 130). Exit status: 0 keeps, 1 changes, 2 a usage error, 3 no verdict (undecided, the sample
+incomplete, or the physics diverged)."""
 
 COMPARE = "The difference map of two heatmap runs (first minus second), like the paper's Euclidean - Manhattan."
 
@@ -348,11 +355,16 @@ def _add_fidelity(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> Non
     )
     gate.add_argument(
         "--candidate",
-        default="fast",
+        default="reference",
         help="the configuration under test: fast, reference, or "
         "RESOLUTION:TIMESTEP [vertices per side : s] (like 15:0.002)",
     )
-    gate.add_argument("--finer", default="reference", help="the configuration whose outcomes it must keep")
+    gate.add_argument(
+        "--finer",
+        default="finer",
+        help="the configuration whose answers it must give: finer (the candidate's mesh 6 vertices a side finer, "
+        "at half its step), or as --candidate",
+    )
     gate.add_argument(
         "--controller",
         action="append",
@@ -362,13 +374,36 @@ def _add_fidelity(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> Non
     )
     O.sample(gate, cells_per_stratum=8, trials_per_cell=5)
     gate.add_argument("--seed", type=number(0, integer=True), default=77, help="seed of the sample's cells and trials")
-    gate.add_argument("--shift", type=float, default=1e-4, help="[m] how far the noise floor's run moves every start")
+    gate.add_argument(
+        "--shift",
+        type=float,
+        action="append",
+        metavar="M",
+        help="[m] how far a floor's run moves every start; repeatable, one floor each (default: 0.002, the rig's "
+        "repeatability)",
+    )
+    gate.add_argument(
+        "--until-decided",
+        action="store_true",
+        help="while undecided, grow the sample to the pairs its intervals say would decide it, and go on",
+    )
+    gate.add_argument(
+        "--max-pairs",
+        type=number(1, integer=True),
+        default=1000,
+        help="with --until-decided, the most pairs per controller the sample grows to",
+    )
+    gate.add_argument(
+        "--report-only",
+        action="store_true",
+        help="judge the trials --trials-dir holds and run none (a sample too costly here, or still running elsewhere)",
+    )
     gate.add_argument(
         "--runs",
-        nargs=3,
-        metavar=("CANDIDATE", "FINER", "FLOOR"),
-        help="compare three existing results files (the floor: the finer run with its starts moved) "
-        "instead of running the sample",
+        nargs="+",
+        metavar="FILE",
+        help="compare existing results files instead of running the sample: the candidate's, the finer run's, "
+        "then any floors (the finer run with its starts moved)",
     )
     gate.add_argument(
         "--trials-dir",

@@ -1,4 +1,4 @@
-"""`mantaray sim fidelity`: the fidelity gate, does a cheaper physics keep a finer one's outcomes."""
+"""`mantaray sim fidelity`: the fidelity gate, does a cheaper physics give a finer one's answers."""
 
 from __future__ import annotations
 
@@ -14,7 +14,8 @@ from .cli_common import interruptible, output, workers
 
 
 def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
-    """`sim fidelity`: the paired sample run (or --runs loaded), compared, and the verdict as the exit status."""
+    """`sim fidelity`: the paired sample run (or --runs loaded), compared, grown while undecided with
+    --until-decided, and the verdict as the exit status."""
     import shlex
 
     from . import fidelity as G
@@ -23,24 +24,40 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from .results_file import ResultsFileBusy
 
     try:
-        sample, runs, candidate, finer, shift_m, sample_text = _gate(args)
+        sample, runs, candidate, finer, sample_text = _gate(args)
+        while True:
+            interrupted = sample is not None and not args.report_only and not _run_missing(sample, runs, args.jobs)
+            report = G.compare(runs)
+            if (
+                interrupted
+                or sample is None
+                or args.report_only
+                or not args.until_decided
+                or report["verdict"] != G.UNDECIDED
+            ):
+                break
+            more = G.grown(sample, report["pairs_to_decide"], args.max_pairs)
+            if isinstance(more, str):
+                print(f"undecided at {report['pairs']} paired trials, and it stays so: {more}", file=sys.stderr)
+                break
+            print(
+                f"undecided at {min(report['pairs_per_arm'].values())} pairs per controller: growing the sample to "
+                f"{more.trials_per_cell} trials per cell ({len(more.cells()) * more.trials_per_cell} pairs)",
+                file=sys.stderr,
+                flush=True,
+            )
+            sample = more
+            runs = G.open_runs(sample, candidate, finer, Path(args.trials_dir), _shifts(args))
     except ExperimentMismatch as exc:
         return _refused(f"{exc} (the gate keeps its runs in --trials-dir {args.trials_dir})")
-    except (ValueError, ResultsFileBusy) as exc:
+    except (ValueError, ResultsFileBusy) as exc:  # a GateMismatch is a ValueError too
         return _refused(str(exc))
-    try:
-        interrupted = sample is not None and not _run_missing(sample, runs, args.jobs)
     except SimulationUnstable as exc:
         return _refused(f"{exc}; the finished trials are kept in {args.trials_dir}", 3)
-    try:
-        report = G.compare(runs)
-    except G.GateMismatch as exc:
-        return _refused(str(exc))
     report.update(
         candidate=candidate.label,
         finer=finer.label,
-        shift_m=shift_m,
-        sample_text=sample_text,
+        sample_text=sample_text if sample is None else _described(sample),
         command=shlex.join(["mantaray", *sys.argv[1:]]),
     )
     p = runs[0].finer.experiment
@@ -63,16 +80,25 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     return {G.KEEPS: 0, G.CHANGES: 1}.get(report["verdict"], 3)
 
 
+def _shifts(args: argparse.Namespace) -> tuple[float, ...]:
+    from . import fidelity as G
+
+    return tuple(args.shift or (G.REPEATABILITY_M,))
+
+
 def _gate(args: argparse.Namespace):
-    """(sample, runs, candidate, finer, shift [m], the sample in words) from the arguments: the three runs of each arm
-    opened, or with --runs the three files loaded (sample None: nothing to run). ValueError for a bad argument."""
+    """(sample, runs, candidate, finer, the runs in words) from the arguments: every arm's runs opened, or with --runs
+    the files loaded (sample None: nothing to run). ValueError for a bad argument."""
     from . import fidelity as G
 
     if args.runs:
+        if len(args.runs) < 2:
+            raise ValueError("--runs takes the candidate's results file and the finer run's, then any floors")
         runs = G.load_runs(*args.runs)
         candidate, finer = (G.run_fidelity(getattr(runs[0], n)) for n in ("candidate", "finer"))
-        return None, runs, candidate, finer, runs[0].floor.experiment.start_shift_m, f"the runs {', '.join(args.runs)}"
-    candidate, finer = G.parse_fidelity(args.candidate), G.parse_fidelity(args.finer)
+        return None, runs, candidate, finer, f"the runs {', '.join(args.runs)}"
+    candidate = G.parse_fidelity(args.candidate)
+    finer = G.parse_fidelity(args.finer, candidate)
     arms = tuple(G.Arm.parse(c) for c in (args.controller or ("manhattan", "euclidean")))
     sample = G.GateSample(
         object_name=args.object,
@@ -85,15 +111,19 @@ def _gate(args: argparse.Namespace):
         seed=args.seed,
         duration_s=args.duration,
     )
-    sample.experiment(arms[0], candidate, args.shift)  # the protocol's own checks, before any work
-    runs = G.open_runs(sample, candidate, finer, Path(args.trials_dir), args.shift)
-    text = (
-        f"{args.object} on the {sample.plant_label} plant, α = {args.alpha:g} m, "
-        f"{', '.join(a.label for a in arms)}: {len(sample.cells())} cells "
-        f"({args.cells_per_stratum} from each stratum) x {args.trials_per_cell} trials, seed "
-        f"{args.seed}, T = {args.duration:g} s"
+    for shift_m in _shifts(args):
+        sample.experiment(arms[0], candidate, shift_m)  # the protocol's own checks, before any work
+    runs = G.open_runs(sample, candidate, finer, Path(args.trials_dir), _shifts(args))
+    return sample, runs, candidate, finer, _described(sample)
+
+
+def _described(sample) -> str:
+    return (
+        f"{sample.object_name} on the {sample.plant_label} plant, α = {sample.alpha_m:g} m, "
+        f"{', '.join(a.label for a in sample.arms)}: {len(sample.cells())} cells "
+        f"({sample.cells_per_stratum} from each stratum) x {sample.trials_per_cell} trials, seed "
+        f"{sample.seed}, T = {sample.duration_s:g} s"
     )
-    return sample, runs, candidate, finer, args.shift, text
 
 
 def _run_missing(sample, runs: list, jobs: int | None) -> bool:
@@ -102,7 +132,7 @@ def _run_missing(sample, runs: list, jobs: int | None) -> bool:
     from .progress import Progress
 
     left = G.missing_trials(runs)
-    total = 3 * sum(len(r.finer.experiment.cell_ids()) * r.finer.experiment.trials_per_cell for r in runs)
+    total = sum(len(r.finer.experiment.cell_ids()) * r.finer.experiment.trials_per_cell * len(r.files()) for r in runs)
     bar = Progress(total, initial=total - left, unit="trial", label="fidelity")
     interruptible()
     try:
@@ -121,13 +151,21 @@ def _refused(why: str, status: int = 2) -> int:
 
 
 def _verdict_line(report: dict, candidate, finer, path) -> str:
+    from . import fidelity as G
+
+    head = f"{candidate.label} against {finer.label}"
     if report["verdict"] is None:
+        return f"{head}: incomplete ({report['pairs']} of {report['expected_pairs']} paired trials); {path}"
+    if report["verdict"] == G.UNDECIDED:
+        more = report["pairs_to_decide"]
         return (
-            f"{candidate.label} against {finer.label}: incomplete ({report['pairs']} of {report['expected_pairs']} "
-            f"paired trials); {path}"
+            f"{head}: undecided at {report['pairs']} paired trials"
+            + f"; about {more} pairs per controller would decide it (--until-decided)"
+            + "".join(f"\n  {c}" for c in report["undecided"])
+            + f"\n{path}"
         )
     return (
-        f"{candidate.label} {report['verdict']} of {finer.label} ({report['pairs']} paired trials)"
+        f"{candidate.label} {report['verdict']} ({finer.label}; {report['pairs']} paired trials)"
         + "".join(f"\n  {c}" for c in report["changed"])
         + f"\n{path}"
     )

@@ -1,4 +1,4 @@
-"""Paired comparisons of two runs of the same trials: McNemar's exact test on a yes/no outcome, a bootstrap on a number."""
+"""Paired comparisons of two runs of the same trials: McNemar's exact test on a yes/no outcome, bootstraps on a number."""
 
 from __future__ import annotations
 
@@ -94,6 +94,30 @@ def mean_interval(differences: Sequence[float], level: float = 0.95, seed: int =
     tail = (1.0 - level) / 2.0
     return MeanInterval(
         int(d.size), float(d.mean()), float(np.quantile(means, tail)), float(np.quantile(means, 1.0 - tail))
+    )
+
+
+def median_difference_interval(
+    a: Sequence[float], b: Sequence[float], level: float = 0.95, seed: int = 0
+) -> MeanInterval:
+    """The difference of medians, median(a) − median(b), over pairs (a[i], b[i]), with a bootstrap percentile
+    interval that resamples the pairs (NaN bounds with fewer than MIN_BOOTSTRAP_N pairs; NaN throughout with none).
+    Returned as a MeanInterval whose mean is that difference."""
+    x, y = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if x.shape != y.shape:
+        raise ValueError(f"paired values must be as many in both runs, got {x.size} and {y.size}")
+    if not 0 < level < 1:
+        raise ValueError(f"level must be in (0, 1), got {level}")
+    if x.size == 0:
+        return MeanInterval(0, math.nan, math.nan, math.nan)
+    difference = float(np.median(x) - np.median(y))
+    if x.size < MIN_BOOTSTRAP_N:
+        return MeanInterval(int(x.size), difference, math.nan, math.nan)
+    pick = np.random.default_rng(seed).integers(0, x.size, size=(BOOTSTRAP_DRAWS, x.size))
+    medians = np.median(x[pick], axis=1) - np.median(y[pick], axis=1)
+    tail = (1.0 - level) / 2.0
+    return MeanInterval(
+        int(x.size), difference, float(np.quantile(medians, tail)), float(np.quantile(medians, 1.0 - tail))
     )
 
 

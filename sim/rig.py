@@ -61,6 +61,7 @@ class Actuators:
         return self.motor_speed_rpm / 60.0 * self.pulley_circumference_m
 
 
+FINER_BY_VERTICES = 6  # [vertices per side] how much finer `finer` is than the fidelity it checks (half the step too)
 STATED_AT_RESOLUTION = 15  # [vertices per side] the mesh at which sim/plant.toml states the edges' time constant
 
 
@@ -84,14 +85,19 @@ class Fidelity:
         """As a command line gives it: RESOLUTION:TIMESTEP."""
         return f"{self.resolution}:{self.timestep_s:g}"
 
+    def finer(self) -> Fidelity:
+        """The configuration a fidelity is checked against (`finer` on the command line): FINER_BY_VERTICES more
+        vertices a side at half the step, the same integrator and contact."""
+        return Fidelity(self.resolution + FINER_BY_VERTICES, self.timestep_s / 2)
 
-# The named fidelities, the one place they are written. The reference is the configuration whose outcomes the
-# project's answers hold at, and what every command runs by default: 15 x 15 at 0.5 ms, the largest step whose
-# outcomes a finer one keeps (the fidelity gate, sim/fidelity.py: 0.25 ms keeps 0.5 ms's, 0.5 ms changes 1 ms's;
-# docs/results/fidelity/convergence.md). It is not converged in the mesh (21 x 21 changes its outcomes): it stays
-# the default until a finer mesh is shown to be, since every answer must be re-run there anyway. The fast mode is
-# the one the committed maps, the fitted `paper` plant and the tuned settings of docs/results.md were made in, which
-# the gate finds changes the outcomes: kept by name to read them.
+
+# The named fidelities, the one place they are written. The reference is the configuration whose answers the
+# project's results hold at, and what every command runs by default: 15 x 15 at 0.5 ms. It is not settled: the
+# fidelity gate (sim/fidelity.py; docs/results/fidelity/convergence.md) finds 21 x 21 changes its answers, and that
+# 0.25 ms keeps them undecided at 200 pairs per controller; it stays the default until a configuration passes, since
+# every answer must be re-run there anyway. The fast mode is the one the committed maps, the fitted `paper` plant and
+# the tuned settings of docs/results.md were made in, which the gate finds changes the answers: kept by name to read
+# them.
 FIDELITIES = {"fast": Fidelity(11, 0.002), "reference": Fidelity(15, 0.0005)}
 DEFAULT_FIDELITY = FIDELITIES["reference"]
 

@@ -61,7 +61,8 @@ def main() -> int:
     parser.add_argument(
         "--meshes",
         default="11:0.00025,15:0.00025,21:0.00025",
-        help="RESOLUTION:TIMESTEP, comma-separated, coarsest first: the last is the finest",
+        help="fast, reference, RESOLUTION:TIMESTEP or finer (the one before it, 6 vertices a side finer at half the "
+        "step), comma-separated, coarsest first: the last is the finest",
     )
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a plant value; repeatable")
     args = parser.parse_args()
@@ -71,7 +72,9 @@ def main() -> int:
         parser.error("--drops must be 1..1000")
     try:
         plant = Plant(args.plant).set(dict(parse_setting(text) for text in args.set))
-        meshes = [parse_fidelity(m) for m in args.meshes.split(",")]
+        meshes = []
+        for text in args.meshes.split(","):
+            meshes.append(parse_fidelity(text, meshes[-1] if meshes else None))
     except (ParameterError, ValueError) as exc:
         parser.error(str(exc))
     if len(meshes) < 2:
