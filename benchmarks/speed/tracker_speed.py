@@ -86,7 +86,7 @@ def main() -> int:
             t0 = time.perf_counter()
             obs = tracker.observe(image, time.monotonic())
             link.position(
-                m.ObjectPosition(frame=k + 1, capture_time=(k + 1) * 83333, x=obs.xy_m[0], y=obs.xy_m[1]), timeout=1.0
+                m.ObjectPosition(frame=k + 1, capture_time=(k + 1) * 83333, x=obs.xy_m[0], y=obs.xy_m[1]), timeout_s=1.0
             )
             rtts.append(time.perf_counter() - t0)
             spans.append(transport.written_at - t0)
