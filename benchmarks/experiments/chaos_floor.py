@@ -1,9 +1,10 @@
-"""How many trial outcomes flip when every start moves a little: the fidelity gate's noise floor at several sizes.
+"""How many trial outcomes flip when every start moves a little: the fidelity gate's floors at several sizes.
 
 Run: python3 benchmarks/experiments/chaos_floor.py [--fidelity 15:0.00025] [--plant polyester]
      [--set fabric.stretch=threads] [--shifts 0.0001,0.001,0.003] [--pairs 60] [--jobs 2]
-The gate (`mantaray sim fidelity`, sim/fidelity.py) calls a cheaper configuration's outcomes changed when it flips more
-trials than the finer one does with every start moved 0.1 mm. A rolling sphere's path is chaotic, so how many flips a
+The gate (`mantaray sim fidelity`, sim/fidelity.py) reports the trials a cheaper configuration flips beside those the
+finer one flips with every start moved (2 mm, the rig's repeatability; 0.1 mm, a diagnostic of chaos). A rolling
+sphere's path is chaotic, so how many flips a
 start moved d brings grows with d; this measures that growth on one configuration, on the gate's own sample (the
 paper's Manhattan and Euclidean, 8 cells a stratum x 5 trials, seed 77), its first --pairs trials of each controller
 in the gate's run order (a stratified prefix). Each shifted run is kept where the gate keeps its runs

@@ -6,7 +6,8 @@ Each gate is `mantaray sim fidelity` (sim/fidelity.py) on the sphere, to the end
 Manhattan and the cascade tuned for it (docs/results/tune/sphere_cascade/settings.toml), on the polyester plant
 the paper's Manhattan and Euclidean. Gates that share a run share its trials (out/fidelity/trials/). The trials are
 committed gzipped in docs/results/fidelity/trials/ and the script starts from them, so on a fresh clone it only
-rewrites the reports; every run resumes where it stopped (a 21 x 21 run takes hours on 2 cores). --collect only
+rewrites the reports; every run resumes where it stopped (a 21 x 21 run takes hours on 2 cores). --judge-only
+judges again the trials each gate holds and runs none (the gate's --report-only). --collect only
 writes back what out/ holds (from a gate still running, say). The reports go to docs/results/fidelity/<gate>/ and
 the table of every verdict to docs/results/fidelity/convergence.md.
 """
@@ -58,7 +59,7 @@ def gate(name: str) -> tuple[str, str, str, tuple[tuple[str, str], ...]]:
     return plant, candidate, finer, fixed[0] if fixed else ()
 
 
-def command(name: str, jobs: int | None) -> list[str]:
+def command(name: str, jobs: int | None, report_only: bool = False) -> list[str]:
     plant, candidate, finer, fixed = gate(name)
     arms = [a for arm in ARMS[plant] for a in ("--controller", arm)]
     sets = [a for key, value in fixed for a in ("--set", f"{key}={value}")]
@@ -74,11 +75,14 @@ def command(name: str, jobs: int | None) -> list[str]:
         plant,
         *sets,
         *arms,
+        "--shift",  # the floor these trials were run with: a diagnostic of chaos (the rig's repeatability is 2 mm)
+        "0.0001",
         "--trials-dir",
         str(TRIALS.relative_to(REPO)),
         "--out",
         f"out/fidelity/{name}",
         *(["--jobs", str(jobs)] if jobs else []),
+        *(["--report-only"] if report_only else []),
     ]
 
 
@@ -93,51 +97,65 @@ def restore() -> None:
 
 
 def collect(name: str) -> None:
-    """Write a gate's report and every trial of out/ back to docs/results/fidelity/."""
+    """Write a gate's report (once it pairs a trial) and every trial of out/ back to docs/results/fidelity/."""
     (COMMITTED / "trials").mkdir(parents=True, exist_ok=True)
     for path in sorted(TRIALS.glob("*.jsonl")):
         keep(path, COMMITTED / "trials" / (path.name + ".gz"))
     out = REPO / "out" / "fidelity" / name
+    if not (out / "report.json").exists() or not json.loads((out / "report.json").read_text())["pairs"]:
+        return
     for report in ("report.json", "report.md"):
         if (out / report).exists():
             (COMMITTED / name).mkdir(parents=True, exist_ok=True)
             (COMMITTED / name / report).write_bytes((out / report).read_bytes())
 
 
+def _interval(d: dict) -> str:
+    if d["estimate"] is None:
+        return "no pairs"
+    if d["low"] is None:
+        return f"{d['estimate']:+.3f} ({d['n']} pairs: no interval)"
+    return f"{d['estimate']:+.3f} [{d['low']:+.3f} .. {d['high']:+.3f}]"
+
+
 def table() -> str:
-    """Every committed gate's verdict and its numbers, one row each."""
+    """Every committed gate's verdict and its judged rates, one row each."""
     rows = [
         "# The fidelity gate on each mesh and step (the sphere, to the end of T)",
         "",
         "Written by `python3 benchmarks/experiments/fidelity_study.py`; each gate's report, with the command that "
-        "reproduces it, is in its folder here. Rates over the pooled sample of both controllers: candidate / finer. Flips: "
-        "trials whose outcome differs from the finer run's, for the candidate / for the finer run with every start "
-        "moved 0.1 mm (the noise floor).",
+        "reproduces it, is in its folder here. Each rate: the paired difference candidate − finer per controller, "
+        "with its 90 % interval, judged against ±5 percentage points (`mantaray sim fidelity --help`); ✓ equivalent, "
+        "✗ different, ? undecided. Flips: the trials whose outcome differs from the finer run's, at the candidate / at "
+        "the finer run with every start moved 0.1 mm (a diagnostic of chaos, not judged).",
         "",
-        "| plant | candidate | finer | paired trials | reached | fell off | within ε at T | flips reached | "
-        "flips fell | flips within ε | verdict |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| plant | candidate | finer | pairs | reached | within ε at T | fell off | flips (reached) | verdict |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
+    mark = {"equivalent": "✓", "different": "✗", "undecided": "?"}
     for name in GATES:
         plant, _, _, fixed = gate(name)
         path = COMMITTED / name / "report.json"
         if not path.exists():
             continue
         r = json.loads(path.read_text())
-        o = r["outcomes"]
 
-        def rates(key: str, o: dict = o) -> str:
-            return f"{o[key]['rate']['candidate']:.3f} / {o[key]['rate']['finer']:.3f}"
+        def judged(key: str, r: dict = r) -> str:
+            return "; ".join(
+                f"{arm} {_interval(answers[key]['difference'])} {mark[answers[key]['difference']['status']]}"
+                for arm, answers in r["per_arm"].items()
+            )
 
-        def flips(key: str, o: dict = o) -> str:
-            return f"{o[key]['candidate_vs_finer']['flips']} / {o[key]['floor_vs_finer']['flips']}"
-
+        flips = "; ".join(
+            f"{arm} {row['reached']['candidate']} / {row['reached']['floor']}"
+            for arm, rows in r["flips"].items()
+            for row in rows
+        )
         verdict = r["verdict"] or f"incomplete ({r['pairs']} of {r['expected_pairs']})"
         label = plant + "".join(f", {v}" for _, v in fixed)
         rows.append(
-            f"| {label} | {r['candidate']} | {r['finer']} | {r['pairs']} | {rates('reached')} | "
-            f"{rates('fell_off')} | {rates('success')} | {flips('reached')} | {flips('fell_off')} | "
-            f"{flips('success')} | [{verdict}]({name}/report.md) |"
+            f"| {label} | {r['candidate']} | {r['finer']} | {r['pairs']} | {judged('reached')} | "
+            f"{judged('success')} | {judged('fell_off')} | {flips} | [{verdict}]({name}/report.md) |"
         )
     return "\n".join(rows) + "\n"
 
@@ -147,6 +165,11 @@ def main() -> int:
     parser.add_argument("--gates", default=",".join(GATES), help=f"comma-separated, of: {', '.join(GATES)}")
     parser.add_argument("--jobs", type=int, help="parallel workers (default: every core)")
     parser.add_argument("--collect", action="store_true", help="only write back what out/ holds, run nothing")
+    parser.add_argument(
+        "--judge-only",
+        action="store_true",
+        help="judge again the trials each gate holds (the committed ones, on a fresh clone) and run none",
+    )
     args = parser.parse_args()
     names = [n.strip() for n in args.gates.split(",") if n.strip()]
     unknown = [n for n in names if n not in GATES]
@@ -156,8 +179,8 @@ def main() -> int:
     interruptible()  # Ctrl-C (or SIGINT, also when started in the background, or SIGTERM) ends it as below
     for name in names:
         if not args.collect:
-            print(f"{name}: {' '.join(command(name, args.jobs))}", flush=True)
-            gate_run = subprocess.Popen(command(name, args.jobs), cwd=REPO)
+            print(f"{name}: {' '.join(command(name, args.jobs, args.judge_only))}", flush=True)
+            gate_run = subprocess.Popen(command(name, args.jobs, args.judge_only), cwd=REPO)
             try:
                 code = gate_run.wait()
             except KeyboardInterrupt:  # the gate keeps every finished trial and reports them: wait, then write back
