@@ -33,11 +33,14 @@ SETTLE_MAX_S = 6.0  # [s, simulated] a drop still moving after this is reported 
 CLOSE_M = 0.01  # [m] half the protocol's epsilon
 
 
-def rest_positions(plant: Plant, object_name: str, fidelity, drops: np.ndarray) -> tuple[list, float]:
-    """Each drop's rest position [m] (None where the object fell or kept moving), and the wall time [s]."""
+def rest_positions(plant: Plant, object_name: str, fidelity, drops: np.ndarray, prepare=None) -> tuple[list, float]:
+    """Each drop's rest position [m] (None where the object fell or kept moving), and the wall time [s]; prepare,
+    if given, is called with the loaded model and data before the first drop (another contact, say)."""
     rig = plant.rig(resolution=fidelity.resolution, timestep_s=fidelity.timestep_s, object_name=object_name)
     started = time.perf_counter()
     model, data = M.load(rig)
+    if prepare is not None:
+        prepare(model, data)
     key = model.key(M.REST_KEY).id
     out = []
     for x_m, y_m in drops:
