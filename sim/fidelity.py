@@ -249,19 +249,20 @@ def _rate(x: np.ndarray) -> float | None:
     return round(float(x.mean()), 4) if x.size else None
 
 
+def _rate_difference(c: list[dict], f: list[dict], key: str) -> tuple[np.ndarray, np.ndarray, Judged]:
+    """A rate's flags at the candidate and at the finer run over the same trials, and their paired difference judged."""
+    a, b = _flags(c, key), _flags(f, key)
+    return a, b, mean_difference(a.astype(int) - b.astype(int), RATE_MARGIN)
+
+
 def _answers(r: Runs) -> dict:
     """One arm's judged answers on the trials both its candidate and finer runs hold."""
     keys = _common(r.candidate, r.finer)
     c, f = ([run.records[k] for k in keys] for run in (r.candidate, r.finer))
     out = {}
     for key, label in RATES:
-        a, b = _flags(c, key), _flags(f, key)
-        out[key] = {
-            "label": label,
-            "candidate": _rate(a),
-            "finer": _rate(b),
-            "difference": mean_difference(a.astype(int) - b.astype(int), RATE_MARGIN),
-        }
+        a, b, d = _rate_difference(c, f, key)
+        out[key] = {"label": label, "candidate": _rate(a), "finer": _rate(b), "difference": d}
     a, b = _values(c, "time_to_reach_s"), _values(f, "time_to_reach_s")
     both = np.isfinite(a) & np.isfinite(b)
     mean = mean_interval(a[both] - b[both], level=LEVEL, seed=1)
@@ -315,8 +316,7 @@ def _zones(r: Runs) -> dict:
         c, f = ([run.records[k] for k in inside] for run in (r.candidate, r.finer))
         out[zone] = {"pairs": len(inside)}
         for key, _ in RATES:
-            a, b = _flags(c, key), _flags(f, key)
-            d = mean_difference(a.astype(int) - b.astype(int), RATE_MARGIN)
+            a, b, d = _rate_difference(c, f, key)
             out[zone][key] = {"candidate": _rate(a), "finer": _rate(b), "low": _round(d.low), "high": _round(d.high)}
     return out
 
