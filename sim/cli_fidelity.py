@@ -113,7 +113,7 @@ def _gate(args: argparse.Namespace):
     )
     for shift_m in _shifts(args):
         sample.experiment(arms[0], candidate, shift_m)  # the protocol's own checks, before any work
-    runs = G.open_runs(sample, candidate, finer, Path(args.trials_dir), _shifts(args))
+    runs = G.open_runs(sample, candidate, finer, Path(args.trials_dir), _shifts(args), create=not args.report_only)
     return sample, runs, candidate, finer, _described(sample)
 
 

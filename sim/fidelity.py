@@ -518,9 +518,11 @@ def open_runs(
     finer: Fidelity,
     trials_dir: Path,
     shifts_m: tuple[float, ...] = (REPEATABILITY_M,),
+    create: bool = True,
 ) -> list[Runs]:
     """Every arm's runs, opened (created, or continued where an earlier gate left them): the candidate, the finer
-    fidelity and one floor per shift. Different runs: a candidate that is the finer fidelity, or a floor that moves
+    fidelity and one floor per shift (with create False, a run that has no file yet is left without one). Different
+    runs: a candidate that is the finer fidelity, or a floor that moves
     nothing, would be the finer run again."""
     if candidate == finer:
         raise ValueError(f"the candidate and the finer fidelity are both {finer.label}: nothing to compare")
@@ -531,7 +533,10 @@ def open_runs(
 
     def opened(arm: Arm, fidelity: Fidelity, shift_m: float = 0.0) -> ResultsFile:
         path = sample.results_path(trials_dir, arm, fidelity, shift_m)
-        return ResultsFile.open(path, sample.experiment(arm, fidelity, shift_m))
+        experiment = sample.experiment(arm, fidelity, shift_m)
+        if not create and not path.exists():  # nothing run yet: an empty run, kept in memory, no file written
+            return ResultsFile(path, experiment)
+        return ResultsFile.open(path, experiment)
 
     return [
         Runs(arm.label, opened(arm, candidate), opened(arm, finer), tuple(opened(arm, finer, s) for s in shifts_m))

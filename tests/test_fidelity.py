@@ -481,6 +481,12 @@ def test_the_command_runs_the_three_runs_writes_its_report_and_resumes_without_r
     assert json.loads((tmp_path / "gate" / "report.json").read_text())["per_arm"] == report["per_arm"]
 
 
+def test_report_only_judges_what_is_there_and_writes_no_run(tmp_path):
+    done = _gate(tmp_path, "--controller", "manhattan", "--report-only")
+    assert done.returncode == 3 and "incomplete (0 of 5" in done.stdout, done.stderr
+    assert not (tmp_path / "trials").exists() or not list((tmp_path / "trials").iterdir())
+
+
 def test_until_decided_grows_the_sample_to_its_most_pairs_and_says_so(tmp_path):
     grown = _gate(tmp_path, "--controller", "manhattan", "--until-decided", "--max-pairs", "10")
     assert grown.returncode == 3 and "growing the sample to 2 trials per cell (10 pairs)" in grown.stderr
