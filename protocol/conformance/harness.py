@@ -275,15 +275,6 @@ class Dut:
         for i in range(0, len(data), chunk):
             self.link.send_raw(data[i : i + chunk])
 
-    def reply_to(self, msg_id: int, seq: int, timeout_s: float | None = None) -> m.Ack | m.Nack:
-        """The ack or nack whose ref_id and ref_seq are these."""
-        deadline = time.monotonic() + (self.link.ack_timeout_s * 2 if timeout_s is None else timeout_s)
-        while (remaining := deadline - time.monotonic()) > 0:
-            msg = self.link.receive(remaining)
-            if isinstance(msg, (m.Ack, m.Nack)) and msg.ref_id == msg_id and msg.ref_seq == seq:
-                return msg
-        raise AssertionError(f"no ack or nack for id 0x{msg_id:02X} seq {seq}")
-
     def exchange(self, data: bytes, delimiter_first: bool = False) -> tuple[list[Message], m.Telemetry]:
         """Sends raw bytes, then a probe; returns (every frame answered before the probe, the probe's
         telemetry). The link is ordered, so an answer to `data` would have come before the probe's."""
@@ -409,10 +400,6 @@ def base_pid_fingerprint(dut: Dut) -> dict:
     if "pid" not in dut.cache:
         dut.cache["pid"] = pid_fingerprint(dut)
     return dut.cache["pid"]
-
-
-def wire_errors(t: m.Telemetry) -> tuple[int, int]:
-    return t.crc_errors, t.frame_errors
 
 
 def error_delta(before: m.Telemetry, after: m.Telemetry) -> tuple[int, int]:
