@@ -7,6 +7,7 @@ import tempfile
 import mujoco
 import numpy as np
 
+from . import kernel_contact
 from .mjcf import FABRIC, MARKER, OBJECT, OBJECT_SLIDES, REST_KEY, write_model
 from .rig import FallRule, Rig
 
@@ -46,6 +47,8 @@ def load(rig: Rig, fabric_settle_s: float = 2.0) -> tuple[mujoco.MjModel, mujoco
     The object is parked on the floor beside the frame while the fabric settles; place_object()
     starts from REST_KEY. The returned data is in the REST_KEY state.
     """
+    if rig.contact.model == "kernel":
+        kernel_contact.load_plugin()
     with tempfile.TemporaryDirectory() as tmp:
         model = mujoco.MjModel.from_xml_path(str(write_model(rig, tmp)))
     data = mujoco.MjData(model)
@@ -110,7 +113,8 @@ def fabric_triangles(model: mujoco.MjModel) -> np.ndarray:
 
 
 def fabric_height(model: mujoco.MjModel, data: mujoco.MjData, x_m: float, y_m: float) -> float:
-    """Height [m, world z] of the fabric's top surface at (x, y): highest triangle above that point."""
+    """Height [m, world z] of the fabric's top surface at (x, y): the highest triangle above that point (with the mesh
+    contact, the surface the object meets); a ValueError where no triangle is under it."""
     flex = _flex_id(model)
     tri = fabric_vertices(model, data)[fabric_triangles(model)]
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
@@ -168,7 +172,8 @@ class ObjectNotSettled(RuntimeError):
 
 
 def drop_object(model: mujoco.MjModel, data: mujoco.MjData, x_m: float, y_m: float, *, yaw_rad: float = 0.0) -> None:
-    """Reset to REST_KEY and put the object upright, DROP_CLEARANCE_M above the fabric at (x, y), at rest in the air."""
+    """Reset to REST_KEY and put the object upright, DROP_CLEARANCE_M above the fabric it meets at (x, y), at rest in
+    the air."""
     mujoco.mj_resetDataKeyframe(model, data, model.key(REST_KEY).id)
     mujoco.mj_forward(model, data)
     half_height_m = model.site(MARKER).pos[2]
@@ -176,6 +181,10 @@ def drop_object(model: mujoco.MjModel, data: mujoco.MjData, x_m: float, y_m: flo
     qadr = _object_qpos_adr(model)
     data.qpos[qadr : qadr + 7] = [x_m, y_m, z, np.cos(yaw_rad / 2), 0.0, 0.0, np.sin(yaw_rad / 2)]
     mujoco.mj_forward(model, data)
+    kernel_m = kernel_contact.surface_height(model, data)  # the surface the kernel contact meets, under the object
+    if kernel_m is not None:
+        data.qpos[qadr + 2] = kernel_m + model.flex_radius[_flex_id(model)] + half_height_m + DROP_CLEARANCE_M
+        mujoco.mj_forward(model, data)
 
 
 def place_object(

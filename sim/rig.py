@@ -103,6 +103,7 @@ DEFAULT_FIDELITY = FIDELITIES["reference"]
 
 
 STRETCH_MODELS = lookup("fabric.stretch").choices  # what may hold the sheet's length (Fabric.stretch)
+CONTACT_MODELS = lookup("contact.model").choices  # what the object may meet (Contact.model)
 
 
 @dataclass(frozen=True)
@@ -161,7 +162,8 @@ class Fabric:
 
 @dataclass(frozen=True)
 class Contact:
-    """Object-fabric contact, written on both the fabric and the object's geom so MuJoCo's mixing changes nothing."""
+    """Object-fabric contact: MuJoCo's, written on both the fabric and the object's geom so its mixing changes nothing,
+    or the kernel's (model)."""
 
     friction: tuple[float, float, float] = (
         _d("contact.friction[0]"),
@@ -179,6 +181,14 @@ class Contact:
     # soft fabric, the rate at which a rolling sphere's speed decays on a level
     # sheet; damping on the object's rotational dofs (MuJoCo's own rolling
     # friction is Coulomb-like, the same at any speed)
+    model: str = _d("contact.model")  # what the object meets: "mesh" (the flex's triangles) or "kernel"
+    # (sim/kernel_contact.py: the sheet smoothed over kernel_width_m)
+    kernel_width_m: float = _d("contact.kernel_width_m")  # [m] the kernel's support radius
+    kernel_stiffness_n_per_m: float = _d("contact.kernel_stiffness_n_per_m")  # [N/m] the kernel contact's spring
+
+    def __post_init__(self) -> None:
+        if self.model not in CONTACT_MODELS:
+            raise ValueError(f"contact model must be one of {', '.join(CONTACT_MODELS)}, got {self.model!r}")
 
 
 @dataclass(frozen=True)
