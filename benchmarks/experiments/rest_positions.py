@@ -8,7 +8,7 @@ object on it, which is what a trial's outcome rests on. --drops points are drawn
 the settled sheet with the actuators level (sim/model.py, place_object: at rest means slower than 1 cm/s and 0.5 rad/s
 for 0.2 s, simulated; a drop still moving after 6 s is reported) and its rest position [cm] is printed; the last mesh
 is the finest. Per coarser mesh it then prints
-how far each rest position lies from the finest mesh's [cm] (median, largest) and in how many drops that distance
+how far each rest position lies from the finest mesh's [mm] (median, largest) and in how many drops that distance
 is within half the protocol's epsilon (1 cm). The wall time of each mesh (compile, settle, every drop) is printed
 for comparing rows of one run only.
 """
@@ -33,14 +33,11 @@ SETTLE_MAX_S = 6.0  # [s, simulated] a drop still moving after this is reported 
 CLOSE_M = 0.01  # [m] half the protocol's epsilon
 
 
-def rest_positions(plant: Plant, object_name: str, fidelity, drops: np.ndarray, prepare=None) -> tuple[list, float]:
-    """Each drop's rest position [m] (None where the object fell or kept moving), and the wall time [s]; prepare,
-    if given, is called with the loaded model and data before the first drop (another contact, say)."""
+def rest_positions(plant: Plant, object_name: str, fidelity, drops: np.ndarray) -> tuple[list, float]:
+    """Each drop's rest position [m] (None where the object fell or kept moving), and the wall time [s]."""
     rig = plant.rig(resolution=fidelity.resolution, timestep_s=fidelity.timestep_s, object_name=object_name)
     started = time.perf_counter()
     model, data = M.load(rig)
-    if prepare is not None:
-        prepare(model, data)
     key = model.key(M.REST_KEY).id
     out = []
     for x_m, y_m in drops:
@@ -53,6 +50,26 @@ def rest_positions(plant: Plant, object_name: str, fidelity, drops: np.ndarray, 
             continue
         out.append(M.object_xy(model, data).copy())
     return out, time.perf_counter() - started
+
+
+def print_gaps(rests: dict, meshes: list, indent: str = "") -> None:
+    """Per coarser mesh, how far its rest positions lie from the finest mesh's [mm] (median, largest) and in how many
+    drops that is within CLOSE_M; rests maps each mesh's label to rest_positions' list."""
+    finest = meshes[-1].label
+    for mesh in meshes[:-1]:
+        pairs = [
+            (a, b) for a, b in zip(rests[mesh.label], rests[finest], strict=True) if a is not None and b is not None
+        ]
+        if not pairs:
+            print(f"{indent}{mesh.label} against {finest}: no drop at rest on both", flush=True)
+            continue
+        gap_m = np.array([np.hypot(*(a - b)) for a, b in pairs])
+        print(
+            f"{indent}{mesh.label} against {finest}: rest positions {np.median(gap_m) * 1000:.1f} mm apart (median), "
+            f"{gap_m.max() * 1000:.1f} mm at most; within {CLOSE_M * 100:.0f} cm in {int((gap_m <= CLOSE_M).sum())} "
+            f"of {len(pairs)} drops",
+            flush=True,
+        )
 
 
 def main() -> int:
@@ -99,21 +116,7 @@ def main() -> int:
             r = rests[mesh.label][i]
             cells.append(f"{'not at rest':>18s}" if r is None else f"({r[0] * 100:+6.1f}, {r[1] * 100:+6.1f})    ")
         print(f"({x_m * 100:+6.1f}, {y_m * 100:+6.1f}) " + " ".join(cells), flush=True)
-    finest = meshes[-1].label
-    for mesh in meshes[:-1]:
-        pairs = [
-            (a, b) for a, b in zip(rests[mesh.label], rests[finest], strict=True) if a is not None and b is not None
-        ]
-        if not pairs:
-            print(f"{mesh.label} against {finest}: no drop at rest on both", flush=True)
-            continue
-        gap_m = np.array([np.hypot(*(a - b)) for a, b in pairs])
-        print(
-            f"{mesh.label} against {finest}: rest positions {np.median(gap_m) * 100:.1f} cm apart (median), "
-            f"{gap_m.max() * 100:.1f} cm at most; within {CLOSE_M * 100:.0f} cm in {int((gap_m <= CLOSE_M).sum())} "
-            f"of {len(pairs)} drops",
-            flush=True,
-        )
+    print_gaps(rests, meshes)
     return 0
 
 

@@ -2,16 +2,16 @@
 
 Run: python3 benchmarks/experiments/static_tilt.py [--plants paper,polyester] [--object cube] [--starts 0,0.1]
      [--tilts 10,20,26.565,35] [--hold 6] [--resolution 11] [--timestep 0.002] [--integrator discrete]
-     [--set KEY=VALUE] [--kernel-width H] [--kernel-stiffness K]
+     [--set KEY=VALUE ...]
 For each plant, start x [m] (y = 0) and tilt θ [deg]: the object is placed and left to settle, then the four
 corners are commanded at once to the plane of a pure x-tilt θ (a_i = x_i tan θ, PROTOCOL.md §5; every corner stays
 in range up to atan(range / (m / 2)) = 45°) and held for --hold s of simulated time. No controller runs: this
 separates what the plant lets an object do (its carriages' speed, the sheet's give, the friction) from what a
 controller asks of it. The physics is the trials' default fidelity (the reference) unless --resolution and --timestep say
 otherwise, under the rig's integrator unless --integrator names another (`discrete` integrates the sheet's bending and
-its damping implicitly, Euler explicitly: the step-convergence probe of sim/README.md, Convergence). With
---kernel-width, the object meets the sheet through kernel_contact.py's smooth kernel of that support radius [m] in
-place of the flex's triangles (issue 39's candidate contact).
+its damping implicitly, Euler explicitly: the step-convergence probe of sim/README.md, Convergence). The contact is
+the plant's (`--set contact.model=kernel --set contact.kernel_width_m=0.12` for the kernel contact, sim/README.md,
+Convergence 9).
 Prints, per row: when the carriages' own positions first came within 1° of the commanded tilt [s after the
 command] and their tilt at the end [deg]; the object's slide relative to the sheet under it (along x, + =
 downhill; the sheet itself moves as the corners do, carrying the object), when it first exceeded 2 cm and its
@@ -24,9 +24,7 @@ import argparse
 import dataclasses
 import math
 import sys
-from pathlib import Path
 
-import mujoco
 import numpy as np
 
 import mantaray.sim  # noqa: F401  (headless GL before mujoco)
@@ -36,10 +34,6 @@ from mantaray.sim.objects import OBJECTS
 from mantaray.sim.parameters import plant_names
 from mantaray.sim.plant import parse_setting
 from mantaray.sim.rig import Rig
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))  # kernel_contact.py's contact
-
-from kernel_contact import KernelContact  # noqa: E402
 
 SLID_M = 0.02  # [m] a slide this long counts as the object set going (the protocol's ε)
 AT_TILT_DEG = 1.0  # [deg] the carriages count as at the commanded tilt within this
@@ -116,21 +110,7 @@ def main() -> int:
         metavar="KEY=VALUE",
         help="set a plant parameter over each plant (a key of sim/plant.toml, in its range); repeatable",
     )
-    parser.add_argument(
-        "--kernel-width",
-        type=float,
-        default=None,
-        metavar="H",
-        help="[m] the object meets the sheet through kernel_contact.py's smooth kernel of this support radius, "
-        "0.005..0.25 (default: the flex's own contact)",
-    )
-    parser.add_argument(
-        "--kernel-stiffness", type=float, default=500.0, metavar="K", help="[N/m] the kernel contact's spring"
-    )
     args = parser.parse_args()
-    if args.kernel_width is not None:
-        if not 0.005 <= args.kernel_width <= 0.25 or not 1.0 <= args.kernel_stiffness <= 1e5:
-            parser.error("--kernel-width must be 0.005..0.25 m and --kernel-stiffness 1..1e5 N/m")
     try:
         setting = tuple(parse_setting(text) for text in args.set)
     except ValueError as exc:
@@ -161,11 +141,11 @@ def main() -> int:
         if args.integrator:
             rig = dataclasses.replace(rig, solver=dataclasses.replace(rig.solver, integrator=args.integrator))
         model, data = M.load(rig)
-        contact = "the flex's triangles"
-        if args.kernel_width is not None:
-            friction = rig.contact.friction[0]
-            mujoco.set_mjcb_passive(KernelContact(model, args.kernel_width, args.kernel_stiffness, friction))
-            contact = f"a kernel of h = {args.kernel_width * 100:g} cm, k = {args.kernel_stiffness:g} N/m"
+        contact = (
+            "the flex's triangles"
+            if rig.contact.model == "mesh"
+            else f"a kernel of h = {rig.contact.kernel_width_m * 100:g} cm, k = {rig.contact.kernel_stiffness_n_per_m:g} N/m"
+        )
         print(
             f"{plant}: carriages at most {rig.actuators.speed_m_per_s:.3f} m/s; fabric {args.resolution} x "
             f"{args.resolution} at {args.timestep:g} s, {rig.solver.integrator}; contact {contact}",
