@@ -47,6 +47,15 @@ SCALARS = (  # the other entries this module and the generator read
     "encoder_address",
     "encoder_angle_register",
 )
+PHYSICAL_RANGE = {  # entry -> (least, most) a rig can have, in the entry's unit: outside is a typo, not a rig
+    "module_size_x_m": (0.05, 5.0),  # [m] a hand-sized module to a room's
+    "module_size_y_m": (0.05, 5.0),
+    "actuator_range_m": (0.005, 2.0),  # [m]
+    "pulley_circumference_m": (0.005, 1.0),  # [m/rev] a 5-tooth GT2 pulley to a drum
+    "encoder_counts": (2, 0xFFFF),  # [counts/rev]
+    "motor_speed_rpm": (1.0, 30000.0),  # [rev/min]
+    "actuator_period_us": (100, 1_000_000),  # [us] 10 kHz to 1 Hz
+}
 PIO_BOARD_PREFIX = {"uno": "uno", "mega2560": "mega"}  # a board's PlatformIO environments start with this
 MAX_ACTUATORS = 16  # jog.actuator and zero.actuators (a 16-bit mask) address actuators 0..15 (schema.toml)
 
@@ -224,6 +233,8 @@ def _read(path: Path) -> dict:
             return tomllib.load(f)
     except FileNotFoundError:
         raise RigDescriptionError(f"{path}: no such rig file") from None
+    except UnicodeDecodeError:
+        raise RigDescriptionError(f"{path}: not a text file, so not a rig file (a rig file is TOML)") from None
     except (OSError, tomllib.TOMLDecodeError) as exc:
         raise RigDescriptionError(f"{path}: not a readable TOML file ({exc})") from None
 
@@ -288,16 +299,12 @@ def check(rig: dict, path: Path) -> Board:
     for key in ("modules_x", "modules_y"):
         if v(key) < 1:
             raise RigDescriptionError(f"{where} {key}: {v(key)} modules; a rig has at least 1 along each axis")
-    for key in (
-        "module_size_x_m",
-        "module_size_y_m",
-        "actuator_range_m",
-        "pulley_circumference_m",
-        "encoder_counts",
-        "actuator_period_us",
-    ):
-        if v(key) <= 0:
-            raise RigDescriptionError(f"{where} {key}: {v(key)} must be positive")
+    for key, (least, most) in PHYSICAL_RANGE.items():
+        if not least <= v(key) <= most:
+            unit = f" {rig['core'][key]['unit']}" if rig["core"][key].get("unit") else ""
+            raise RigDescriptionError(
+                f"{where} {key}: {v(key):g}{unit} is outside {least:g}..{most:g}{unit}, what a rig can have"
+            )
     count = (v("modules_x") + 1) * (v("modules_y") + 1)
     if v("actuator_count") != count:
         raise RigDescriptionError(
@@ -383,6 +390,32 @@ def build_of(name: str, base: str, joiner: str = "-") -> str:
     """A rig's build of base, as CMakeLists.txt names it: base for the default rig ("module"), else base, joiner and
     the rig's name (mantaray-vmcu-array_2x2, libmantaray_capi_array_2x2)."""
     return base if name == "module" else f"{base}{joiner}{name}"
+
+
+def core_differences(a: RigDescription, b: RigDescription) -> list[str]:
+    """Each [core] value a states otherwise than b, in words, in the file's order: what a firmware built for b would
+    not know of a."""
+    return [
+        f"{key} is {entry['value']} in {a.path}, {b.core[key]['value']} in {b.path}"
+        for key, entry in a.core.items()
+        if entry["value"] != b.core[key]["value"]
+    ]
+
+
+def firmware_for(description: RigDescription) -> RigDescription:
+    """The committed rig whose builds (the virtual MCU, the C core) run the rig description gives: the one of its
+    name if their [core] values agree, else any whose do. RigDescriptionError, naming the first value that differs
+    from the committed rig of that name (or the default), where none is built for it."""
+    rigs = committed()
+    same_name = [r for r in rigs if r.name == description.name]
+    for candidate in same_name + rigs:
+        if not core_differences(description, candidate):
+            return candidate
+    nearest = (same_name or rigs)[0]
+    raise RigDescriptionError(
+        f"{description.path}: no firmware is built for this rig ({core_differences(description, nearest)[0]}); "
+        f"put it in {RIGS}, run python3 protocol/generate.py and rebuild (bash scripts/setup.sh)"
+    )
 
 
 def named(name: str) -> RigDescription:

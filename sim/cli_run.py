@@ -59,7 +59,7 @@ def _trial(args: argparse.Namespace, parser: argparse.ArgumentParser):
     args.rig = args.rig or rig_description.default()
     try:
         rig = plant.rig(args.object).with_description(args.rig)
-    except ValueError as exc:  # a rig file whose actuators the simulated rig does not have
+    except ValueError as exc:  # a rig file whose actuators the simulated rig lacks, or no firmware is built for
         parser.error(f"--rig: {exc}")
     if args.vision:
         if rig.module.grid.module_count > 1:

@@ -242,7 +242,9 @@ class Rig:
 
     def with_description(self, description: _rig.RigDescription) -> Rig:
         """The same plant on the rig a rig file describes (an array: protocol/rigs/): its modules, each with the
-        fabric patch, mesh spacing and camera view of one module here, and the firmware built for it."""
+        fabric patch, mesh spacing and camera view of one module here, and the firmware built for it (a committed rig
+        whose [core] values are the file's; protocol/rig.py firmware_for's RigDescriptionError, a ValueError, where
+        none is)."""
         if description.actuator_range_m != self.actuators.range_m:
             raise ValueError(
                 f"{description.path.name} gives the actuators +-{description.actuator_range_m:g} m of travel, the "
@@ -254,7 +256,7 @@ class Rig:
             size_y_m=description.module_size_y_m,
             modules_x=description.modules_x,
             modules_y=description.modules_y,
-            build=description.name,
+            build=_rig.firmware_for(description).name,
         )
         return dataclasses.replace(self, module=module)
 

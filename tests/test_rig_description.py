@@ -62,7 +62,9 @@ def _edited(tmp_path, source, old: str, new: str):
         (r"^encoder_counts = .*", "encoder_counts = 4096\nencoder_cpr = 4096", "has unknown encoder_cpr"),
         (r"^motor_sign = .*", "motor_sign = [1, 1, 1, 1, 1, 1, 1, 1, 0]", "motor_sign: each must be 1 or -1"),
         (r"^pwm_max = .*", "pwm_max = 256", "pwm_max: 256 is not a u8"),
-        (r"^module_size_x_m = .*", "module_size_x_m = -0.5", "module_size_x_m: -0.5 must be positive"),
+        (r"^module_size_x_m = .*", "module_size_x_m = -0.5", "module_size_x_m: -0.5 m is outside 0.05..5 m"),
+        (r"^module_size_y_m = .*", "module_size_y_m = 1e-9", "module_size_y_m: 1e-09 m is outside 0.05..5 m"),
+        (r"^motor_speed_rpm = .*", "motor_speed_rpm = 0.0", "motor_speed_rpm: 0 rev/min is outside 1..30000"),
         (r"^actuator_range_m = .*", 'actuator_range_m = "far"', "actuator_range_m: 'far' is not a f32"),
         (r"^\[board\]", "[boards]", "needs a [board] table"),
         (r"^modules_x = 2", "modules_x = [2", "not a readable TOML file"),
@@ -72,8 +74,8 @@ def _edited(tmp_path, source, old: str, new: str):
         (r"^arduino = .*", 'arduino = ["mega2560"]', "arduino: ['mega2560'] is not one of"),
         (r"^mux_address = .*", "mux_address = [0x70, 0x70, 0x70, 0x70, 0x70, 0x70, 0x70, 0x70, 0x20]", "0x20 is no"),
         (r"^mux_address = .*", "mux_address = 0x36", "mux_address: 0x36 is no TCA9548A's (0x70..0x77) or is the"),
-        (r"^encoder_counts = .*", "encoder_counts = 0", "encoder_counts: 0 must be positive"),
-        (r"^actuator_period_us = .*", "actuator_period_us = 0", "actuator_period_us: 0 must be positive"),
+        (r"^encoder_counts = .*", "encoder_counts = 0", "encoder_counts: 0 is outside 2..65535,"),
+        (r"^actuator_period_us = .*", "actuator_period_us = 0", "actuator_period_us: 0 us is outside 100..1e+06 us"),
     ],
 )
 def test_an_array_file_that_contradicts_itself_or_its_board_is_refused_naming_the_field(tmp_path, old, new, needle):
@@ -115,6 +117,30 @@ def test_the_default_file_without_an_entry_names_it(tmp_path):
 def test_a_missing_rig_file_is_one_clear_error(tmp_path):
     with pytest.raises(rig.RigDescriptionError, match="no such rig file"):
         rig.load(tmp_path / "nowhere.toml")
+
+
+def test_a_binary_file_says_it_is_not_a_text_file(tmp_path):
+    path = tmp_path / "myrig.toml"
+    path.write_bytes(bytes(range(256)) * 8)
+    with pytest.raises(rig.RigDescriptionError, match="myrig.toml: not a text file"):
+        rig.load(path)
+
+
+def test_a_copy_of_a_committed_rig_anywhere_runs_on_that_rigs_firmware(tmp_path):
+    """A rig file is what a user writes for their own rig: from any folder, under any name, it runs on the build of
+    the committed rig whose [core] values it shares."""
+    path = tmp_path / "myrig.toml"
+    path.write_text(ARRAY.read_text())
+    assert rig.firmware_for(rig.load(path)).name == "array_2x2"
+    assert Rig().with_description(rig.load(path)).module.build == "array_2x2"
+
+
+def test_an_edited_copy_under_a_committed_name_is_refused_naming_the_first_difference(tmp_path):
+    """The firmware built for array_2x2.toml knows 0.5 m modules; a file of that name with 0.6 m ones would run a
+    simulated sheet the firmware does not describe."""
+    path = _edited(tmp_path, ARRAY, r"^module_size_x_m = .*", "module_size_x_m = 0.6")
+    with pytest.raises(rig.RigDescriptionError, match=r"no firmware is built for this rig \(module_size_x_m is 0.6"):
+        Rig().with_description(rig.load(path))
 
 
 def test_more_actuators_than_the_protocol_addresses_are_refused(tmp_path):

@@ -82,9 +82,12 @@ def test_an_array_trial_hands_the_object_over_and_moves_every_actuator_on_the_dr
     assert np.any(np.abs(lifts[[2, 5, 8]]) > 0.005)  # the +x column, outside module 0 and on its plane
 
 
-def test_sim_run_takes_a_rig_file_and_draws_the_array(tmp_path):
+def test_sim_run_takes_a_rig_file_from_any_folder_and_draws_the_array(tmp_path):
+    """A user's own rig file, here a copy of the array's under another name, runs from where it is."""
+    mine = tmp_path / "myrig.toml"
+    mine.write_text(ARRAY.path.read_text())
     proc = subprocess.run(
-        [sys.executable, "-m", "mantaray.cli", "sim", "run", "--rig", "protocol/rigs/array_2x2.toml", "--json",
+        [sys.executable, "-m", "mantaray.cli", "sim", "run", "--rig", str(mine), "--json",
          "--duration", "0.5", "--start=-0.3,-0.3", "--target", "0.3,0.3", "--out", str(tmp_path)],
         cwd=REPO, capture_output=True, text=True, timeout=300,
     )  # fmt: skip
@@ -110,14 +113,28 @@ def test_sim_run_refuses_what_an_array_cannot_do_before_any_work(args, needle):
     assert proc.returncode == 2 and needle in proc.stderr and "Traceback" not in proc.stderr
 
 
-def test_sim_run_refuses_a_rig_file_that_is_not_one(tmp_path):
-    bad = tmp_path / "bad.toml"
-    bad.write_text("not toml [")
+@pytest.mark.parametrize(
+    "text, needle",
+    [
+        (b"not toml [", "not a readable TOML file"),
+        (bytes(range(256)) * 8, "not a text file"),
+        (ARRAY.path.read_bytes().replace(b"module_size_x_m = 0.5", b"module_size_x_m = 1e-9"), "is outside 0.05..5 m"),
+        (
+            ARRAY.path.read_bytes().replace(b"module_size_x_m = 0.5", b"module_size_x_m = 0.6"),
+            "no firmware is built for this rig (module_size_x_m is 0.6",
+        ),
+    ],
+    ids=["not TOML", "binary", "no rig's size", "edited copy"],
+)
+def test_sim_run_refuses_a_rig_file_it_cannot_run_in_one_line(tmp_path, text, needle):
+    bad = tmp_path / "array_2x2.toml"  # the committed file's name: an edited copy must not pass for it
+    bad.write_bytes(text)
     proc = subprocess.run(
         [sys.executable, "-m", "mantaray.cli", "sim", "run", "--rig", str(bad)],
         cwd=REPO, capture_output=True, text=True, timeout=60,
     )  # fmt: skip
-    assert proc.returncode == 2 and "not a readable TOML file" in proc.stderr and "Traceback" not in proc.stderr
+    assert proc.returncode == 2 and needle in proc.stderr and "Traceback" not in proc.stderr
+    assert proc.stderr.strip().splitlines()[-1].startswith("mantaray sim run: error: ")
 
 
 def test_a_rendered_frame_shows_the_borders_between_modules():
