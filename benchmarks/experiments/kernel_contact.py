@@ -16,16 +16,12 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # rest_positions.py's drops and their comparison
 
-from rest_positions import DROP_HALF_WIDTH_M, print_gaps, rest_positions  # noqa: E402
+from rest_positions import plant_meshes_drops, print_gaps, rest_positions  # noqa: E402
 
-from mantaray.sim.fidelity import parse_fidelity  # noqa: E402
 from mantaray.sim.objects import OBJECTS  # noqa: E402
 from mantaray.sim.parameters import ParameterError, plant_names  # noqa: E402
-from mantaray.sim.plant import Plant, parse_setting  # noqa: E402
 
 
 def main() -> int:
@@ -38,23 +34,13 @@ def main() -> int:
     parser.add_argument("--widths", default="0.04,0.08,0.12", help="[m] kernel support radii, comma-separated")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a plant value; repeatable")
     args = parser.parse_args()
-    if args.plant not in plant_names():
-        parser.error(f"--plant: unknown {args.plant!r}; known: {', '.join(plant_names())}")
-    if not 1 <= args.drops <= 1000:
-        parser.error("--drops must be 1..1000")
+    plant, meshes, drops = plant_meshes_drops(parser, args)
     try:
-        plant = Plant(args.plant).set(dict(parse_setting(text) for text in args.set))
-        meshes = []
-        for text in args.meshes.split(","):
-            meshes.append(parse_fidelity(text, meshes[-1] if meshes else None))
         kernels = [
             plant.set({"contact.model": "kernel", "contact.kernel_width_m": float(w)}) for w in args.widths.split(",")
         ]
     except (ParameterError, ValueError) as exc:
         parser.error(str(exc))
-    if len(meshes) < 2:
-        parser.error("--meshes needs two at least: the last is compared with the others")
-    drops = np.random.default_rng(args.seed).uniform(-DROP_HALF_WIDTH_M, DROP_HALF_WIDTH_M, size=(args.drops, 2))
     mesh_plant = plant.set({"contact.model": "mesh"})
     print(f"{args.object} on {args.plant} {' '.join(args.set)}: {args.drops} drops, seed {args.seed}", flush=True)
     native_s = {m.label: rest_positions(mesh_plant, args.object, m, drops)[1] for m in meshes}

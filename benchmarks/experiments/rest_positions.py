@@ -72,6 +72,26 @@ def print_gaps(rests: dict, meshes: list, indent: str = "") -> None:
         )
 
 
+def plant_meshes_drops(parser: argparse.ArgumentParser, args: argparse.Namespace) -> tuple[Plant, list, np.ndarray]:
+    """From --plant, --set, --meshes, --drops and --seed: the plant, the meshes (coarsest first) and the drop points
+    [m]; what is wrong with them is a usage error."""
+    if args.plant not in plant_names():
+        parser.error(f"--plant: unknown {args.plant!r}; known: {', '.join(plant_names())}")
+    if not 1 <= args.drops <= 1000:
+        parser.error("--drops must be 1..1000")
+    try:
+        plant = Plant(args.plant).set(dict(parse_setting(text) for text in args.set))
+        meshes: list = []
+        for text in args.meshes.split(","):
+            meshes.append(parse_fidelity(text, meshes[-1] if meshes else None))
+    except (ParameterError, ValueError) as exc:
+        parser.error(str(exc))
+    if len(meshes) < 2:
+        parser.error("--meshes needs two at least: the last is compared with the others")
+    drops = np.random.default_rng(args.seed).uniform(-DROP_HALF_WIDTH_M, DROP_HALF_WIDTH_M, size=(args.drops, 2))
+    return plant, meshes, drops
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--plant", default="polyester", help="one of: " + ", ".join(plant_names()))
@@ -86,20 +106,7 @@ def main() -> int:
     )
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a plant value; repeatable")
     args = parser.parse_args()
-    if args.plant not in plant_names():
-        parser.error(f"--plant: unknown {args.plant!r}; known: {', '.join(plant_names())}")
-    if not 1 <= args.drops <= 1000:
-        parser.error("--drops must be 1..1000")
-    try:
-        plant = Plant(args.plant).set(dict(parse_setting(text) for text in args.set))
-        meshes = []
-        for text in args.meshes.split(","):
-            meshes.append(parse_fidelity(text, meshes[-1] if meshes else None))
-    except (ParameterError, ValueError) as exc:
-        parser.error(str(exc))
-    if len(meshes) < 2:
-        parser.error("--meshes needs two at least: the last is compared with the others")
-    drops = np.random.default_rng(args.seed).uniform(-DROP_HALF_WIDTH_M, DROP_HALF_WIDTH_M, size=(args.drops, 2))
+    plant, meshes, drops = plant_meshes_drops(parser, args)
     print(f"{args.object} on {args.plant} {' '.join(args.set)}: {args.drops} drops, seed {args.seed}", flush=True)
     print(f"{'drop [cm]':>16s} " + " ".join(f"{m.label:>18s}" for m in meshes), flush=True)
     rests = {}
