@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import re
 import sys
+from pathlib import Path
 
 
 class Parser(argparse.ArgumentParser):
@@ -63,9 +64,12 @@ def cmd_conformance(args: argparse.Namespace, parser: argparse.ArgumentParser) -
         check_port(args.port)
     except PortError as exc:
         parser.error(str(exc))
+    from mantaray.protocol import conformance
+
     pytest_args = [
         "--pyargs",
         "mantaray.protocol.conformance",
+        f"--rootdir={Path(conformance.__file__).parent}",  # its tests named by module, not from the port's folder
         "-p",
         "mantaray.protocol.conformance.plugin",
         "-q",
