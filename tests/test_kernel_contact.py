@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+import re
 import tempfile
 from pathlib import Path
 
@@ -29,6 +31,16 @@ def test_the_flex_collides_with_nothing_and_the_plugin_is_in_the_scene():
     flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, J.FABRIC)
     assert model.flex_contype[flex] == 0 and model.flex_conaffinity[flex] == 0
     assert model.nplugin == 1 and mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PLUGIN, K.INSTANCE) == 0
+
+
+@pytest.mark.parametrize("ratio", [0.0, 0.25, 1.0, 2.0])
+def test_the_normal_damping_is_its_ratio_of_critical_for_the_objects_mass(ratio):
+    rig = _rig("sphere", **{"contact.kernel_damping_ratio": ratio})
+    alone = J._object_alone(rig)
+    xml = K.plugin_xml(rig, alone, J.FABRIC, J.OBJECT)
+    said = float(re.search(r'key="damping_n_s_per_m" value="([^"]+)"', xml).group(1))
+    mass_kg = float(alone.body_mass[alone.geom_bodyid[alone.geom(J.OBJECT).id]])
+    assert said == pytest.approx(ratio * 2 * math.sqrt(rig.contact.kernel_stiffness_n_per_m * mass_kg))
 
 
 @pytest.mark.parametrize("object_name", ["sphere", "cube"])
