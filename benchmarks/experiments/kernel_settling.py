@@ -14,16 +14,20 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 import mujoco
 import numpy as np
 
-from mantaray.sim import model as M
-from mantaray.sim.fidelity import parse_fidelity
-from mantaray.sim.mjcf import OBJECT
-from mantaray.sim.objects import OBJECTS
-from mantaray.sim.parameters import ParameterError, plant_names
-from mantaray.sim.plant import Plant, parse_setting
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # rest_positions.py's plant from the arguments
+
+from rest_positions import plant_of  # noqa: E402
+
+from mantaray.sim import model as M  # noqa: E402
+from mantaray.sim.fidelity import parse_fidelity  # noqa: E402
+from mantaray.sim.mjcf import OBJECT  # noqa: E402
+from mantaray.sim.objects import OBJECTS  # noqa: E402
+from mantaray.sim.parameters import plant_names  # noqa: E402
 
 PLACE_S = 0.05  # [s, simulated] how long place_object may settle the object before the record starts
 
@@ -59,12 +63,10 @@ def main() -> int:
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a plant value; repeatable")
     args = parser.parse_args()
     args.set = ["fabric.stretch=threads", "contact.model=kernel", *args.set]  # later values win
-    if args.plant not in plant_names():
-        parser.error(f"--plant: unknown {args.plant!r}; known: {', '.join(plant_names())}")
+    plant = plant_of(parser, args)
     try:
-        plant = Plant(args.plant).set(dict(parse_setting(text) for text in args.set))
         mesh = parse_fidelity(args.mesh)
-    except (ParameterError, ValueError) as exc:
+    except ValueError as exc:
         parser.error(str(exc))
     try:
         at_m = tuple(float(v) for v in args.at.split(","))

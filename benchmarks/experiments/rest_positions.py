@@ -72,15 +72,23 @@ def print_gaps(rests: dict, meshes: list, indent: str = "") -> None:
         )
 
 
+def plant_of(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Plant:
+    """The plant --plant names with --set's values over it; what is wrong with them is a usage error."""
+    if args.plant not in plant_names():
+        parser.error(f"--plant: unknown {args.plant!r}; known: {', '.join(plant_names())}")
+    try:
+        return Plant(args.plant).set(dict(parse_setting(text) for text in args.set))
+    except (ParameterError, ValueError) as exc:
+        parser.error(str(exc))
+
+
 def plant_meshes_drops(parser: argparse.ArgumentParser, args: argparse.Namespace) -> tuple[Plant, list, np.ndarray]:
     """From --plant, --set, --meshes, --drops and --seed: the plant, the meshes (coarsest first) and the drop points
     [m]; what is wrong with them is a usage error."""
-    if args.plant not in plant_names():
-        parser.error(f"--plant: unknown {args.plant!r}; known: {', '.join(plant_names())}")
     if not 1 <= args.drops <= 1000:
         parser.error("--drops must be 1..1000")
+    plant = plant_of(parser, args)
     try:
-        plant = Plant(args.plant).set(dict(parse_setting(text) for text in args.set))
         meshes: list = []
         for text in args.meshes.split(","):
             meshes.append(parse_fidelity(text, meshes[-1] if meshes else None))
