@@ -69,7 +69,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     the foreground: under nohup, from a pipe or in the background the run goes on without them). A board that
     goes away (unplugged, reset) is waited for up to --reconnect-timeout and set up again. Every run writes a log
     of its own (configuration, every position and telemetry frame) and the paper's Fig. 3-style plot."""
-    from .rig_run import EXIT_STATUS, RigRun, StopRules
+    from .rig_run import EXIT_STATUS
     from .runlog import RunLog
 
     course = _course(args, parser)
@@ -82,24 +82,7 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         log = RunLog.new(out, "rig", {"args": settings})
         view = _view(log.path.with_suffix(".rrd"), live, settings)
         try:
-            run = RigRun(
-                args.port,
-                setup,
-                source,
-                tracker,
-                log,
-                course,
-                StopRules(
-                    args.tolerance,
-                    args.hold,
-                    args.timeout,
-                    _half_surface_m(args.rig),
-                    (m.Configure.module_x / 2, m.Configure.module_y / 2),
-                ),
-                reconnect_timeout_s=args.reconnect_timeout,
-                view=view,
-                description=args.rig,
-            )
+            run = _rig_run(args, setup, source, tracker, log, course, view)
             outcome = run.run()
         finally:
             recording = view.close()
@@ -114,6 +97,31 @@ def cmd_rig(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         + (f"; recording {recording}" if recording else "")
     )
     return EXIT_STATUS.get(outcome, 1)
+
+
+def _rig_run(args: argparse.Namespace, setup, source, tracker, log, course, view):
+    """The closed loop on the rig for these arguments, not yet started: its stop rules, port and reconnection."""
+    from .rig_run import RigRun, StopRules
+
+    stop = StopRules(
+        args.tolerance,
+        args.hold,
+        args.timeout,
+        _half_surface_m(args.rig),
+        (m.Configure.module_x / 2, m.Configure.module_y / 2),
+    )
+    return RigRun(
+        args.port,
+        setup,
+        source,
+        tracker,
+        log,
+        course,
+        stop,
+        reconnect_timeout_s=args.reconnect_timeout,
+        view=view,
+        description=args.rig,
+    )
 
 
 def _view(recording, live, settings: dict):
