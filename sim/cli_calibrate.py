@@ -48,17 +48,21 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         )
         return 130
     progress.close()
-    report = C.write_report(study, evidence, out, fig3)
-    best = report["best"]
-    print(
-        json.dumps(report)
-        if args.json
-        else f"{report['candidates']} candidates; best #{best['number']}: objectives {best['objectives']}; "
-        f"report {out / 'report.md'}"
-        if best
-        else f"no candidate evaluated; {out / 'report.md'}"
-    )
+    _print_report(C.write_report(study, evidence, out, fig3), out / "report.md", args.json)
     return 0
+
+
+def _print_report(report: dict, path: Path, as_json: bool) -> None:
+    """The search's outcome on stdout: the report as JSON, or one line naming the best candidate and the report."""
+    best = report["best"]
+    if as_json:
+        print(json.dumps(report))
+    elif best:
+        print(
+            f"{report['candidates']} candidates; best #{best['number']}: objectives {best['objectives']}; report {path}"
+        )
+    else:
+        print(f"no candidate evaluated; {path}")
 
 
 def _evidence(args: argparse.Namespace, parser: argparse.ArgumentParser):

@@ -25,29 +25,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
     try:
         sample, runs, candidate, finer, sample_text = _gate(args)
-        while True:
-            interrupted = sample is not None and not args.report_only and not _run_missing(sample, runs, args.jobs)
-            report = G.compare(runs)
-            if (
-                interrupted
-                or sample is None
-                or args.report_only
-                or not args.until_decided
-                or report["verdict"] != G.UNDECIDED
-            ):
-                break
-            more = G.grown(sample, report["pairs_to_decide"], args.max_pairs)
-            if isinstance(more, str):
-                print(f"undecided at {report['pairs']} paired trials, and it stays so: {more}", file=sys.stderr)
-                break
-            print(
-                f"undecided at {min(report['pairs_per_arm'].values())} pairs per controller: growing the sample to "
-                f"{more.trials_per_cell} trials per cell ({len(more.cells()) * more.trials_per_cell} pairs)",
-                file=sys.stderr,
-                flush=True,
-            )
-            sample = more
-            runs = G.open_runs(sample, candidate, finer, Path(args.trials_dir), _shifts(args))
+        sample, runs, report, interrupted = _compared(args, sample, runs, candidate, finer)
     except ExperimentMismatch as exc:
         return _refused(f"{exc} (the gate keeps its runs in --trials-dir {args.trials_dir})")
     except (ValueError, ResultsFileBusy) as exc:  # a GateMismatch is a ValueError too
@@ -60,14 +38,7 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         sample_text=sample_text if sample is None else _described(sample),
         command=shlex.join(["mantaray", *sys.argv[1:]]),
     )
-    p = runs[0].finer.experiment
-    out = output(
-        parser,
-        writable_dir,
-        args.out
-        or f"out/fidelity/{p.object_name}_{p.plant}{G.fixed_slug(p.plant_set)}_alpha{p.alpha_m:g}"
-        f"_{candidate.slug}_vs_{finer.slug}",
-    )
+    out = _out_dir(parser, args, runs, candidate, finer)
     paths = G.write_report(report, out)
     if interrupted:
         print(
@@ -78,6 +49,51 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         return 130
     print(json.dumps(report) if args.json else _verdict_line(report, candidate, finer, paths[1]))
     return {G.KEEPS: 0, G.CHANGES: 1}.get(report["verdict"], 3)
+
+
+def _compared(args: argparse.Namespace, sample, runs, candidate, finer):
+    """(sample, runs, report, interrupted): the missing trials run and compared, and with --until-decided the sample
+    grown and run again while the verdict is undecided and a larger one can decide it."""
+    from . import fidelity as G
+
+    while True:
+        interrupted = sample is not None and not args.report_only and not _run_missing(sample, runs, args.jobs)
+        report = G.compare(runs)
+        if (
+            interrupted
+            or sample is None
+            or args.report_only
+            or not args.until_decided
+            or report["verdict"] != G.UNDECIDED
+        ):
+            break
+        more = G.grown(sample, report["pairs_to_decide"], args.max_pairs)
+        if isinstance(more, str):
+            print(f"undecided at {report['pairs']} paired trials, and it stays so: {more}", file=sys.stderr)
+            break
+        print(
+            f"undecided at {min(report['pairs_per_arm'].values())} pairs per controller: growing the sample to "
+            f"{more.trials_per_cell} trials per cell ({len(more.cells()) * more.trials_per_cell} pairs)",
+            file=sys.stderr,
+            flush=True,
+        )
+        sample = more
+        runs = G.open_runs(sample, candidate, finer, Path(args.trials_dir), _shifts(args))
+    return sample, runs, report, interrupted
+
+
+def _out_dir(parser: argparse.ArgumentParser, args: argparse.Namespace, runs, candidate, finer) -> Path:
+    """--out, else out/fidelity/ named by the sample's object, plant, alpha and the two fidelities."""
+    from . import fidelity as G
+
+    p = runs[0].finer.experiment
+    return output(
+        parser,
+        writable_dir,
+        args.out
+        or f"out/fidelity/{p.object_name}_{p.plant}{G.fixed_slug(p.plant_set)}_alpha{p.alpha_m:g}"
+        f"_{candidate.slug}_vs_{finer.slug}",
+    )
 
 
 def _shifts(args: argparse.Namespace) -> tuple[float, ...]:

@@ -17,32 +17,17 @@ from .plant import DEFAULT_PLANT
 def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """`sim heatmap`: the protocol checked, its results file opened or continued, the missing trials run."""
     from .executors import RayUnavailable, run
-    from .experiment import ExperimentMismatch
     from .model import SimulationUnstable
     from .progress import Progress
-    from .results_file import ResultsFile, ResultsFileBusy
-    from .summary import heatmap_outputs
 
     experiment = _experiment(args, parser)
     check_ray(parser, args)
-    if args.live and args.executor == "ray":
-        parser.error("--live shows the trial of a worker of this machine: use it with --executor local")
     out = output(parser, writable_dir, args.out or _default_out(args, experiment))
-    try:
-        results = ResultsFile.open(out / "results.jsonl", experiment)
-    except (ExperimentMismatch, ValueError, ResultsFileBusy) as exc:
-        _report(str(exc))
+    results = _results_file(out / "results.jsonl", experiment)
+    if results is None:
         return 2
-    for warning in results.warnings():
-        _report(f"warning: {warning}")
     todo, total = results.missing(), len(experiment.cell_ids()) * experiment.trials_per_cell
-    if len(todo) < total:
-        print(
-            f"continuing {out / 'results.jsonl'}: {total - len(todo)} of {total} trials already done", file=sys.stderr
-        )
-    live = start_live(parser, args, _report)
-    if live is not None:
-        _report(f"live view of one worker's trials at {live.options.page_url}")
+    live = _live(parser, args)
     bar = Progress(total, initial=total - len(todo), unit="trial", label="heatmap")  # on stderr, beside --json
     interruptible()
     try:
@@ -69,18 +54,55 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if live is not None:
             live.close()
     bar.close()
+    _write_outputs(args, experiment, results, out)
+    return 0
+
+
+def _live(parser: argparse.ArgumentParser, args: argparse.Namespace):
+    """The live view's server when --live asks for one, else None."""
+    live = start_live(parser, args, _report)
+    if live is not None:
+        _report(f"live view of one worker's trials at {live.options.page_url}")
+    return live
+
+
+def _results_file(path: Path, experiment):
+    """The run's results file, opened or continued (what it holds reported on stderr), or None where it cannot be
+    (another experiment's, unreadable, or in use: said in one line)."""
+    from .experiment import ExperimentMismatch
+    from .results_file import ResultsFile, ResultsFileBusy
+
+    try:
+        results = ResultsFile.open(path, experiment)
+    except (ExperimentMismatch, ValueError, ResultsFileBusy) as exc:
+        _report(str(exc))
+        return None
+    for warning in results.warnings():
+        _report(f"warning: {warning}")
+    left, total = len(results.missing()), len(experiment.cell_ids()) * experiment.trials_per_cell
+    if left < total:
+        print(f"continuing {path}: {total - left} of {total} trials already done", file=sys.stderr)
+    return results
+
+
+def _write_outputs(args: argparse.Namespace, experiment, results, out: Path) -> None:
+    """The map, its figure and summary written to out, and the summary (or --json) printed."""
+    from .summary import heatmap_outputs
+
     title = (
         f"{args.object}, {args.controller}, α = {args.alpha:g} m, ε = {args.tolerance:g} m, T = {args.duration:g} s, "
         f"{experiment.trials_per_cell} trials/cell"
     )
     summary = heatmap_outputs(results, out, title)
     print(json.dumps(summary) if args.json else _summary_line(args, summary, len(experiment.cell_ids()), out))
-    return 0
 
 
 def _experiment(args: argparse.Namespace, parser: argparse.ArgumentParser):
     """The experiment the arguments describe; a usage error for one that cannot be."""
     from .experiment import Experiment
+
+    if args.live and args.executor == "ray":
+        parser.error("--live shows the trial of a worker of this machine: use it with --executor local")
 
     settings = controller_settings(parser, args)
     args.plant = plant_for_settings(parser, settings, args.plant)
