@@ -1,0 +1,31 @@
+"""Command handlers stay short: each reads as its command's steps, the work in named helpers (issue 42, item 7)."""
+
+from __future__ import annotations
+
+import ast
+
+from mantaray.paths import REPO
+
+MAX_LINES = 45  # a handler's length, its signature and docstring included
+
+
+def _handlers():
+    """(file, name, lines) of every command handler: a host or top-level cmd_* function, a sim/cli_*.py run()."""
+    files = [*(REPO / "host").glob("cli*.py"), REPO / "mantaray" / "cli.py", *(REPO / "sim").glob("cli_*.py")]
+    for path in files:
+        for node in ast.parse(path.read_text()).body:
+            if isinstance(node, ast.FunctionDef) and (
+                node.name.startswith("cmd_") or (path.parent.name == "sim" and node.name == "run")
+            ):
+                assert node.end_lineno is not None
+                yield path.relative_to(REPO), node.name, node.end_lineno - node.lineno + 1
+
+
+def test_the_handlers_are_found():
+    names = {(str(path), name) for path, name, _ in _handlers()}
+    assert ("host/cli.py", "cmd_rig") in names and ("sim/cli_heatmap.py", "run") in names and len(names) >= 15
+
+
+def test_no_command_handler_is_over_45_lines():
+    long = [f"{path}:{name} ({lines} lines)" for path, name, lines in _handlers() if lines > MAX_LINES]
+    assert not long, f"handlers over {MAX_LINES} lines: {', '.join(long)}"
