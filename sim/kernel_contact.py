@@ -10,7 +10,8 @@ passive callback: that callback is one per process and breaks every model compil
   points over its faces, a cylinder its rims and cap centres, a mesh 48 of its hull's vertices) that lies below that
   surface plus the flex's radius presses into it with a spring of k = contact.kernel_stiffness_n_per_m [N/m] (shared
   by the FACE_POINTS points of a face for any object but the sphere, so an object resting on a face feels k), and a
-  damping of contact.kernel_damping_ratio times critical for the object's mass, along the surface's normal.
+  damping of contact.kernel_damping_ratio times critical for the reduced mass of the point's share of the object and
+  the patch of sheet under it (the vertices' masses by the kernel's squared weights), along the surface's normal.
 - A regularised Coulomb friction (contact.friction[0]; slip below 1 mm/s grows linearly) acts at the point
   against its velocity relative to the sheet under it.
 - Each point's force is shared back to the vertices by the same weights, so the sheet carries the object's load spread
@@ -94,13 +95,13 @@ def plugin_xml(rig: Rig, alone: mujoco.MjModel, flex: str, geom: str) -> str:
     geom_id = alone.geom(geom).id
     points, radius_m = surface_points(alone, geom_id)
     share = 1.0 if len(points) == 1 else 1.0 / FACE_POINTS  # the points that bear the object share its spring
-    mass_kg = float(alone.body_mass[alone.geom_bodyid[geom_id]])
     config = {
         "flex": flex,
         "geom": geom,
         "width_m": repr(c.kernel_width_m),
-        "stiffness_n_per_m": repr(c.kernel_stiffness_n_per_m * share),
-        "damping_n_s_per_m": repr(c.kernel_damping_ratio * 2 * math.sqrt(c.kernel_stiffness_n_per_m * mass_kg) * share),
+        "stiffness_n_per_m": repr(c.kernel_stiffness_n_per_m),
+        "share": repr(share),
+        "damping_ratio": repr(c.kernel_damping_ratio),
         "friction": repr(float(c.friction[0])),
         "radius_m": repr(radius_m),
         "points_m": " ".join(repr(float(x)) for x in points.ravel()),

@@ -20,6 +20,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # rest_positions.py's 
 
 from rest_positions import plant_meshes_drops, print_gaps, rest_positions  # noqa: E402
 
+from mantaray.sim import model as M  # noqa: E402
 from mantaray.sim.objects import OBJECTS  # noqa: E402
 from mantaray.sim.parameters import ParameterError, plant_names  # noqa: E402
 
@@ -43,12 +44,22 @@ def main() -> int:
         parser.error(str(exc))
     mesh_plant = plant.set({"contact.model": "mesh"})
     print(f"{args.object} on {args.plant} {' '.join(args.set)}: {args.drops} drops, seed {args.seed}", flush=True)
-    native_s = {m.label: rest_positions(mesh_plant, args.object, m, drops)[1] for m in meshes}
-    for kernel, width in zip(kernels, args.widths.split(","), strict=True):
+    try:
+        sweep(kernels, args.widths.split(","), mesh_plant, args.object, meshes, drops)
+    except M.SimulationUnstable as exc:
+        print(f"diverged: {exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def sweep(kernels, widths, mesh_plant, object_name, meshes, drops) -> None:
+    """Print each width's rests on each mesh, their gaps and wall times against the flex's own contact's."""
+    native_s = {m.label: rest_positions(mesh_plant, object_name, m, drops)[1] for m in meshes}
+    for kernel, width in zip(kernels, widths, strict=True):
         print(f"h = {float(width) * 100:g} cm:", flush=True)
         rests = {}
         for mesh in meshes:
-            rests[mesh.label], wall_s = rest_positions(kernel, args.object, mesh, drops)
+            rests[mesh.label], wall_s = rest_positions(kernel, object_name, mesh, drops)
             at_rest = [
                 f"({r[0] * 100:+.1f}, {r[1] * 100:+.1f})" if r is not None else "moving" for r in rests[mesh.label]
             ]
@@ -58,7 +69,6 @@ def main() -> int:
                 flush=True,
             )
         print_gaps(rests, meshes, indent="  ")
-    return 0
 
 
 if __name__ == "__main__":

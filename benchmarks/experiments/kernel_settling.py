@@ -76,7 +76,11 @@ def main() -> int:
         parser.error(f"--at takes x,y [m] within ±0.2, got {args.at!r}")
     if not (0 < args.every <= args.duration <= 60):
         parser.error("--every and --duration: 0 < every <= duration <= 60 s")
-    said, end = speeds(plant, args.object, mesh, at_m, args.duration, args.every)
+    try:
+        said, end = speeds(plant, args.object, mesh, at_m, args.duration, args.every)
+    except M.SimulationUnstable as exc:
+        print(f"diverged: {exc}", file=sys.stderr)
+        return 1
     print(
         f"{args.object} on {args.plant} {' '.join(args.set)}, {mesh.label}: speed [mm/s] every "
         f"{args.every:g} s: {' '.join(f'{v * 1000:.1f}' for v in said)}; at ({end[0]:+.3f}, {end[1]:+.3f}) m at the end"

@@ -1,8 +1,12 @@
-// MuJoCo passive-force plugin "mantaray.kernel_contact": the object meets the sheet through a smooth kernel (sim/kernel_contact.py).
+// MuJoCo passive-force plugin "mantaray.kernel_contact": the object meets the sheet through a smooth kernel
+// (sim/kernel_contact.py).
 //
 // Each step, each of the object's contact points below the sheet's kernel surface presses into it with a damped
-// spring along the surface's normal and a regularised Coulomb friction; the force acts on the object at the point and
-// is shared back to the flex's vertices by the kernel's weights. The surface under (x, y) is the vertices' heights
+// spring along the surface's normal and a regularised Coulomb friction; the damping is a ratio of critical for the
+// reduced mass of the point's share of the object and the patch of sheet under it (the vertices' masses weighted by
+// the kernel's squared weights: the same in kg on every mesh), so it does not act on the grams of sheet under the
+// object with the damping an object's mass would want; the force acts on the object at the point
+// and is shared back to the flex's vertices by the kernel's weights. The surface under (x, y) is the vertices' heights
 // averaged with Wendland C2 weights w(r) = (1 - r/h)^4 (1 + 4 r/h) of support radius h [m]. The configuration (the
 // names of the flex and the object's geom, h, the springs and the points) is written by sim/kernel_contact.py; the
 // plugin's one state value is the kernel surface's height [m, world z] under the geom's centre at the last step
@@ -17,15 +21,17 @@
 
 #define SLIP_SPEED_M_PER_S 1e-3  // [m/s] below this relative speed the friction grows linearly
 
-static const char* const kAttributes[] = {"flex", "geom", "width_m", "stiffness_n_per_m", "damping_n_s_per_m",
-                                          "friction", "radius_m", "points_m"};
-enum { kFlex, kGeom, kWidth, kStiffness, kDamping, kFriction, kRadius, kPoints, kAttributeCount };
+static const char* const kAttributes[] = {"flex",          "geom",     "width_m",  "stiffness_n_per_m", "share",
+                                          "damping_ratio", "friction", "radius_m", "points_m"};
+enum { kFlex, kGeom, kWidth, kStiffness, kShare, kDamping, kFriction, kRadius, kPoints, kAttributeCount };
 
 typedef struct {
-  int geom, body;                   // the object
-  int first, count;                 // the flex's vertices in flexvert_xpos
-  int* dof;                         // [count] each vertex's first of its x, y, z slides, or -1 with none
-  mjtNum h, k, b, mu, radius, top;  // [m], [N/m], [N s/m], [-], [m], [m] the flex's radius over its vertices
+  int geom, body;                      // the object
+  int first, count;                    // the flex's vertices in flexvert_xpos
+  int* dof;                            // [count] each vertex's first of its x, y, z slides, or -1 with none
+  mjtNum* mass;                        // [count] each vertex's mass [kg] (its body's)
+  mjtNum h, k, zeta, mu, radius, top;  // [m], [N/m] a point's spring, [-] of critical, [-], [m], [m] the flex's radius
+  mjtNum share;                        // [-] the fraction of the object's mass a point bears
   int npoint;
   mjtNum* point;   // [3 npoint] the contact points in the geom's frame [m]
   mjtNum* weight;  // [count] scratch: each vertex's kernel weight under the point at hand
@@ -57,6 +63,7 @@ static void destroy(mjData* d, int instance) {
   Kernel* kernel = (Kernel*)d->plugin_data[instance];
   if (kernel) {
     free(kernel->dof);
+    free(kernel->mass);
     free(kernel->point);
     free(kernel->weight);
     free(kernel);
@@ -70,33 +77,42 @@ static int init(const mjModel* m, mjData* d, int instance) {
   if (!kernel) return -1;
   int flex = read_id(m, instance, kFlex, mjOBJ_FLEX);
   kernel->geom = read_id(m, instance, kGeom, mjOBJ_GEOM);
+  mjtNum share = 0;
   if (flex < 0 || kernel->geom < 0 || read_number(m, instance, kWidth, &kernel->h) ||
-      read_number(m, instance, kStiffness, &kernel->k) || read_number(m, instance, kDamping, &kernel->b) ||
-      read_number(m, instance, kFriction, &kernel->mu) || read_number(m, instance, kRadius, &kernel->radius)) {
+      read_number(m, instance, kStiffness, &kernel->k) || read_number(m, instance, kShare, &share) ||
+      read_number(m, instance, kDamping, &kernel->zeta) || read_number(m, instance, kFriction, &kernel->mu) ||
+      read_number(m, instance, kRadius, &kernel->radius)) {
     destroy(d, instance);
     return -1;
   }
-  if (kernel->h <= 0 || kernel->k <= 0 || kernel->b < 0 || kernel->mu < 0 || kernel->radius < 0) {
-    mju_warning("mantaray.kernel_contact: width and stiffness must be > 0, damping, friction and radius >= 0");
+  if (kernel->h <= 0 || kernel->k <= 0 || share <= 0 || share > 1 || kernel->zeta < 0 || kernel->mu < 0 ||
+      kernel->radius < 0) {
+    mju_warning(
+        "mantaray.kernel_contact: width and stiffness must be > 0, share in (0, 1], damping ratio, friction "
+        "and radius >= 0");
     destroy(d, instance);
     return -1;
   }
   kernel->body = m->geom_bodyid[kernel->geom];
+  kernel->k *= share;
+  kernel->share = share;
   kernel->first = m->flex_vertadr[flex];
   kernel->count = m->flex_vertnum[flex];
   kernel->top = m->flex_radius[flex];
   kernel->dof = (int*)malloc(sizeof(int) * (size_t)kernel->count);
+  kernel->mass = (mjtNum*)malloc(sizeof(mjtNum) * (size_t)kernel->count);
   kernel->weight = (mjtNum*)malloc(sizeof(mjtNum) * (size_t)kernel->count);
   const char* text = mj_getPluginConfig(m, instance, kAttributes[kPoints]);
   size_t length = text ? strlen(text) : 0;
   kernel->point = (mjtNum*)malloc(sizeof(mjtNum) * (length / 2 + 3));  // a number takes two characters at least
-  if (!kernel->dof || !kernel->weight || !kernel->point) {
+  if (!kernel->dof || !kernel->mass || !kernel->weight || !kernel->point) {
     destroy(d, instance);
     return -1;
   }
   for (int i = 0; i < kernel->count; i++) {
     int body = m->flex_vertbodyid[kernel->first + i];
     kernel->dof[i] = m->body_dofnum[body] == 3 ? m->body_dofadr[body] : -1;
+    kernel->mass[i] = m->body_mass[body];
   }
   int n = 0;
   char* end = NULL;
@@ -168,7 +184,8 @@ static void compute(const mjModel* m, mjData* d, int instance, int capability_bi
   mjtNum top = -INFINITY, z = NAN, gradient[2];
   for (int i = 0; i < kernel->count; i++) top = fmax(top, vertex[3 * i + 2]);
   top += kernel->top;
-  d->plugin_state[m->plugin_stateadr[instance]] = surface(kernel, vertex, centre[0], centre[1], &z, gradient) > 0 ? z : NAN;
+  d->plugin_state[m->plugin_stateadr[instance]] =
+      surface(kernel, vertex, centre[0], centre[1], &z, gradient) > 0 ? z : NAN;
   mjtNum velocity[6], force_sum[3] = {0, 0, 0}, torque_sum[3] = {0, 0, 0};
   mj_objectVelocity(m, d, mjOBJ_GEOM, kernel->geom, velocity, 0);  // [rot, lin] in the world frame
   for (int j = 0; j < kernel->npoint; j++) {
@@ -187,14 +204,18 @@ static void compute(const mjModel* m, mjData* d, int instance, int capability_bi
     mju_sub3(arm, at, centre);
     mju_cross(spin, velocity, arm);
     mju_add3(relative, velocity + 3, spin);
+    mjtNum sheet = 0;                          // [1/kg] the inverse mass of the patch of sheet under the point
     for (int i = 0; i < kernel->count; i++) {  // less the sheet's velocity under the point
       if (kernel->weight[i] > 0 && kernel->dof[i] >= 0) {
-        mju_addToScl3(relative, d->qvel + kernel->dof[i], -kernel->weight[i] / total);
+        mjtNum part = kernel->weight[i] / total;
+        mju_addToScl3(relative, d->qvel + kernel->dof[i], -part);
+        if (kernel->mass[i] > 0) sheet += part * part / kernel->mass[i];
       }
     }
     mjtNum v_n = mju_dot3(relative, n), tangential[3];
     mju_addScl3(tangential, relative, n, -v_n);
-    mjtNum normal = fmax(0.0, kernel->k * depth - kernel->b * v_n);  // [N] a penalty spring cannot pull
+    mjtNum b = kernel->zeta * 2 * sqrt(kernel->k / (1 / (m->body_mass[kernel->body] * kernel->share) + sheet));
+    mjtNum normal = fmax(0.0, kernel->k * depth - b * v_n);  // [N] a penalty spring cannot pull
     mjtNum slip = sqrt(mju_dot3(tangential, tangential) + SLIP_SPEED_M_PER_S * SLIP_SPEED_M_PER_S);
     mjtNum force[3], torque[3];
     mju_scl3(force, n, normal);
