@@ -23,10 +23,10 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     experiment = _experiment(args, parser)
     check_ray(parser, args)
     out = output(parser, writable_dir, args.out or _default_out(args, experiment))
-    results = _results_file(out / "results.jsonl", experiment)
-    if results is None:
+    opened = _results_file(out / "results.jsonl", experiment)
+    if opened is None:
         return 2
-    todo, total = results.missing(), len(experiment.cell_ids()) * experiment.trials_per_cell
+    results, todo, total = opened
     live = _live(parser, args)
     bar = Progress(total, initial=total - len(todo), unit="trial", label="heatmap")  # on stderr, beside --json
     interruptible()
@@ -67,8 +67,9 @@ def _live(parser: argparse.ArgumentParser, args: argparse.Namespace):
 
 
 def _results_file(path: Path, experiment):
-    """The run's results file, opened or continued (what it holds reported on stderr), or None where it cannot be
-    (another experiment's, unreadable, or in use: said in one line)."""
+    """(the run's results file, its missing trials, the run's trial count): the file opened or continued (what it
+    holds reported on stderr), or None where it cannot be (another experiment's, unreadable, or in use: said in one
+    line)."""
     from .experiment import ExperimentMismatch
     from .results_file import ResultsFile, ResultsFileBusy
 
@@ -79,10 +80,10 @@ def _results_file(path: Path, experiment):
         return None
     for warning in results.warnings():
         _report(f"warning: {warning}")
-    left, total = len(results.missing()), len(experiment.cell_ids()) * experiment.trials_per_cell
-    if left < total:
-        print(f"continuing {path}: {total - left} of {total} trials already done", file=sys.stderr)
-    return results
+    todo, total = results.missing(), len(experiment.cell_ids()) * experiment.trials_per_cell
+    if len(todo) < total:
+        print(f"continuing {path}: {total - len(todo)} of {total} trials already done", file=sys.stderr)
+    return results, todo, total
 
 
 def _write_outputs(args: argparse.Namespace, experiment, results, out: Path) -> None:

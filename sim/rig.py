@@ -185,7 +185,8 @@ class Contact:
     # (sim/kernel_contact.py: the sheet smoothed over kernel_width_m)
     kernel_width_m: float = _d("contact.kernel_width_m")  # [m] the kernel's support radius
     kernel_stiffness_n_per_m: float = _d("contact.kernel_stiffness_n_per_m")  # [N/m] the kernel contact's spring
-    kernel_damping_ratio: float = _d("contact.kernel_damping_ratio")  # [-] its damping, of critical for the object
+    kernel_damping_ratio: float = _d("contact.kernel_damping_ratio")  # [-] its damping, of critical for the
+    # reduced mass of the object and the sheet under it
 
     def __post_init__(self) -> None:
         if self.model not in CONTACT_MODELS:

@@ -31,7 +31,7 @@ typedef struct {
   int* dof;                            // [count] each vertex's first of its x, y, z slides, or -1 with none
   mjtNum* mass;                        // [count] each vertex's mass [kg] (its body's)
   mjtNum h, k, zeta, mu, radius, top;  // [m], [N/m] a point's spring, [-] of critical, [-], [m], [m] the flex's radius
-  mjtNum share;                        // [-] the fraction of the object's mass a point bears
+  mjtNum point_inverse_mass;           // [1/kg] of the point's share of the object
   int npoint;
   mjtNum* point;   // [3 npoint] the contact points in the geom's frame [m]
   mjtNum* weight;  // [count] scratch: each vertex's kernel weight under the point at hand
@@ -95,7 +95,7 @@ static int init(const mjModel* m, mjData* d, int instance) {
   }
   kernel->body = m->geom_bodyid[kernel->geom];
   kernel->k *= share;
-  kernel->share = share;
+  kernel->point_inverse_mass = 1 / (m->body_mass[kernel->body] * share);
   kernel->first = m->flex_vertadr[flex];
   kernel->count = m->flex_vertnum[flex];
   kernel->top = m->flex_radius[flex];
@@ -214,7 +214,7 @@ static void compute(const mjModel* m, mjData* d, int instance, int capability_bi
     }
     mjtNum v_n = mju_dot3(relative, n), tangential[3];
     mju_addScl3(tangential, relative, n, -v_n);
-    mjtNum b = kernel->zeta * 2 * sqrt(kernel->k / (1 / (m->body_mass[kernel->body] * kernel->share) + sheet));
+    mjtNum b = kernel->zeta * 2 * sqrt(kernel->k / (kernel->point_inverse_mass + sheet));  // [N s/m]
     mjtNum normal = fmax(0.0, kernel->k * depth - b * v_n);  // [N] a penalty spring cannot pull
     mjtNum slip = sqrt(mju_dot3(tangential, tangential) + SLIP_SPEED_M_PER_S * SLIP_SPEED_M_PER_S);
     mjtNum force[3], torque[3];
