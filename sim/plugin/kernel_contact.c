@@ -2,15 +2,18 @@
 // (sim/kernel_contact.py).
 //
 // Each step, each of the object's contact points below the sheet's kernel surface presses into it with a damped
-// spring along the surface's normal and a regularised Coulomb friction; the damping is a ratio of critical for the
+// spring along the surface's normal and a stick spring along it capped by Coulomb; the damping is a ratio of critical for the
 // reduced mass of the point's share of the object and the patch of sheet under it (the vertices' masses weighted by
 // the kernel's squared weights: the same in kg on every mesh), so it does not act on the grams of sheet under the
 // object with the damping an object's mass would want; the force acts on the object at the point
 // and is shared back to the flex's vertices by the kernel's weights. The surface under (x, y) is the vertices' heights
 // averaged with Wendland C2 weights w(r) = (1 - r/h)^4 (1 + 4 r/h) of support radius h [m]. The configuration (the
 // names of the flex and the object's geom, h, the springs and the points) is written by sim/kernel_contact.py; the
-// plugin's one state value is the kernel surface's height [m, world z] under the geom's centre at the last step
-// (NaN off the sheet), which is how the Python side places an object on the surface without a second copy of it.
+// plugin's state is the kernel surface's height [m, world z] under the geom's centre at the last step (NaN off the
+// sheet), which is how the Python side places an object on the surface without a second copy of it, then each point's
+// stick stretch [m, world frame]: how far the point has moved along the sheet since it touched, the tangential spring's
+// extension (Chrono's and Bullet's penalty friction), capped so the spring never pulls harder than mu N. So an object
+// that friction should hold is held at any step, where a friction regularised by a slip speed lets it creep.
 
 #include <math.h>
 #include <stdint.h>
@@ -18,8 +21,6 @@
 #include <string.h>
 
 #include <mujoco/mujoco.h>
-
-#define SLIP_SPEED_M_PER_S 1e-3  // [m/s] below this relative speed the friction grows linearly
 
 static const char* const kAttributes[] = {"flex",          "geom",     "width_m",  "stiffness_n_per_m", "share",
                                           "damping_ratio", "friction", "radius_m", "points_m"};
@@ -34,8 +35,11 @@ typedef struct {
   mjtNum point_inverse_mass;           // [1/kg] of the point's share of the object
   int npoint;
   mjtNum* point;   // [3 npoint] the contact points in the geom's frame [m]
-  mjtNum* weight;  // [count] scratch: each vertex's kernel weight under the point at hand
+  mjtNum* weight;   // [count] scratch: each vertex's kernel weight under the point at hand
+  mjtNum* stretch;  // [3 npoint] each point's stick stretch [m] after this step's compute, state from advance
 } Kernel;
+
+#define STATE_STRETCH 1  // the first stick stretch in the instance's state, after the surface height
 
 static int read_number(const mjModel* m, int instance, int attribute, mjtNum* out) {
   const char* text = mj_getPluginConfig(m, instance, kAttributes[attribute]);
@@ -66,6 +70,7 @@ static void destroy(mjData* d, int instance) {
     free(kernel->mass);
     free(kernel->point);
     free(kernel->weight);
+    free(kernel->stretch);
     free(kernel);
   }
   d->plugin_data[instance] = 0;
@@ -129,20 +134,56 @@ static int init(const mjModel* m, mjData* d, int instance) {
     return -1;
   }
   kernel->npoint = n / 3;
+  kernel->stretch = (mjtNum*)calloc((size_t)n, sizeof(mjtNum));
+  if (!kernel->stretch) {
+    destroy(d, instance);
+    return -1;
+  }
   return 0;
 }
 
+// The points' count, as init reads it: a number in points_m starts where a blank follows a non-blank.
 static int nstate(const mjModel* m, int instance) {
-  (void)m;
-  (void)instance;
-  return 1;
+  const char* text = mj_getPluginConfig(m, instance, kAttributes[kPoints]);
+  int numbers = 0;
+  for (const char* at = text; at && *at; at++) {
+    int blank = *at == ' ' || *at == '\n' || *at == '\t';
+    if (!blank && (at == text || at[-1] == ' ' || at[-1] == '\n' || at[-1] == '\t')) numbers++;
+  }
+  return STATE_STRETCH + numbers;
 }
 
 static void reset(const mjModel* m, mjtNum* state, void* data, int instance) {
-  (void)m;
-  (void)data;
-  (void)instance;
   state[0] = NAN;
+  Kernel* kernel = (Kernel*)data;
+  int count = nstate(m, instance) - STATE_STRETCH;
+  for (int i = 0; i < count; i++) state[STATE_STRETCH + i] = 0;
+  if (kernel) memset(kernel->stretch, 0, sizeof(mjtNum) * (size_t)count);
+}
+
+// The step is taken: the stretches compute found become the state the next step starts from.
+static void advance(const mjModel* m, mjData* d, int instance) {
+  Kernel* kernel = (Kernel*)d->plugin_data[instance];
+  mju_copy(d->plugin_state + m->plugin_stateadr[instance] + STATE_STRETCH, kernel->stretch, 3 * kernel->npoint);
+}
+
+// The tangential force [N] of a point's stick spring, and its stretch after this step: the stretch it started with,
+// turned into the tangent plane of normal n at its length, grown by the tangential velocity over the step, and cut
+// back so the spring and its damping b never exceed the Coulomb limit [N].
+static void stick(mjtNum force[3], mjtNum stretch[3], const mjtNum n[3], const mjtNum tangential[3], mjtNum k,
+                  mjtNum b, mjtNum limit, mjtNum dt) {
+  mjtNum length = mju_norm3(stretch);
+  mju_addToScl3(stretch, n, -mju_dot3(stretch, n));
+  mjtNum turned = mju_norm3(stretch);
+  if (turned > 1e-12) mju_scl3(stretch, stretch, length / turned);
+  mju_addToScl3(stretch, tangential, dt);
+  mju_scl3(force, stretch, -k);
+  mju_addToScl3(force, tangential, -b);
+  mjtNum size = mju_norm3(force);
+  if (size > limit) {
+    mju_scl3(force, force, size > 0 ? limit / size : 0);
+    mju_scl3(stretch, force, -1 / k);  // slipping: the spring alone holds the limit
+  }
 }
 
 // The kernel surface under (x, y): its height [m] and gradient, each vertex's weight in kernel->weight; returns the
@@ -181,7 +222,9 @@ static void compute(const mjModel* m, mjData* d, int instance, int capability_bi
   const mjtNum* vertex = d->flexvert_xpos + 3 * kernel->first;
   const mjtNum* centre = d->geom_xpos + 3 * kernel->geom;
   const mjtNum* rotation = d->geom_xmat + 9 * kernel->geom;
+  const mjtNum* started = d->plugin_state + m->plugin_stateadr[instance] + STATE_STRETCH;
   mjtNum top = -INFINITY, z = NAN, gradient[2];
+  mju_zero(kernel->stretch, 3 * kernel->npoint);  // a point off the sheet lets go
   for (int i = 0; i < kernel->count; i++) top = fmax(top, vertex[3 * i + 2]);
   top += kernel->top;
   d->plugin_state[m->plugin_stateadr[instance]] =
@@ -216,10 +259,10 @@ static void compute(const mjModel* m, mjData* d, int instance, int capability_bi
     mju_addScl3(tangential, relative, n, -v_n);
     mjtNum b = kernel->zeta * 2 * sqrt(kernel->k / (kernel->point_inverse_mass + sheet));  // [N s/m]
     mjtNum normal = fmax(0.0, kernel->k * depth - b * v_n);  // [N] a penalty spring cannot pull
-    mjtNum slip = sqrt(mju_dot3(tangential, tangential) + SLIP_SPEED_M_PER_S * SLIP_SPEED_M_PER_S);
-    mjtNum force[3], torque[3];
-    mju_scl3(force, n, normal);
-    mju_addToScl3(force, tangential, -kernel->mu * normal / slip);
+    mjtNum force[3], torque[3], *stretch = kernel->stretch + 3 * j;
+    mju_copy3(stretch, started + 3 * j);
+    stick(force, stretch, n, tangential, kernel->k, b, kernel->mu * normal, m->opt.timestep);
+    mju_addToScl3(force, n, normal);
     mju_cross(torque, arm, force);
     mju_addTo3(force_sum, force);
     mju_addTo3(torque_sum, torque);
@@ -243,6 +286,7 @@ mjPLUGIN_LIB_INIT(mantaray_kernel_contact) {
   plugin.init = init;
   plugin.destroy = destroy;
   plugin.reset = reset;
+  plugin.advance = advance;
   plugin.compute = compute;
   mjp_registerPlugin(&plugin);
 }
