@@ -12,8 +12,10 @@ passive callback: that callback is one per process and breaks every model compil
   by the FACE_POINTS points of a face for any object but the sphere, so an object resting on a face feels k), and a
   damping of contact.kernel_damping_ratio times critical for the reduced mass of the point's share of the object and
   the patch of sheet under it (the vertices' masses by the kernel's squared weights), along the surface's normal.
-- A regularised Coulomb friction (contact.friction[0]; slip below 1 mm/s grows linearly) acts at the point
-  against its velocity relative to the sheet under it.
+- Friction (contact.friction[0]) is a stick spring at each point in contact: its stretch [m] is how far the point has
+  moved along the sheet under it since it touched (the plugin's state), pulled back with the same k and damping,
+  and cut to the Coulomb limit mu N where it would pull harder, so the point slips. An object friction should hold
+  is held at any step; a friction regularised by a slip speed let it creep, the more the longer the step.
 - Each point's force is shared back to the vertices by the same weights, so the sheet carries the object's load spread
   over h, and momentum is kept.
 Rolling resistance is the object's rotational damping (contact.rolling_damping_per_s), as with the mesh contact; the
