@@ -10,19 +10,13 @@ import tempfile
 import time
 from pathlib import Path
 
-from mantaray.paths import REPO, native_artifact
-from mantaray.protocol.rig import RigDescription, default
+from mantaray.paths import native_artifact
+from mantaray.protocol.rig import default
 
+from .avr_image import elf_path
 from .processes import DIE_WITH_PARENT, end
 
-
-def elf_for(description: RigDescription) -> Path:
-    """Where scripts/avr_build.py puts a rig's board image: build/avr for the Uno's, build/avr-ENV for another."""
-    env = description.pio_env
-    return REPO / "build" / ("avr" if env == "uno" else f"avr-{env}") / "firmware.elf"
-
-
-DEFAULT_ELF = elf_for(default())  # the Uno image
+DEFAULT_ELF = elf_path(default())  # the Uno image
 
 
 def end_of_data(elf: Path) -> int:

@@ -1,6 +1,9 @@
-"""The boards a rig can be built for: each Arduino pin's port and bit, its PWM output and timer registers, from the MCU.
+"""The boards a rig can be built for: the MCU, its clock and memories, how PlatformIO names it, and each Arduino pin's
+port and bit, its PWM output and timer registers. The one board table: scripts/avr_build.py, host/avr_image.py, the
+simavr benchmarks and tests read it, and tests/test_avr_build.py checks platformio.ini against it.
 
-Sources: the ATmega328P and ATmega2560 datasheets (register addresses in data space, as avr-libc's io headers give
+Sources: PlatformIO's board JSON (platform-atmelavr boards/uno.json, megaatmega2560.json: build.mcu, f_cpu,
+extra_flags, variant; upload.maximum_size, maximum_ram_size), the ATmega328P and ATmega2560 datasheets (register addresses in data space, as avr-libc's io headers give
 them: an I/O address + 0x20) and Arduino's variant files (variants/standard and variants/mega, pins_arduino.h: which
 port bit and which timer output each Arduino pin number is). protocol/rig.py checks a rig's pins against these;
 protocol/generate_rig.py places them on the registers for the AVR simulator's harness.
@@ -24,13 +27,21 @@ class TimerOutput:
 class Board:
     """One Arduino board: what an Arduino pin number means on its MCU."""
 
-    name: str  # as rig files and PlatformIO environments name it
-    mcu: str  # avr-gcc's -mmcu
+    name: str  # as rig files name it
+    mcu: str  # avr-gcc's -mmcu, simavr's -m
+    pio_board: str  # platformio.ini's board = (its board JSON's name)
+    pio_prefix: str  # a rig's PlatformIO environment is PREFIX_RIG (the Uno's one-module environment is plain uno)
+    arduino_define: str  # the board JSON's build.extra_flags: -D this
+    variant: str  # the Arduino core's variants/ folder for its pins
+    flash_bytes: int  # [bytes] upload.maximum_size: flash less the bootloader
+    ram_bytes: int  # [bytes] upload.maximum_ram_size
     port_address: dict[str, int]  # port letter -> data-space address of PORTx
     pins: dict[int, tuple[str, int]]  # Arduino pin number -> (port letter, bit)
     pwm: dict[int, str]  # Arduino pin number -> the timer output driving it (analogWrite)
     timer_outputs: dict[str, TimerOutput]  # timer output name -> its registers
     reserved: dict[int, str]  # pins the firmware's own peripherals use (serial link, I2C bus) -> what for
+
+    f_cpu_hz: int = 16_000_000  # [Hz] the crystal: the board JSON's f_cpu, simavr's -f
 
     def pin_range(self) -> str:
         return f"0..{max(self.pins)}"
@@ -54,6 +65,12 @@ TIMERS_0_TO_2 = {
 UNO = Board(
     name="uno",
     mcu="atmega328p",
+    pio_board="uno",
+    pio_prefix="uno",
+    arduino_define="ARDUINO_AVR_UNO",
+    variant="standard",
+    flash_bytes=32256,
+    ram_bytes=2048,
     port_address={"B": 0x25, "C": 0x28, "D": 0x2B},
     pins=_port_pins("PD0 PD1 PD2 PD3 PD4 PD5 PD6 PD7 PB0 PB1 PB2 PB3 PB4 PB5 PC0 PC1 PC2 PC3 PC4 PC5"),
     pwm={3: "OC2B", 5: "OC0B", 6: "OC0A", 9: "OC1A", 10: "OC1B", 11: "OC2A"},
@@ -64,6 +81,12 @@ UNO = Board(
 MEGA2560 = Board(
     name="mega2560",
     mcu="atmega2560",
+    pio_board="megaatmega2560",
+    pio_prefix="mega",
+    arduino_define="ARDUINO_AVR_MEGA2560",
+    variant="mega",
+    flash_bytes=253952,
+    ram_bytes=8192,
     port_address={
         "A": 0x22,
         "B": 0x25,
@@ -116,3 +139,4 @@ MEGA2560 = Board(
 )
 
 BOARDS = {board.name: board for board in (UNO, MEGA2560)}
+PIO_BOARDS = {board.pio_board: board for board in BOARDS.values()}  # by platformio.ini's board =

@@ -56,7 +56,6 @@ PHYSICAL_RANGE = {  # entry -> (least, most) a rig can have, in the entry's unit
     "motor_speed_rpm": (1.0, 30000.0),  # [rev/min]
     "actuator_period_us": (100, 1_000_000),  # [us] 10 kHz to 1 Hz
 }
-PIO_BOARD_PREFIX = {"uno": "uno", "mega2560": "mega"}  # a board's PlatformIO environments start with this
 MAX_ACTUATORS = 16  # jog.actuator and zero.actuators (a 16-bit mask) address actuators 0..15 (schema.toml)
 
 
@@ -171,7 +170,7 @@ class RigDescription:
     def pio_env(self) -> str:
         """The PlatformIO environment that builds this rig's board image (platformio.ini; scripts/avr_build.py
         writes it to build/avr for the Uno's, build/avr-ENV for any other)."""
-        return "uno" if self.name == "module" else f"{PIO_BOARD_PREFIX[self.board.name]}_{self.name}"
+        return "uno" if self.name == "module" else f"{self.board.pio_prefix}_{self.name}"
 
     @property
     def modules_x(self) -> int:

@@ -31,6 +31,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # its sibling avr_size.py, also when loaded by a test
 import avr_size  # noqa: E402
 
+from mantaray.host.avr_image import build_dir  # noqa: E402
+from mantaray.protocol.boards import PIO_BOARDS, Board  # noqa: E402
+
 REPO = Path(__file__).resolve().parent.parent
 ARDUINO_AVR = Path("/usr/share/arduino/hardware/arduino/avr")  # Debian package arduino-core-avr
 AVR_LIBC_HEADER = Path("/usr/lib/avr/include/avr/io.h")  # Debian package avr-libc
@@ -57,24 +60,6 @@ UNSUPPORTED_OPTIONS = (
     "board_build.f_cpu",
 )
 MEASURE_FLAGS = ["-gdwarf-4"]  # debug info only (no code change): lets the line table attribute code to files
-
-
-@dataclass(frozen=True)
-class Board:
-    """What PlatformIO takes from its board JSON (platform-atmelavr boards/<name>.json)."""
-
-    mcu: str
-    f_cpu: str  # [Hz] with the L suffix PlatformIO passes on
-    define: str  # build.extra_flags
-    variant: str
-    flash: int  # [bytes] upload.maximum_size: flash less the bootloader
-    ram: int  # [bytes] upload.maximum_ram_size
-
-
-BOARDS = {
-    "uno": Board("atmega328p", "16000000L", "ARDUINO_AVR_UNO", "standard", 32256, 2048),
-    "megaatmega2560": Board("atmega2560", "16000000L", "ARDUINO_AVR_MEGA2560", "mega", 253952, 8192),
-}
 
 
 class BuildError(Exception):
@@ -146,7 +131,7 @@ def framework_flags(board: Board) -> Flags:
         cxxflags=["-fno-exceptions", "-fno-threadsafe-statics", "-fpermissive", "-std=gnu++11"],
         asppflags=machine + ["-x", "assembler-with-cpp"],
         linkflags=machine + ["-Os", "-Wl,--gc-sections", "-flto", "-fuse-linker-plugin"],
-        defines=[f"F_CPU={board.f_cpu}", "ARDUINO_ARCH_AVR", f"ARDUINO={ARDUINO_VERSION}"],
+        defines=[f"F_CPU={board.f_cpu_hz}L", "ARDUINO_ARCH_AVR", f"ARDUINO={ARDUINO_VERSION}"],
         includes=[ARDUINO_AVR / "cores" / "arduino", ARDUINO_AVR / "variants" / board.variant],
         libs=["m"],
     )
@@ -193,9 +178,9 @@ def read_project(ini: Path, env: str) -> Project:
     if option("platform") != "atmelavr" or option("framework") != "arduino":
         raise BuildError(f"[{section}] must be platform = atmelavr, framework = arduino")
     board_name = option("board")
-    if board_name not in BOARDS:
-        raise BuildError(f"board {board_name!r} is not in this script's table ({', '.join(BOARDS)})")
-    board = BOARDS[board_name]
+    if board_name not in PIO_BOARDS:
+        raise BuildError(f"board {board_name!r} is not in protocol/boards.py's table ({', '.join(PIO_BOARDS)})")
+    board = PIO_BOARDS[board_name]
 
     project_dir = ini.resolve().parent
 
@@ -203,7 +188,7 @@ def read_project(ini: Path, env: str) -> Project:
         value = parser.get("platformio", name, fallback=default)
         return (project_dir / value).resolve()
 
-    flags = parse_flags([f"-D{board.define}"], project_dir)
+    flags = parse_flags([f"-D{board.arduino_define}"], project_dir)
     flags.extend(parse_flags(ini_values(option("build_flags")), project_dir))
     flags.extend(framework_flags(board))
     flags.remove(parse_flags(ini_values(option("build_unflags")), project_dir))
@@ -449,7 +434,7 @@ def main(argv: list[str] | None = None) -> int:
         missing = missing_packages(compiling=not args.dry_run)
         if missing:
             raise BuildError(f"the AVR toolchain is incomplete: apt-get install {' '.join(missing)}")
-        out = args.out or REPO / "build" / ("avr" if args.env == "uno" else f"avr-{args.env}")
+        out = args.out or build_dir(args.env)
         plan = plan_build(project, out.resolve())
         if args.dry_run:
             print("\n".join(shlex.join(command) for command in plan.commands()))

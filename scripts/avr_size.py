@@ -90,8 +90,8 @@ def measure(elf: Path, lib_dir: Path, board_name: str, board) -> dict:
     ]
     core_ram = sum(size for size, _ in core_data)
     core_initialised = sum(size for size, kind in core_data if kind in "dD")  # initial values stored in flash
-    flash_budget = int(board.flash * FLASH_BUDGET)
-    ram_budget = int(board.ram * RAM_BUDGET)
+    flash_budget = int(board.flash_bytes * FLASH_BUDGET)
+    ram_budget = int(board.ram_bytes * RAM_BUDGET)
     largest = sorted(data, reverse=True)[:5]
     return {
         "elf": str(elf),
@@ -99,11 +99,16 @@ def measure(elf: Path, lib_dir: Path, board_name: str, board) -> dict:
         "mcu": board.mcu,
         "flash": {
             "used": flash,
-            "max": board.flash,
-            "percent": round(100 * flash / board.flash, 1),
+            "max": board.flash_bytes,
+            "percent": round(100 * flash / board.flash_bytes, 1),
             "budget": flash_budget,
         },
-        "ram": {"used": ram, "max": board.ram, "percent": round(100 * ram / board.ram, 1), "budget": ram_budget},
+        "ram": {
+            "used": ram,
+            "max": board.ram_bytes,
+            "percent": round(100 * ram / board.ram_bytes, 1),
+            "budget": ram_budget,
+        },
         "core": {"flash": core_code + core_initialised, "code": core_code, "ram": core_ram},
         "largest_ram": [{"name": name, "size": size} for size, _, name in largest],
         "within_budget": flash <= flash_budget and ram <= ram_budget,

@@ -117,6 +117,7 @@ def _add_run(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None:
             shared["trial"],
             shared["alpha"],
             shared["closed_loop"],
+            shared["fidelity"],
             O.plant_set(),
             O.out("the figure, trajectory and video", "out/sim"),
         ],

@@ -58,7 +58,11 @@ def _trial(args: argparse.Namespace, parser: argparse.ArgumentParser):
     plant = Plant(args.plant).set(dict(args.set))
     args.rig = args.rig or rig_description.default()
     try:
-        rig = plant.rig(args.object).with_description(args.rig)
+        rig = plant.rig(args.object, resolution=args.resolution, timestep_s=args.timestep)
+    except ValueError as exc:
+        parser.error(f"--resolution, --timestep: {exc}")
+    try:
+        rig = rig.with_description(args.rig)
     except ValueError as exc:  # a rig file whose actuators the simulated rig lacks, or no firmware is built for
         parser.error(f"--rig: {exc}")
     if args.vision:

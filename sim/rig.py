@@ -203,6 +203,12 @@ class Solver:
     solver: str = "Newton"  # CG stalls on the stiff edges (iteration cap) and diverged in some settings
     tolerance: float = 1e-6  # [-] solver stopping tolerance (SIM-NOTES)
 
+    MAX_TIMESTEP_S = 0.01  # [s] a step no fidelity takes: the sheet's 2 ms constraints already diverge above 1 ms
+
+    def __post_init__(self) -> None:
+        if not 0 < self.timestep_s <= self.MAX_TIMESTEP_S:
+            raise ValueError(f"timestep must be in (0, {self.MAX_TIMESTEP_S:g}] s, got {self.timestep_s}")
+
 
 @dataclass(frozen=True)
 class Camera:

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import pytest
 
+from mantaray.protocol.boards import UNO
 from mantaray.protocol.framing import encode_packet
 from mantaray.protocol.messages import Boot, ResetCause, Telemetry
 
@@ -187,6 +188,23 @@ def test_repository_ini_flags_are_the_ones_used():
     assert len(link) == 1 and all(f" {flag} " in f" {link[0]} " for flag in linker)
 
 
+def test_platformio_ini_builds_each_board_as_the_board_table_says():
+    """Every AVR environment of platformio.ini names a board of protocol/boards.py's table under its prefix, and
+    leaves the MCU and clock to the board's (no board_build override), so the table's clock is the one the image
+    runs at and simavr and the benchmarks time by."""
+    from mantaray.protocol.boards import PIO_BOARDS
+
+    parser = configparser.ConfigParser(inline_comment_prefixes=(";",))
+    parser.read(REPO / "platformio.ini")
+    avr = [name for name in parser.sections() if parser.get(name, "platform", fallback="") == "atmelavr"]
+    assert avr
+    for section in avr:
+        board = PIO_BOARDS[parser[section]["board"]]
+        env = section.removeprefix("env:")
+        assert env == "uno" or env.startswith(f"{board.pio_prefix}_")
+        assert not {"board_build.mcu", "board_build.f_cpu"} & set(parser[section])
+
+
 def test_unknown_board_and_missing_env_are_errors(tmp_path):
     result = run_script("--ini", str(ini_with(tmp_path, board="esp32dev")), "--dry-run")
     assert result.returncode == 1 and "esp32dev" in result.stderr
@@ -225,7 +243,7 @@ def simavr_uart(elf: Path, want: int, deadline_s: float = 20.0) -> bytes:
     simavr prints UART output in green chunks of up to 256 bytes on stderr, each byte below 0x20 as '.'.
     """
     proc = subprocess.Popen(
-        ["simavr", "-m", "atmega328p", "-f", "16000000", str(elf)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+        ["simavr", "-m", UNO.mcu, "-f", str(UNO.f_cpu_hz), str(elf)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
     )
     raw, uart = b"", b""
     try:

@@ -275,8 +275,6 @@ def test_every_committed_rig_has_its_builds_under_the_names_the_description_give
     for description in rig.committed():
         flags = ini.get(f"env:{description.pio_env}", "build_flags")
         assert f"-Ifirmware/rigs/{description.name}" in flags.split()
-        assert ini.get(f"env:{description.pio_env}", "board").startswith(
-            {"uno": "uno", "mega2560": "megaatmega2560"}[description.board.name]
-        )
+        assert ini.get(f"env:{description.pio_env}", "board") == description.board.pio_board
         assert native_artifact(description.vmcu_program).exists()
         assert native_artifact(description.simavr_harness).exists()

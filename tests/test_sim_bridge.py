@@ -254,6 +254,8 @@ def test_sim_run_takes_negative_points_and_names_each_trial_apart(tmp_path):
         (("--tolerance", "0"), "tolerance epsilon: 0 m is outside 0.001..0.5 m"),
         (("--video", "--video-fps", "0"), "--video-fps must be 1..240"),
         (("--out", "/proc/version/sub"), "cannot write into /proc/version/sub"),
+        (("--resolution", "14"), "fabric resolution must be odd and >= 3, got 14"),
+        (("--timestep", "0"), "timestep must be in (0, 0.01] s, got 0.0"),
     ],
 )
 def test_sim_run_refuses_bad_input_in_one_line_before_any_work(args, needle, tmp_path):

@@ -12,15 +12,18 @@ import time
 import pytest
 from conformance_result import assert_suite_passed
 
+from mantaray.host.avr_image import ensure_elf
 from mantaray.host.controller_settings import ControllerSettings
 from mantaray.host.link import CommandRefused, Link
-from mantaray.host.simavr import DEFAULT_ELF, SimulatedUno, elf_for
+from mantaray.host.simavr import SimulatedUno
 from mantaray.host.transport import SerialTransport
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
 from mantaray.protocol import rig
 
-RX_BUFFER_CYCLES = 64 * 10 * 16_000_000 // 115_200  # [cycles] 64 bytes of 10 bits at 115200 baud: 5.6 ms
+RX_BUFFER_CYCLES = (
+    64 * 10 * rig.default().board.f_cpu_hz // 115_200
+)  # [cycles] 64 bytes of 10 bits at 115200 baud: 5.6 ms
 LOOP_PERIOD_CYCLES = 4000 * 16  # [cycles] the 250 Hz actuator loop period
 ARRAY_RIG = rig.named("array_2x2")  # the Mega 2560 and its nine actuators
 # the rig side's conformance tests: those whose module (clock-marked tests, timed replies) or own name holds one of
@@ -30,11 +33,7 @@ RIG_SIDE_KEYWORDS = ("handshake", "deadman", "object_position", "sim_clock", "te
 
 @pytest.fixture(scope="module")
 def elf():
-    proc = subprocess.run(
-        [sys.executable, str(REPO / "scripts" / "avr_build.py")], capture_output=True, text=True, timeout=600
-    )
-    assert proc.returncode == 0, proc.stderr
-    return DEFAULT_ELF
+    return ensure_elf(rig.default())
 
 
 def _conformance(port: str, *pytest_args: str) -> subprocess.CompletedProcess:
@@ -250,14 +249,7 @@ def test_positions_as_fast_as_the_link_allows_lose_no_byte_while_the_loops_run(e
 
 @pytest.fixture(scope="module")
 def mega_elf():
-    proc = subprocess.run(
-        [sys.executable, str(REPO / "scripts" / "avr_build.py"), "--env", ARRAY_RIG.pio_env],
-        capture_output=True,
-        text=True,
-        timeout=900,
-    )
-    assert proc.returncode == 0, proc.stderr
-    return elf_for(ARRAY_RIG)
+    return ensure_elf(ARRAY_RIG)
 
 
 def test_the_protocol_conformance_suite_passes_against_the_mega_binary(mega_elf):

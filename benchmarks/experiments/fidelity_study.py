@@ -1,13 +1,13 @@
 """The convergence study: the fidelity gate on each mesh and step against a finer one, for two plants; its table.
 
 Run: python3 benchmarks/experiments/fidelity_study.py [--gates paper_15x15_2ms,...] [--jobs 2] [--collect]
-Each gate is `mantaray sim fidelity` (sim/fidelity.py) on the sphere, to the end of T, with its default sample
-(40 cells, 8 from each stratum, 5 trials each, seed 77) for two controllers: on the `paper` plant the paper's
-Manhattan and the cascade tuned for it (docs/results/tune/sphere_cascade/settings.toml), on the polyester plant
-the paper's Manhattan and Euclidean. Gates that share a run share its trials (out/fidelity/trials/). The trials are
-committed gzipped in docs/results/fidelity/trials/ and the script starts from them, so on a fresh clone it only
-rewrites the reports; every run resumes where it stopped (a 21 x 21 run takes hours on 2 cores). --judge-only
-judges again the trials each gate holds and runs none (the gate's --report-only). --collect only
+Each gate is `mantaray sim fidelity` (sim/fidelity.py) on one object (the sphere unless the gate names another), to
+the end of T, with the gate's sample (by default 40 cells, 8 from each stratum, 5 trials each, seed 77) for two controllers:
+on the `paper` plant the paper's Manhattan and the cascade tuned for that object on it (docs/results/tune/), on the
+polyester plant the paper's Manhattan and Euclidean. Gates that share a run share its trials (out/fidelity/trials/).
+The trials are committed gzipped in docs/results/fidelity/trials/ and the script starts from them, so on a fresh
+clone it only rewrites the reports; every run resumes where it stopped (a 21 x 21 run takes hours on 2 cores).
+--judge-only judges again the trials each gate holds and runs none (the gate's --report-only). --collect only
 writes back what out/ holds (from a gate still running, say). The reports go to docs/results/fidelity/<gate>/ and
 the table of every verdict to docs/results/fidelity/convergence.md.
 """
@@ -20,6 +20,7 @@ import json
 import signal
 import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 from mantaray.sim.cli_common import interruptible
@@ -29,54 +30,90 @@ from mantaray.sim.results_file import write_whole
 REPO = Path(__file__).resolve().parents[2]
 COMMITTED = REPO / "docs" / "results" / "fidelity"
 TRIALS = REPO / "out" / "fidelity" / "trials"
-CASCADE = "docs/results/tune/sphere_cascade/settings.toml"
-ARMS = {"paper": ("manhattan", CASCADE), "polyester": ("manhattan", "euclidean")}
+CASCADES = {  # object: (α [m] it was tuned at and is gated at, the cascade tuned for it on the paper plant)
+    "sphere": (0.0, "docs/results/tune/sphere_cascade/settings.toml"),
+    "cube": (0.1, "docs/results/tune/cube_cascade_alpha0.1/settings.toml"),
+}
 THREADS = (("fabric.stretch", "threads"),)  # the sheet held by tension-only threads (sim/README.md, Convergence 7)
-GATES = {  # name: (plant, candidate, finer[, values fixed over the plant]), in the order they run
-    "paper_15x15_2ms": ("paper", "15:0.002", "15:0.001"),
-    "paper_11x11_2ms": ("paper", "11:0.002", "15:0.001"),
-    "paper_11x11_1ms": ("paper", "11:0.001", "15:0.001"),
-    "paper_15x15_0.5ms": ("paper", "15:0.0005", "15:0.001"),  # is 1 ms itself converged in the step?
-    "paper_15x15_0.25ms_vs_0.5ms": ("paper", "15:0.00025", "15:0.0005"),  # ... and 0.5 ms?
-    "polyester_15x15_2ms": ("polyester", "15:0.002", "15:0.001"),
-    "polyester_11x11_2ms": ("polyester", "11:0.002", "15:0.001"),
-    "polyester_11x11_1ms": ("polyester", "11:0.001", "15:0.001"),
-    "polyester_15x15_0.5ms": ("polyester", "15:0.0005", "15:0.001"),  # is 1 ms converged for this plant too?
-    "paper_15x15_1ms_vs_21x21": ("paper", "15:0.001", "21:0.001"),
-    "polyester_15x15_0.5ms_vs_21x21": ("polyester", "15:0.0005", "21:0.0005"),  # the reference's mesh (no clamp)
-    "polyester_15x15_0.25ms_vs_0.5ms": ("polyester", "15:0.00025", "15:0.0005"),  # the reference's step
+KERNEL = (*THREADS, ("contact.model", "kernel"))  # ... and met through the kernel contact (Convergence 9)
+REPEATABILITY = "0.002"  # [m] the floor the reference's gates are judged beside: the rig's repeatability
+CHAOS = "0.0001"  # [m] the floor of the mesh-contact gates: a diagnostic of chaos
+
+
+@dataclass(frozen=True)
+class Gate:
+    """One gate: the plant, the candidate and finer fidelities, the values it fixes over the plant, its object, how
+    far its floor moves every start [m], and the cells it draws from each stratum (5 trials each, per controller)."""
+
+    plant: str
+    candidate: str
+    finer: str
+    fixed: tuple[tuple[str, str], ...] = ()
+    object_name: str = "sphere"
+    shift: str = CHAOS
+    cells_per_stratum: int = 8
+
+    def arms(self) -> tuple[str, str]:
+        return ("manhattan", CASCADES[self.object_name][1]) if self.plant == "paper" else ("manhattan", "euclidean")
+
+    def alpha(self) -> float:
+        return CASCADES[self.object_name][0]
+
+
+GATES = {  # name: its gate, in the order they run
+    "paper_15x15_2ms": Gate("paper", "15:0.002", "15:0.001"),
+    "paper_11x11_2ms": Gate("paper", "11:0.002", "15:0.001"),
+    "paper_11x11_1ms": Gate("paper", "11:0.001", "15:0.001"),
+    "paper_15x15_0.5ms": Gate("paper", "15:0.0005", "15:0.001"),  # is 1 ms itself converged in the step?
+    "paper_15x15_0.25ms_vs_0.5ms": Gate("paper", "15:0.00025", "15:0.0005"),  # ... and 0.5 ms?
+    "polyester_15x15_2ms": Gate("polyester", "15:0.002", "15:0.001"),
+    "polyester_11x11_2ms": Gate("polyester", "11:0.002", "15:0.001"),
+    "polyester_11x11_1ms": Gate("polyester", "11:0.001", "15:0.001"),
+    "polyester_15x15_0.5ms": Gate("polyester", "15:0.0005", "15:0.001"),  # is 1 ms converged for this plant too?
+    "paper_15x15_1ms_vs_21x21": Gate("paper", "15:0.001", "21:0.001"),
+    "polyester_15x15_0.5ms_vs_21x21": Gate("polyester", "15:0.0005", "21:0.0005"),  # the reference's mesh (no clamp)
+    "polyester_15x15_0.25ms_vs_0.5ms": Gate("polyester", "15:0.00025", "15:0.0005"),  # the reference's step
     # threads: 15 x 15 at its cheapest stable step against 21 x 21 at the step that mesh needs (its bending is
     # explicit, and a sheet free to buckle is stiffer to it): the mesh and the step in one gate
-    "polyester_threads_15x15_0.5ms_vs_21x21_0.25ms": ("polyester", "15:0.0005", "21:0.00025", THREADS),
+    "polyester_threads_15x15_0.5ms_vs_21x21_0.25ms": Gate("polyester", "15:0.0005", "21:0.00025", THREADS),
     # ... and the mesh alone, at the step both need (it shares the 21 x 21 runs)
-    "polyester_threads_15x15_vs_21x21_0.25ms": ("polyester", "15:0.00025", "21:0.00025", THREADS),
+    "polyester_threads_15x15_vs_21x21_0.25ms": Gate("polyester", "15:0.00025", "21:0.00025", THREADS),
+    # the reference candidate of issue 39: the kernel contact on threads, 15 x 15 at 1 ms, against 21 x 21 at 0.25 ms
+    # (21 x 21 at 0.5 ms, its `finer`, diverges on threads), beside the rig's repeatability
+    "paper_kernel_15x15_1ms_vs_21x21_0.25ms": Gate("paper", "15:0.001", "21:0.00025", KERNEL, shift=REPEATABILITY),
+    "paper_kernel_cube_15x15_1ms_vs_21x21_0.25ms": Gate(
+        "paper", "15:0.001", "21:0.00025", KERNEL, "cube", REPEATABILITY
+    ),
+    "polyester_kernel_15x15_1ms_vs_21x21_0.25ms": Gate(  # 200 pairs: 4 cells a stratum
+        "polyester", "15:0.001", "21:0.00025", KERNEL, shift=REPEATABILITY, cells_per_stratum=4
+    ),
 }
 
 
-def gate(name: str) -> tuple[str, str, str, tuple[tuple[str, str], ...]]:
-    """A gate's plant, candidate, finer fidelity and the values it fixes over the plant (none for most)."""
-    plant, candidate, finer, *fixed = GATES[name]
-    return plant, candidate, finer, fixed[0] if fixed else ()
-
-
 def command(name: str, jobs: int | None, report_only: bool = False) -> list[str]:
-    plant, candidate, finer, fixed = gate(name)
-    arms = [a for arm in ARMS[plant] for a in ("--controller", arm)]
-    sets = [a for key, value in fixed for a in ("--set", f"{key}={value}")]
+    g = GATES[name]
+    arms = [a for arm in g.arms() for a in ("--controller", arm)]
+    sets = [a for key, value in g.fixed for a in ("--set", f"{key}={value}")]
     return [
         "mantaray",
         "sim",
         "fidelity",
+        "--object",
+        g.object_name,
+        "--alpha",
+        f"{g.alpha():g}",
         "--candidate",
-        candidate,
+        g.candidate,
         "--finer",
-        finer,
+        g.finer,
         "--plant",
-        plant,
+        g.plant,
         *sets,
         *arms,
-        "--shift",  # the floor these trials were run with: a diagnostic of chaos (the rig's repeatability is 2 mm)
-        "0.0001",
+        "--shift",
+        g.shift,
+        "--cells-per-stratum",
+        str(g.cells_per_stratum),
         "--trials-dir",
         str(TRIALS.relative_to(REPO)),
         "--out",
@@ -121,20 +158,21 @@ def _interval(d: dict) -> str:
 def table() -> str:
     """Every committed gate's verdict and its judged rates, one row each."""
     rows = [
-        "# The fidelity gate on each mesh and step (the sphere, to the end of T)",
+        "# The fidelity gate on each mesh and step (to the end of T)",
         "",
         "Written by `python3 benchmarks/experiments/fidelity_study.py`; each gate's report, with the command that "
         "reproduces it, is in its folder here. Each rate: the paired difference candidate − finer per controller, "
         "with its 90 % interval, judged against ±5 percentage points (`mantaray sim fidelity --help`); ✓ equivalent, "
         "✗ different, ? undecided. Flips: the trials whose outcome differs from the finer run's, at the candidate / at "
-        "the finer run with every start moved 0.1 mm (a diagnostic of chaos, not judged).",
+        "the finer run with every start moved by the gate's shift (0.1 mm: a diagnostic of chaos; 2 mm: the rig's "
+        "repeatability; not judged).",
         "",
-        "| plant | candidate | finer | pairs | reached | within ε at T | fell off | flips (reached) | verdict |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| plant | object, α, floor | candidate | finer | pairs | reached | within ε at T | fell off | flips (reached) | verdict |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     mark = {"equivalent": "✓", "different": "✗", "undecided": "?"}
     for name in GATES:
-        plant, _, _, fixed = gate(name)
+        g = GATES[name]
         path = COMMITTED / name / "report.json"
         if not path.exists():
             continue
@@ -152,9 +190,9 @@ def table() -> str:
             for row in rows
         )
         verdict = r["verdict"] or f"incomplete ({r['pairs']} of {r['expected_pairs']})"
-        label = plant + "".join(f", {v}" for _, v in fixed)
+        label = g.plant + "".join(f", {v}" for _, v in g.fixed)
         rows.append(
-            f"| {label} | {r['candidate']} | {r['finer']} | {r['pairs']} | {judged('reached')} | "
+            f"| {label} | {g.object_name}, α {g.alpha():g} m, {g.shift} m floor | {r['candidate']} | {r['finer']} | {r['pairs']} | {judged('reached')} | "
             f"{judged('success')} | {judged('fell_off')} | {flips} | [{verdict}]({name}/report.md) |"
         )
     return "\n".join(rows) + "\n"

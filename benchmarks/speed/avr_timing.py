@@ -22,15 +22,15 @@ import argparse
 import configparser
 import json
 import re
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 from mantaray.arguments import add_controller_arguments, controller_settings
+from mantaray.host.avr_image import AvrBuildError, ensure_elf
 from mantaray.host.cli_board import rig_file
 from mantaray.host.link import Link, LinkError
-from mantaray.host.simavr import SimulatedUno, elf_for
+from mantaray.host.simavr import SimulatedUno
 from mantaray.host.transport import SerialTransport
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
@@ -41,7 +41,6 @@ from mantaray.sim.fidelity import parse_fidelity
 from mantaray.sim.parameters import plant_names
 from mantaray.sim.plant import DEFAULT_PLANT, Plant, plant_for
 
-F_CPU = 16_000_000  # [Hz] both boards
 ARDUINO_RX_BUFFER_BYTES = 64  # HardwareSerial's receive buffer unless an environment sets SERIAL_RX_BUFFER_SIZE
 
 
@@ -53,8 +52,8 @@ def rx_buffer_bytes(env: str) -> int:
     return int(found.group(1)) if found else ARDUINO_RX_BUFFER_BYTES
 
 
-def us(cycles: float) -> str:
-    return f"{cycles:>9,.0f} cycles {cycles / F_CPU * 1e6:>8,.0f} us"
+def us(cycles: float, f_cpu_hz: int) -> str:
+    return f"{cycles:>9,.0f} cycles {cycles / f_cpu_hz * 1e6:>8,.0f} us"
 
 
 def main() -> int:
@@ -77,7 +76,6 @@ def main() -> int:
         parser.error(f"--fidelity: {exc}")
     description = args.rig
     env, harness = description.pio_env, description.simavr_harness
-    elf = elf_for(description)
     one_module = description.module_count == 1
     start, target = ((0.08, -0.06), (-0.05, 0.05)) if one_module else ((-0.3, -0.3), (0.3, 0.3))
     settings = controller_settings(parser, args)
@@ -86,12 +84,12 @@ def main() -> int:
     except ValueError as exc:
         parser.error(str(exc))
     plant = Plant(args.plant)
-    build = subprocess.run(
-        [sys.executable, str(REPO / "scripts" / "avr_build.py"), "--env", env], capture_output=True, text=True
-    )
-    if build.returncode != 0:
-        print(build.stderr, file=sys.stderr)
+    try:
+        elf = ensure_elf(description)
+    except AvrBuildError as exc:
+        print(exc, file=sys.stderr)
         return 1
+    hz = description.board.f_cpu_hz
 
     rig = plant.rig(resolution=fidelity.resolution, timestep_s=fidelity.timestep_s).with_description(description)
     with SimulatedUno(elf, bench=True, harness=harness) as uno:
@@ -139,19 +137,19 @@ def main() -> int:
     worst = max(bench["main_loop_pass"]["max_cycles"], rig_side["main_loop_pass"]["max_cycles"])
     n = description.actuator_count
     print(
-        f"simavr, {description.board.name} at 16 MHz ({description.describe()}), {args.seconds:g} s simulated per run"
+        f"simavr, {description.board.name} at {hz / 1e6:g} MHz ({description.describe()}), {args.seconds:g} s simulated per run"
     )
     print(
         f"object_position frame ({settings.controller} step + reply), longest of {frame['count']} bytes handled: "
-        f"{us(frame['max_cycles'])}"
+        f"{us(frame['max_cycles'], hz)}"
     )
     print(
         f"{n} actuator loops ({n} I2C reads, {n} PIDs, {n} PWM writes), {loops['count']} runs: "
-        f"mean {us(loops['mean_cycles'])}, max {us(loops['max_cycles'])} "
+        f"mean {us(loops['mean_cycles'], hz)}, max {us(loops['max_cycles'], hz)} "
         f"(period {description.value('actuator_period_us'):,} us)"
     )
     rx = rx_buffer_bytes(env)
-    print(f"longest main-loop pass: {us(worst)} (the {rx}-byte RX buffer lasts {rx * 10 / 115_200 * 1e6:,.0f} us)")
+    print(f"longest main-loop pass: {us(worst, hz)} (the {rx}-byte RX buffer lasts {rx * 10 / 115_200 * 1e6:,.0f} us)")
     print(
         f"RAM the stack never reached: bench {bench['never_used_ram_bytes']} B, rig {rig_side['never_used_ram_bytes']} "
         f"B ({description.board.mcu})"

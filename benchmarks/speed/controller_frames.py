@@ -12,20 +12,18 @@ buffer lasts 5.6 ms at 115200 baud). The image is built first (scripts/avr_build
 from __future__ import annotations
 
 import argparse
-import subprocess
 import sys
 
 import numpy as np
 
+from mantaray.host.avr_image import AvrBuildError, ensure_elf
 from mantaray.host.cli_board import rig_file
 from mantaray.host.link import Link
-from mantaray.host.simavr import SimulatedUno, elf_for
+from mantaray.host.simavr import SimulatedUno
 from mantaray.host.transport import SerialTransport
-from mantaray.paths import REPO
 from mantaray.protocol import messages as m
 from mantaray.protocol import rig as rig_description
 
-F_CPU = 16_000_000  # [Hz] both boards
 FRAME_BUDGET_MS = 5.0  # [ms] the longest an object_position frame may take
 FRAME_US = 83_333  # [us] 12 Hz
 
@@ -56,21 +54,18 @@ def main() -> int:
     description = args.rig
     if not 1 <= args.frames <= 10_000:
         parser.error("--frames must be 1..10000")
-    env = description.pio_env
-    build = subprocess.run(
-        [sys.executable, str(REPO / "scripts" / "avr_build.py"), "--env", env], capture_output=True, text=True
-    )
-    if build.returncode != 0:
-        print(build.stderr, file=sys.stderr)
+    try:
+        elf = ensure_elf(description)
+    except AvrBuildError as exc:
+        print(exc, file=sys.stderr)
         return 1
-    elf = elf_for(description)
     hx, hy = description.grid.half_extent_m
     positions = np.random.default_rng(args.seed).uniform((-0.9 * hx, -0.9 * hy), (0.9 * hx, 0.9 * hy), (args.frames, 2))
     print(f"{description.board.mcu} in simavr ({description.describe()}), {args.frames} frames each, seed {args.seed}")
     worst = 0.0
     for controller in m.Controller:
         cycles = longest_frame_cycles(elf, description.simavr_harness, description, controller, positions)
-        ms = cycles / F_CPU * 1000
+        ms = cycles / description.board.f_cpu_hz * 1000
         worst = max(worst, ms)
         print(f"{controller.name.lower():10s} longest frame {cycles:>7,} cycles {ms:5.2f} ms", flush=True)
     print(

@@ -1,9 +1,10 @@
 """Benchmark: heatmap trials per wall second at each physics fidelity, side by side in one run on the same trials.
 
 Run: python3 benchmarks/speed/heatmap_speed.py [--configs reference,15:0.001,15:0.002,fast] [--jobs 2] [--plant paper]
-     [--stretch edges,threads]
-Each config (a named fidelity of sim/rig.py, or RESOLUTION:TIMESTEP [vertices per side : s]), under each stretch
-model of the sheet (sim/plant.toml, fabric.stretch; the plant's own unless --stretch names them), runs the same
+     [--variant plant --variant fabric.stretch=threads,contact.model=kernel]
+Each config (a named fidelity of sim/rig.py, or RESOLUTION:TIMESTEP [vertices per side : s]), under each variant
+of the plant (`plant`: as it is; else KEY=VALUE,... of sim/plant.toml fixed over it; the plant alone unless
+--variant is given), runs the same
 sample of cells (a 4 x 4 spread over the 20 x 20 grid, the paper's 10 trials each, T = 10 s) on --jobs workers,
 firmware core in-process. Prints, per config: trials per wall second and its ratio to the first config,
 simulated seconds per wall second, the share of the trials' wall time spent outside mj_step, the share of trials
@@ -29,8 +30,8 @@ from mantaray.sim import executors as X
 from mantaray.sim import experiment as E
 from mantaray.sim import fidelity as G
 from mantaray.sim import results_file as R
-from mantaray.sim.plant import DEFAULT_PLANT
-from mantaray.sim.rig import STRETCH_MODELS
+from mantaray.sim.parameters import ParameterError
+from mantaray.sim.plant import DEFAULT_PLANT, parse_setting
 
 SAMPLE_IX = (2, 7, 12, 17)  # cells ix, iy of the sample: centres at -0.1875, -0.0625, 0.0625, 0.1875 m
 FULL_TRIALS = 4000  # the paper's protocol: 20 x 20 cells x 10 trials
@@ -86,6 +87,16 @@ def parse_configs(text: str) -> list[G.Fidelity]:
     return out
 
 
+def parse_variant(text: str) -> tuple[tuple[str, float | str], ...]:
+    """`plant` (nothing fixed) or comma-separated KEY=VALUE settings of the plant, each checked against its range."""
+    if text == "plant":
+        return ()
+    try:
+        return tuple(parse_setting(part.strip()) for part in text.split(","))
+    except ParameterError as exc:
+        raise SystemExit(f"heatmap_speed: --variant {text!r}: {exc}") from None
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument(
@@ -99,8 +110,10 @@ def main() -> int:
     parser.add_argument("--alpha", type=float, default=0.0)
     parser.add_argument("--plant", default=DEFAULT_PLANT, help="a named plant of sim/plant.toml")
     parser.add_argument(
-        "--stretch",
-        help=f"comma-separated stretch models of the sheet to run each config under: {', '.join(STRETCH_MODELS)}",
+        "--variant",
+        action="append",
+        help="a variant of the plant to run each config under: plant (as it is) or KEY=VALUE,... of "
+        "sim/plant.toml (like fabric.stretch=threads,contact.model=kernel); repeatable",
     )
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     parser.add_argument("--out", default="out/bench/heatmap_speed")
@@ -109,9 +122,7 @@ def main() -> int:
     if args.jobs < 1:
         raise SystemExit(f"heatmap_speed: --jobs must be at least 1, got {args.jobs}")
     configs = parse_configs(args.configs)
-    stretches = [None] if args.stretch is None else args.stretch.split(",")
-    if not set(stretches) <= {None, *STRETCH_MODELS}:
-        raise SystemExit(f"heatmap_speed: --stretch takes {', '.join(STRETCH_MODELS)}, got {args.stretch!r}")
+    variants = [parse_variant(text) for text in args.variant or ["plant"]]
     if args.batched:
         batched_stepping()
 
@@ -125,7 +136,7 @@ def main() -> int:
         f"{'config':>25s} {'trials/s':>9s} {'x first':>8s} {'sim s/wall s':>12s} {'outside mj_step':>15s} "
         f"{'fell early':>10s} {'4,000 trials':>12s}"
     )
-    for fidelity, stretch in itertools.product(configs, stretches):
+    for fidelity, variant in itertools.product(configs, variants):
         experiment = E.Experiment(
             object_name=args.object,
             controller=args.controller,
@@ -134,7 +145,7 @@ def main() -> int:
             timestep_s=fidelity.timestep_s,
             only_cells=cells,
             plant=args.plant,
-            plant_set=() if stretch is None else (("fabric.stretch", stretch),),
+            plant_set=variant,
         )
         named = f"{args.object}_{args.controller}_alpha{args.alpha:g}_{args.plant}_{fidelity.slug}"
         results = R.ResultsFile.open(Path(args.out) / f"{named}{G.fixed_slug(experiment.plant_set)}.jsonl", experiment)
@@ -144,7 +155,7 @@ def main() -> int:
         wall = time.perf_counter() - t0
         done = {t.key for t in todo}
         new = [r for r in results.records.values() if r["key"] in done]
-        line = f"{fidelity.label + ('' if stretch is None else ', ' + stretch):>25s}"
+        line = f"{fidelity.label + ''.join(f', {v}' for _, v in variant):>25s}"
         if not new:
             print(line + "  (cached: give a new --out to time it)", flush=True)
             continue
