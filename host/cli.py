@@ -6,15 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from mantaray.arguments import (
-    add_controller_arguments,
-    add_view_arguments,
-    controller_settings,
-    number,
-    parse_gains,
-    reporter,
-    start_live,
-)
+from mantaray.arguments import number, reporter
 from mantaray.outputs import writable_dir
 from mantaray.protocol import messages as m
 from mantaray.protocol.codec import bounds_text
@@ -22,6 +14,8 @@ from mantaray.protocol.rig import Grid
 
 from . import cli_board, cli_camera
 from .cli_board import add_port_argument, add_reconnect_argument
+from .cli_controller import add_controller_arguments, controller_settings, parse_gains
+from .cli_view import add_view_arguments, start_live
 from .ports import check_port
 
 

@@ -246,14 +246,6 @@ def _actuators(text: str) -> list[int] | str:
 
 
 # ------------------------------------------------------------------------------------------- parsers
-def rig_file(text: str) -> rig.RigDescription:
-    """A rig file, read and checked (protocol/rig.py); what is wrong with it is a usage error."""
-    try:
-        return rig.load(text)
-    except rig.RigDescriptionError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-
-
 def add_port_argument(parser: argparse.ArgumentParser) -> None:
     """--port and --rig, as every command that talks to a board takes them (the port is checked by
     ports.check_port before any work; the board is refused at identify unless it was built for the rig)."""
@@ -266,7 +258,7 @@ def add_port_argument(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--rig",
-        type=rig_file,
+        type=rig.rig_file,
         default=rig.default(),
         metavar="FILE",
         help="the rig the board drives: its rig file (default protocol/rig.toml, one module; arrays: "

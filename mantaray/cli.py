@@ -79,7 +79,7 @@ def cmd_conformance(args: argparse.Namespace, parser: argparse.ArgumentParser) -
     if args.port:
         pytest_args += ["--port", args.port]
     if args.rig:
-        from mantaray.host.cli_board import rig_file
+        from mantaray.protocol.rig import rig_file
 
         try:
             rig_file(args.rig)  # what is wrong with it, in one line, before pytest starts
@@ -90,7 +90,17 @@ def cmd_conformance(args: argparse.Namespace, parser: argparse.ArgumentParser) -
     return int(pytest.main(pytest_args + extra))
 
 
-def build_parser() -> argparse.ArgumentParser:
+SIM_HELP = "the MuJoCo rig with the firmware in the loop"  # `sim`'s line in `mantaray --help`
+
+
+def _command(argv: list[str] | None) -> str | None:
+    """The command a command line names: its first word that is not an option (None: none, as for --help)."""
+    return next((word for word in (sys.argv[1:] if argv is None else argv) if not word.startswith("-")), None)
+
+
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The command line's parser. The simulation's commands are built only where argv names `sim` (or no command):
+    building them loads the simulation's modules, which a rig's command never needs."""
     parser = Parser(prog="mantaray", description="MANTA-RAY control stack: firmware link, simulation and tools.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
@@ -127,15 +137,19 @@ def build_parser() -> argparse.ArgumentParser:
     conf.set_defaults(func=lambda args: cmd_conformance(args, conf))
 
     from mantaray.host.cli import add_parsers as add_rig
-    from mantaray.sim.cli import add_parser as add_sim
 
     add_rig(sub)
-    add_sim(sub)
+    if _command(argv) in (None, "sim"):
+        from mantaray.sim.cli import add_parser as add_sim
+
+        add_sim(sub, SIM_HELP)
+    else:
+        sub.add_parser("sim", help=SIM_HELP)  # listed; its options are built when it is the command
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()

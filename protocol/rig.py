@@ -9,6 +9,7 @@ field named (RigDescriptionError).
 
 from __future__ import annotations
 
+import argparse
 import functools
 import math
 import tomllib
@@ -358,6 +359,15 @@ def check(rig: dict, path: Path) -> Board:
             )
         seen[encoder] = actuator
     return board
+
+
+def rig_file(text: str) -> RigDescription:
+    """A rig file given on a command line (an argparse type), read and checked; what is wrong with it is a usage
+    error."""
+    try:
+        return load(text)
+    except RigDescriptionError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def load(path: Path | str = RIG_TOML) -> RigDescription:

@@ -5,10 +5,11 @@ from __future__ import annotations
 import argparse
 import importlib
 
-from mantaray.arguments import add_view_arguments, number
-from mantaray.host.cli_board import rig_file
+from mantaray.arguments import number
+from mantaray.host.cli_view import add_view_arguments
 from mantaray.protocol import messages as m
 from mantaray.protocol.codec import choices
+from mantaray.protocol.rig import rig_file
 
 from . import cli_options as O
 from .plant import DEFAULT_PLANT
@@ -72,11 +73,12 @@ def _handler(module: str, parser: argparse.ArgumentParser):
     return lambda args: importlib.import_module(f".{module}", __package__).run(args, parser)
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
-    """Register `sim` and its subcommands on the top-level parser's subparsers."""
+def add_parser(sub: argparse._SubParsersAction, help_text: str) -> None:
+    """Register `sim` (help_text: its line in `mantaray --help`) and its subcommands on the top-level parser's
+    subparsers."""
     sim = sub.add_parser(
         "sim",
-        help="the MuJoCo rig with the firmware in the loop",
+        help=help_text,
         description="The simulated MANTA-RAY: the native firmware drives a MuJoCo model of the rig "
         "over a virtual serial port, through the same protocol as the hardware.",
     )

@@ -7,7 +7,9 @@ import json
 import sys
 from pathlib import Path
 
-from mantaray.arguments import controller_settings, reporter, start_live
+from mantaray.arguments import reporter
+from mantaray.host.cli_controller import controller_settings
+from mantaray.host.cli_view import start_live
 from mantaray.outputs import writable_dir
 
 from .cli_common import check_ray, interruptible, output, plant_for_settings, workers

@@ -6,7 +6,8 @@ from __future__ import annotations
 import argparse
 import math
 
-from mantaray.arguments import add_controller_arguments, number, parse_gains
+from mantaray.arguments import number
+from mantaray.host.cli_controller import add_controller_arguments, parse_gains
 from mantaray.protocol import messages as m
 from mantaray.protocol.codec import bounds_text
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mantaray.arguments import reporter, start_live
+from mantaray.arguments import reporter
+from mantaray.host.cli_view import start_live
 from mantaray.outputs import writable_dir
 
 from .cli_common import load_results, output

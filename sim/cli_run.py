@@ -7,7 +7,9 @@ import hashlib
 import json
 import os
 
-from mantaray.arguments import controller_settings, reporter, start_live
+from mantaray.arguments import reporter
+from mantaray.host.cli_controller import controller_settings
+from mantaray.host.cli_view import start_live
 from mantaray.outputs import writable_dir
 from mantaray.protocol import messages as m
 from mantaray.protocol import rig as rig_description

@@ -27,7 +27,7 @@ class TrialOutputs:
     tilt_limit_deg: float  # [deg] the controller's tilt limit, drawn in the figure
     video_fps: float | None = None  # [frames/s] an .mp4 of the rendered camera at this rate; None: no video
     viewer: bool = False  # MuJoCo's interactive viewer beside the run (needs a display)
-    live: object | None = None  # a started live view (mantaray.arguments.start_live) to stream to; None: none
+    live: object | None = None  # a started live view (mantaray.host.cli_view.start_live) to stream to; None: none
     linger_s: float | None = None  # [s] how long the live view stays up after the run (None: its default)
 
 

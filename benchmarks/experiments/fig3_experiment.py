@@ -19,7 +19,7 @@ import sys
 import time
 from pathlib import Path
 
-from mantaray.arguments import controller_settings
+from mantaray.host.cli_controller import controller_settings
 from mantaray.plots import fig3_figure
 from mantaray.protocol import messages as m
 from mantaray.sim.executors import LocalPool

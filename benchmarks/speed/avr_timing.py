@@ -26,15 +26,15 @@ import sys
 import time
 from pathlib import Path
 
-from mantaray.arguments import add_controller_arguments, controller_settings
 from mantaray.host.avr_image import AvrBuildError, ensure_elf
-from mantaray.host.cli_board import rig_file
+from mantaray.host.cli_controller import add_controller_arguments, controller_settings
 from mantaray.host.link import Link, LinkError
 from mantaray.host.simavr import SimulatedUno
 from mantaray.host.transport import SerialTransport
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
 from mantaray.protocol import rig as rig_description
+from mantaray.protocol.rig import rig_file
 from mantaray.sim.bridge import Bridge, TrialSpec
 from mantaray.sim.experiment import controller_gains
 from mantaray.sim.fidelity import parse_fidelity

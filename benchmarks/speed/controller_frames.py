@@ -17,12 +17,12 @@ import sys
 import numpy as np
 
 from mantaray.host.avr_image import AvrBuildError, ensure_elf
-from mantaray.host.cli_board import rig_file
 from mantaray.host.link import Link
 from mantaray.host.simavr import SimulatedUno
 from mantaray.host.transport import SerialTransport
 from mantaray.protocol import messages as m
 from mantaray.protocol import rig as rig_description
+from mantaray.protocol.rig import rig_file
 
 FRAME_BUDGET_MS = 5.0  # [ms] the longest an object_position frame may take
 FRAME_US = 83_333  # [us] 12 Hz

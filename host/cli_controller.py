@@ -1,0 +1,61 @@
+"""The controller's options every command that runs one takes (--controller, --settings, --gains) and the settings
+they name: one reading for the rig and the simulation."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from mantaray.protocol import messages as m
+from mantaray.protocol.codec import choices
+
+
+def parse_gains(text: str) -> tuple[float, float, float, float]:
+    """KP,KI,KD[,ILIMIT] of a PID [deg/m, deg/(m s), deg s/m, deg]; without ILIMIT the firmware's boot default."""
+    try:
+        values = tuple(float(v) for v in text.replace(",", " ").split())
+    except ValueError:
+        values = ()
+    if len(values) == 3:
+        values += (m.PID_DEFAULTS[m.Axis.X]["integral_limit"],)
+    if len(values) != 4 or not all(math.isfinite(v) and v >= 0 for v in values):
+        raise argparse.ArgumentTypeError(f"expected KP,KI,KD or KP,KI,KD,ILIMIT (numbers >= 0), got {text!r}")
+    return values
+
+
+def controller_settings(parser: argparse.ArgumentParser, args: argparse.Namespace):
+    """The controller settings a command runs with: --settings FILE (its controller), else --controller's boot
+    values; a --controller that contradicts the file is a usage error. Sets args.controller."""
+    from mantaray.host.controller_settings import ControllerSettings, SettingsError
+
+    try:
+        settings = (
+            ControllerSettings.load(args.settings)
+            if args.settings
+            else ControllerSettings(args.controller or "manhattan")
+        )
+    except SettingsError as exc:
+        parser.error(str(exc))
+    if args.controller and args.controller != settings.controller:
+        parser.error(
+            f"--controller {args.controller} contradicts {args.settings}, which sets up the "
+            f"{settings.controller} controller"
+        )
+    args.controller = settings.controller
+    if getattr(args, "gains", None) is not None and any(k.startswith("pid.") for k, _ in settings.values):
+        parser.error(f"--gains and {args.settings} both set the PIDs' gains: give them in one place")
+    return settings
+
+
+def add_controller_arguments(parser: argparse.ArgumentParser) -> None:
+    """--controller and --settings, as every command that runs a controller takes them."""
+    parser.add_argument(
+        "--controller",
+        choices=choices(m.Controller),
+        help="the tilt controller (default: manhattan, or the one --settings names)",
+    )
+    parser.add_argument(
+        "--settings",
+        metavar="FILE",
+        help="a controller's settings (TOML, as mantaray sim tune writes: host/controller_settings.py)",
+    )
