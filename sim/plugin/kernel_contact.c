@@ -2,11 +2,11 @@
 // (sim/kernel_contact.py).
 //
 // Each step, each of the object's contact points below the sheet's kernel surface presses into it with a damped
-// spring along the surface's normal and a stick spring along it capped by Coulomb; the damping is a ratio of critical for the
-// reduced mass of the point's share of the object and the patch of sheet under it (the vertices' masses weighted by
-// the kernel's squared weights: the same in kg on every mesh), so it does not act on the grams of sheet under the
-// object with the damping an object's mass would want; the force acts on the object at the point
-// and is shared back to the flex's vertices by the kernel's weights. The surface under (x, y) is the vertices' heights
+// spring along the surface's normal and a stick spring along it capped by Coulomb; the damping is a ratio of critical
+// for the reduced mass of the point's share of the object and the patch of sheet under it (the vertices' masses
+// weighted by the kernel's squared weights: the same in kg on every mesh), so it does not act on the grams of sheet
+// under the object with the damping an object's mass would want; the force acts on the object at the point and is
+// shared back to the flex's vertices by the kernel's weights. The surface under (x, y) is the vertices' heights
 // averaged with Wendland C2 weights w(r) = (1 - r/h)^4 (1 + 4 r/h) of support radius h [m]. The configuration (the
 // names of the flex and the object's geom, h, the springs and the points) is written by sim/kernel_contact.py; the
 // plugin's state is the kernel surface's height [m, world z] under the geom's centre at the last step (NaN off the
@@ -34,7 +34,7 @@ typedef struct {
   mjtNum h, k, zeta, mu, radius, top;  // [m], [N/m] a point's spring, [-] of critical, [-], [m], [m] the flex's radius
   mjtNum point_inverse_mass;           // [1/kg] of the point's share of the object
   int npoint;
-  mjtNum* point;   // [3 npoint] the contact points in the geom's frame [m]
+  mjtNum* point;    // [3 npoint] the contact points in the geom's frame [m]
   mjtNum* weight;   // [count] scratch: each vertex's kernel weight under the point at hand
   mjtNum* stretch;  // [3 npoint] each point's stick stretch [m] after this step's compute, state from advance
 } Kernel;
@@ -170,8 +170,8 @@ static void advance(const mjModel* m, mjData* d, int instance) {
 // The tangential force [N] of a point's stick spring, and its stretch after this step: the stretch it started with,
 // turned into the tangent plane of normal n at its length, grown by the tangential velocity over the step, and cut
 // back so the spring and its damping b never exceed the Coulomb limit [N].
-static void stick(mjtNum force[3], mjtNum stretch[3], const mjtNum n[3], const mjtNum tangential[3], mjtNum k,
-                  mjtNum b, mjtNum limit, mjtNum dt) {
+static void stick(mjtNum force[3], mjtNum stretch[3], const mjtNum n[3], const mjtNum tangential[3], mjtNum k, mjtNum b,
+                  mjtNum limit, mjtNum dt) {
   mjtNum length = mju_norm3(stretch);
   mju_addToScl3(stretch, n, -mju_dot3(stretch, n));
   mjtNum turned = mju_norm3(stretch);
