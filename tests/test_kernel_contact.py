@@ -135,3 +135,20 @@ def test_a_config_the_plugin_cannot_use_is_refused_at_compile():
         (Path(tmp) / "scene.xml").write_text(bad)
         with pytest.raises(ValueError, match="width_m is not a number"):
             mujoco.MjModel.from_xml_path(str(Path(tmp) / "scene.xml"))
+
+
+def test_the_state_has_a_stretch_for_every_point_whatever_blanks_part_them():
+    """nstate counts points_m's numbers as init reads them (strtod), so carriage returns and vertical tabs between
+    them still give every point its 3 stretch values: a count by spaces alone gave the state fewer slots than the
+    plugin writes."""
+    K.load_plugin()
+    rig = _rig("cube")
+    scene = J.scene_xml(rig)
+    points = re.search(r'key="points_m" value="([^"]+)"', scene).group(1)
+    numbers = points.split(" ")
+    odd = numbers[0] + "".join(("&#13;&#10;" if i % 2 else "&#11;") + x for i, x in enumerate(numbers[1:]))
+    with tempfile.TemporaryDirectory() as tmp:
+        (Path(tmp) / J.MODEL_FILE).write_text(J.model_xml(rig))
+        (Path(tmp) / "scene.xml").write_text(scene.replace(points, odd))
+        model = mujoco.MjModel.from_xml_path(str(Path(tmp) / "scene.xml"))
+    assert model.plugin_statenum[0] == 1 + len(numbers)

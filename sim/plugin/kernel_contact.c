@@ -15,6 +15,7 @@
 // extension (Chrono's and Bullet's penalty friction), capped so the spring never pulls harder than mu N. So an object
 // that friction should hold is held at any step, where a friction regularised by a slip speed lets it creep.
 
+#include <ctype.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -76,6 +77,22 @@ static void destroy(mjData* d, int instance) {
   d->plugin_data[instance] = 0;
 }
 
+// The numbers of points_m as strtod reads them one after another, written to out unless it is NULL: their count, or
+// -1 where anything but blanks follows them. init and nstate both count with it, so the state fits the points.
+static int read_points(const char* text, mjtNum* out) {
+  int n = 0;
+  char* end = NULL;
+  for (const char* at = text; at && *at;) {
+    mjtNum value = strtod(at, &end);
+    if (end == at) break;
+    if (out) out[n] = value;
+    n++;
+    at = end;
+  }
+  while (end && isspace((unsigned char)*end)) end++;
+  return end && *end != '\0' ? -1 : n;
+}
+
 static int init(const mjModel* m, mjData* d, int instance) {
   Kernel* kernel = (Kernel*)calloc(1, sizeof(Kernel));
   d->plugin_data[instance] = (uintptr_t)kernel;
@@ -119,16 +136,8 @@ static int init(const mjModel* m, mjData* d, int instance) {
     kernel->dof[i] = m->body_dofnum[body] == 3 ? m->body_dofadr[body] : -1;
     kernel->mass[i] = m->body_mass[body];
   }
-  int n = 0;
-  char* end = NULL;
-  for (const char* at = text; at && *at;) {
-    mjtNum value = strtod(at, &end);
-    if (end == at) break;
-    kernel->point[n++] = value;
-    at = end;
-  }
-  while (end && (*end == ' ' || *end == '\n' || *end == '\t')) end++;
-  if (n == 0 || n % 3 != 0 || (end && *end != '\0')) {
+  int n = read_points(text, kernel->point);
+  if (n <= 0 || n % 3 != 0) {
     mju_warning("mantaray.kernel_contact: config points_m must be x y z triples [m]");
     destroy(d, instance);
     return -1;
@@ -142,15 +151,10 @@ static int init(const mjModel* m, mjData* d, int instance) {
   return 0;
 }
 
-// The points' count, as init reads it: a number in points_m starts where a blank follows a non-blank.
+// One height, then a stretch for each point init reads.
 static int nstate(const mjModel* m, int instance) {
-  const char* text = mj_getPluginConfig(m, instance, kAttributes[kPoints]);
-  int numbers = 0;
-  for (const char* at = text; at && *at; at++) {
-    int blank = *at == ' ' || *at == '\n' || *at == '\t';
-    if (!blank && (at == text || at[-1] == ' ' || at[-1] == '\n' || at[-1] == '\t')) numbers++;
-  }
-  return STATE_STRETCH + numbers;
+  int numbers = read_points(mj_getPluginConfig(m, instance, kAttributes[kPoints]), NULL);
+  return STATE_STRETCH + (numbers > 0 ? numbers : 0);
 }
 
 static void reset(const mjModel* m, mjtNum* state, void* data, int instance) {
@@ -158,7 +162,7 @@ static void reset(const mjModel* m, mjtNum* state, void* data, int instance) {
   Kernel* kernel = (Kernel*)data;
   int count = nstate(m, instance) - STATE_STRETCH;
   for (int i = 0; i < count; i++) state[STATE_STRETCH + i] = 0;
-  if (kernel) memset(kernel->stretch, 0, sizeof(mjtNum) * (size_t)count);
+  if (kernel) memset(kernel->stretch, 0, sizeof(mjtNum) * 3 * (size_t)kernel->npoint);
 }
 
 // The step is taken: the stretches compute found become the state the next step starts from.
