@@ -18,7 +18,8 @@ class AvrBuildError(Exception):
 
 
 def build_dir(env: str) -> Path:
-    """scripts/avr_build.py's output for a PlatformIO environment: build/avr for the Uno's, build/avr-ENV for another."""
+    """scripts/avr_build.py's output for a PlatformIO environment: build/avr for the Uno's, build/avr-ENV for
+    another."""
     return REPO / "build" / ("avr" if env == "uno" else f"avr-{env}")
 
 

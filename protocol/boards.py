@@ -3,10 +3,11 @@ port and bit, its PWM output and timer registers. The one board table: scripts/a
 simavr benchmarks and tests read it, and tests/test_avr_build.py checks platformio.ini against it.
 
 Sources: PlatformIO's board JSON (platform-atmelavr boards/uno.json, megaatmega2560.json: build.mcu, f_cpu,
-extra_flags, variant; upload.maximum_size, maximum_ram_size), the ATmega328P and ATmega2560 datasheets (register addresses in data space, as avr-libc's io headers give
-them: an I/O address + 0x20) and Arduino's variant files (variants/standard and variants/mega, pins_arduino.h: which
-port bit and which timer output each Arduino pin number is). protocol/rig.py checks a rig's pins against these;
-protocol/generate_rig.py places them on the registers for the AVR simulator's harness.
+extra_flags, variant; upload.maximum_size, maximum_ram_size), the ATmega328P and ATmega2560 datasheets (register
+addresses in data space, as avr-libc's io headers give them: an I/O address + 0x20) and Arduino's variant files
+(variants/standard and variants/mega, pins_arduino.h: which port bit and which timer output each Arduino pin number
+is). protocol/rig.py checks a rig's pins against these; protocol/generate_rig.py places them on the registers for the
+AVR simulator's harness.
 """
 
 from __future__ import annotations

@@ -2,8 +2,8 @@
 
 Run: python3 benchmarks/experiments/fidelity_study.py [--gates paper_15x15_2ms,...] [--jobs 2] [--collect]
 Each gate is `mantaray sim fidelity` (sim/fidelity.py) on one object (the sphere unless the gate names another), to
-the end of T, with the gate's sample (by default 40 cells, 8 from each stratum, 5 trials each, seed 77) for two controllers:
-on the `paper` plant the paper's Manhattan and the cascade tuned for that object on it (docs/results/tune/), on the
+the end of T, with the gate's sample (by default 40 cells, 8 from each stratum, 5 trials each, seed 77) for two
+controllers: on the `paper` plant the paper's Manhattan and the cascade tuned for that object on it (docs/results/tune/), on the
 polyester plant the paper's Manhattan and Euclidean. Gates that share a run share its trials (out/fidelity/trials/).
 The trials are committed gzipped in docs/results/fidelity/trials/ and the script starts from them, so on a fresh
 clone it only rewrites the reports; every run resumes where it stopped (a 21 x 21 run takes hours on 2 cores).
@@ -167,7 +167,8 @@ def table() -> str:
         "the finer run with every start moved by the gate's shift (0.1 mm: a diagnostic of chaos; 2 mm: the rig's "
         "repeatability; not judged).",
         "",
-        "| plant | object, α, floor | candidate | finer | pairs | reached | within ε at T | fell off | flips (reached) | verdict |",
+        "| plant | object, α, floor | candidate | finer | pairs | reached | within ε at T | fell off | flips (reached) "
+        "| verdict |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     mark = {"equivalent": "✓", "different": "✗", "undecided": "?"}
@@ -192,8 +193,8 @@ def table() -> str:
         verdict = r["verdict"] or f"incomplete ({r['pairs']} of {r['expected_pairs']})"
         label = g.plant + "".join(f", {v}" for _, v in g.fixed)
         rows.append(
-            f"| {label} | {g.object_name}, α {g.alpha():g} m, {g.shift} m floor | {r['candidate']} | {r['finer']} | {r['pairs']} | {judged('reached')} | "
-            f"{judged('success')} | {judged('fell_off')} | {flips} | [{verdict}]({name}/report.md) |"
+            f"| {label} | {g.object_name}, α {g.alpha():g} m, {g.shift} m floor | {r['candidate']} | {r['finer']} | "
+            f"{r['pairs']} | {judged('reached')} | {judged('success')} | {judged('fell_off')} | {flips} | [{verdict}]({name}/report.md) |"
         )
     return "\n".join(rows) + "\n"
 

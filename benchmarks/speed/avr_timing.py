@@ -137,7 +137,8 @@ def main() -> int:
     worst = max(bench["main_loop_pass"]["max_cycles"], rig_side["main_loop_pass"]["max_cycles"])
     n = description.actuator_count
     print(
-        f"simavr, {description.board.name} at {hz / 1e6:g} MHz ({description.describe()}), {args.seconds:g} s simulated per run"
+        f"simavr, {description.board.name} at {hz / 1e6:g} MHz ({description.describe()}), "
+        f"{args.seconds:g} s simulated per run"
     )
     print(
         f"object_position frame ({settings.controller} step + reply), longest of {frame['count']} bytes handled: "

@@ -185,8 +185,8 @@ static void stick(mjtNum force[3], mjtNum stretch[3], const mjtNum n[3], const m
   mju_addToScl3(force, tangential, -b);
   mjtNum size = mju_norm3(force);
   if (size > limit) {
-    mju_scl3(force, force, size > 0 ? limit / size : 0);
-    mju_scl3(stretch, force, -1 / k);  // slipping: the spring alone holds the limit
+    mju_scl3(force, force, limit / size);  // size > limit >= 0
+    mju_scl3(stretch, force, -1 / k);      // slipping: the spring alone holds the limit
   }
 }
 
