@@ -14,7 +14,7 @@ from mantaray.protocol.rig import Grid
 
 from . import cli_board, cli_camera
 from .cli_board import add_port_argument, add_reconnect_argument
-from .cli_controller import add_controller_arguments, controller_settings, parse_gains
+from .cli_controller import add_controller_arguments, add_gains_argument, controller_settings
 from .cli_view import add_view_arguments, start_live
 from .ports import check_port
 
@@ -151,7 +151,6 @@ def _course(args: argparse.Namespace, parser: argparse.ArgumentParser):
 def _rig_inputs(args: argparse.Namespace, parser: argparse.ArgumentParser, target_m: tuple[float, float]):
     """(the firmware's Setup, the camera, the tracker, the output folder), each checked before any work: a mistake
     in any of them is a usage error in one line."""
-    from .session import Setup
     from .tracker import Calibration, FrameSource, Tracker
 
     if args.marker_height >= args.camera_height:
@@ -159,12 +158,8 @@ def _rig_inputs(args: argparse.Namespace, parser: argparse.ArgumentParser, targe
             f"--marker-height ({args.marker_height:g} m) must be below the camera (--camera-height "
             f"{args.camera_height:g} m)"
         )
-    settings = controller_settings(parser, args)
+    setup = rig_setup(args, parser, target_m)
     try:
-        configure = settings.configure(
-            m.Configure(tolerance=args.tolerance, noise_amplitude=args.alpha, telemetry_period=0)
-        ).check()
-        gains = settings.gains(_gains(args))
         calibration = Calibration.load(args.calibration) if args.calibration else None
         source = FrameSource(args.camera)  # a camera that does not open is the user's to fix, before work
         check_port(args.port)
@@ -174,19 +169,22 @@ def _rig_inputs(args: argparse.Namespace, parser: argparse.ArgumentParser, targe
     tracker = Tracker(
         marker_height_m=args.marker_height, camera_height_m=args.camera_height, calibration=calibration, blob=args.blob
     )
-    return Setup(configure, gains, target_m, settings.commands()), source, tracker, out
+    return setup, source, tracker, out
 
 
-def _gains(args: argparse.Namespace) -> dict:
-    """--gains for each PID the controller runs (axis -> configure_pid fields, schema-checked); {} without it."""
-    from .session import controller_axes
+def rig_setup(args: argparse.Namespace, parser: argparse.ArgumentParser, target_m: tuple[float, float]):
+    """The firmware's Setup for `mantaray rig`'s arguments: configure, the controller's settings and --gains as
+    they are given (the firmware's numbers), the target; a value the schema refuses is a usage error."""
+    from .session import Setup
 
-    if args.gains is None:
-        return {}
-    gains = {axis: m.ConfigurePid(axis, *args.gains).check().as_dict() for axis in controller_axes(args.controller)}
-    for fields in gains.values():
-        del fields["axis"]
-    return gains
+    settings = controller_settings(parser, args)
+    try:
+        configure = settings.configure(
+            m.Configure(tolerance=args.tolerance, noise_amplitude=args.alpha, telemetry_period=0)
+        ).check()
+    except ValueError as exc:
+        parser.error(str(exc))
+    return Setup(configure, settings.gains({}), target_m, settings.commands())
 
 
 # ------------------------------------------------------------------------------------------- parsers
@@ -219,12 +217,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         help=f"noise amplitude α [m], {bounds_text(m.Configure, 'noise_amplitude')} (paper's hardware: 0.05)",
     )
     rig.add_argument("--tolerance", type=float, default=0.02, help=f"ε [m], {bounds_text(m.Configure, 'tolerance')}")
-    rig.add_argument(
-        "--gains",
-        type=parse_gains,
-        metavar="KP,KI,KD[,ILIM]",
-        help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's",
-    )
+    add_gains_argument(rig)
     rig.add_argument("--hold", type=number(0), default=1.0, help="seconds within ε that count as reached")
     add_reconnect_argument(rig, "the run")
     rig.add_argument(

@@ -9,6 +9,13 @@ import math
 from mantaray.protocol import messages as m
 from mantaray.protocol.codec import choices
 
+GAINS_HELP = (
+    "the gains of every PID the controller runs, as the firmware takes them (configure_pid: "
+    "deg/m, deg/(m s), deg s/m, deg) on the rig and on every simulated plant alike; default the firmware's boot "
+    "gains, the paper's (a simulated plant that reads the paper's gains per radian, such as paper, boots them "
+    "180/pi times larger: leave --gains out to run the paper's controller there)"
+)
+
 
 def parse_gains(text: str) -> tuple[float, float, float, float]:
     """KP,KI,KD[,ILIMIT] of a PID [deg/m, deg/(m s), deg s/m, deg]; without ILIMIT the firmware's boot default."""
@@ -25,7 +32,9 @@ def parse_gains(text: str) -> tuple[float, float, float, float]:
 
 def controller_settings(parser: argparse.ArgumentParser, args: argparse.Namespace):
     """The controller settings a command runs with: --settings FILE (its controller), else --controller's boot
-    values; a --controller that contradicts the file is a usage error. Sets args.controller."""
+    values, with --gains on each of its PIDs (where the command takes --gains); a --controller that contradicts the
+    file, or --gains beside a file that sets gains, is a usage error. Sets args.controller. The one shape every
+    command carries a controller's gains in: the settings' pid.AXIS.NAME keys, the firmware's numbers."""
     from mantaray.host.controller_settings import ControllerSettings, SettingsError
 
     try:
@@ -42,9 +51,12 @@ def controller_settings(parser: argparse.ArgumentParser, args: argparse.Namespac
             f"{settings.controller} controller"
         )
     args.controller = settings.controller
-    if getattr(args, "gains", None) is not None and any(k.startswith("pid.") for k, _ in settings.values):
-        parser.error(f"--gains and {args.settings} both set the PIDs' gains: give them in one place")
-    return settings
+    if getattr(args, "gains", None) is None:
+        return settings
+    try:
+        return settings.with_gains(args.gains)
+    except SettingsError as exc:
+        parser.error(f"{args.settings}: {exc}")
 
 
 def add_controller_arguments(parser: argparse.ArgumentParser) -> None:
@@ -59,3 +71,8 @@ def add_controller_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FILE",
         help="a controller's settings (TOML, as mantaray sim tune writes: host/controller_settings.py)",
     )
+
+
+def add_gains_argument(parser: argparse.ArgumentParser) -> None:
+    """--gains, as every command that runs a controller on a firmware takes it (controller_settings() reads it)."""
+    parser.add_argument("--gains", type=parse_gains, metavar="KP,KI,KD[,ILIM]", help=GAINS_HELP)

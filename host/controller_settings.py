@@ -116,6 +116,18 @@ class ControllerSettings:
     def get(self, key: str) -> float | None:
         return dict(self.values).get(key)
 
+    def with_gains(self, gains: tuple[float, float, float, float]) -> ControllerSettings:
+        """These settings with (kp, ki, kd, integral_limit), the firmware's numbers (configure_pid's), on every PID
+        the controller runs: what --gains sets. SettingsError where these settings give a PID's gain already."""
+        if any(key.startswith("pid.") for key, _ in self.values):
+            raise SettingsError("--gains and these settings both set the PIDs' gains: give them in one place")
+        pids = [
+            (f"pid.{axis.name.lower()}.{name}", value)
+            for axis in controller_axes(self.controller)
+            for name, value in zip(PID_KEYS, gains, strict=True)
+        ]
+        return dataclasses.replace(self, values=(*self.values, *pids))
+
     # ------------------------------------------------------------------------------- as commands
     def configure(self, base: m.Configure) -> m.Configure:
         """base with this controller and its configure fields."""

@@ -27,8 +27,8 @@ from mantaray.protocol import rig as rig_description
 from mantaray.protocol.codec import FieldRefused, choices
 
 from . import model as M
-from .gains import Gains
 from .model import SimulationUnstable
+from .plant import boot_gains
 from .rig import Rig
 from .tracking import DEFAULT_TRACKING, Tracking
 
@@ -56,9 +56,8 @@ class TrialSpec:
     alpha_m: float = 0.0  # [m] noise amplitude
     tolerance_m: float = 0.02  # [m] epsilon
     seed: int = 1  # camera noise, drops and the firmware's noise PRNG
-    gains: dict[str, Gains] = field(
-        default_factory=dict
-    )  # axis name (x, y, radial) -> gains; absent: firmware defaults
+    gain_scale: float = 1.0  # the plant's reading of the paper's gains (Plant.gain_scale): the PIDs the settings
+    # leave out run the firmware's boot gains, the paper's, read so (plant.boot_gains)
     stop_when_reached: bool = False  # end at the first frame within epsilon, as the paper's loop does
     settings: tuple[tuple[str, float], ...] = ()  # the controller's own settings (host/controller_settings.py keys)
 
@@ -69,9 +68,8 @@ class TrialSpec:
             raise ValueError(f"duration must be in (0, 3600] s, got {self.duration_s}")
         if not 0 <= self.seed <= U32:
             raise ValueError(f"seed must be 0..{U32}, got {self.seed}")
-        for axis in self.gains:
-            if axis.upper() not in m.Axis.__members__:
-                raise ValueError(f"gains are for axes {', '.join(choices(m.Axis))}, got {axis!r}")
+        if not 0 < self.gain_scale <= 1000:
+            raise ValueError(f"gain scale must be in (0, 1000], got {self.gain_scale}")
         self.controller_settings()  # the keys and values of settings (SettingsError: a ValueError)
         for command in self.setup().commands():  # the schema's bounds, before any firmware sees them
             try:
@@ -97,12 +95,9 @@ class TrialSpec:
             noise_seed=self.seed or 1,
             telemetry_period=telemetry_period_ms,
         )
-        gains = {}
-        for axis in m.Axis:
-            g = self.gains.get(axis.name.lower())
-            gains[axis] = dict(vars(g) if g else m.PID_DEFAULTS[axis])
         settings = self.controller_settings()  # all of them every time: nothing stays from an earlier trial
-        return Setup(settings.configure(configure), settings.gains(gains), self.target_m, settings.commands())
+        gains = settings.gains(boot_gains(self.gain_scale))
+        return Setup(settings.configure(configure), gains, self.target_m, settings.commands())
 
     def controller_settings(self) -> ControllerSettings:
         return ControllerSettings(self.controller, self.settings)

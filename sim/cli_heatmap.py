@@ -119,7 +119,6 @@ def _experiment(args: argparse.Namespace, parser: argparse.ArgumentParser):
             duration_s=args.duration,
             alpha_m=args.alpha,
             seed=args.seed,
-            gains=args.gains,
             resolution=args.resolution,
             timestep_s=args.timestep,
             only_cells=args.only_cells,

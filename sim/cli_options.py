@@ -7,7 +7,7 @@ import argparse
 import math
 
 from mantaray.arguments import number
-from mantaray.host.cli_controller import add_controller_arguments, parse_gains
+from mantaray.host.cli_controller import add_controller_arguments, add_gains_argument
 from mantaray.protocol import messages as m
 from mantaray.protocol.codec import bounds_text
 
@@ -77,12 +77,7 @@ def shared() -> dict[str, argparse.ArgumentParser]:
     )
     controller = options()
     add_controller_arguments(controller)
-    controller.add_argument(
-        "--gains",
-        type=parse_gains,
-        metavar="KP,KI,KD[,ILIM]",
-        help="PID gains for the controller's axes [deg/m, deg/(m s), deg s/m, deg]; default the paper's",
-    )
+    add_gains_argument(controller)
     controller.add_argument(
         "--tolerance", type=float, default=0.02, help=f"ε [m], {bounds_text(m.Configure, 'tolerance')}"
     )

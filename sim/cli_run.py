@@ -50,7 +50,6 @@ def _trial(args: argparse.Namespace, parser: argparse.ArgumentParser):
     from mantaray.host.ports import check_port
 
     from .bridge import TrialSpec
-    from .experiment import controller_gains
     from .plant import Plant
     from .trial_run import TrialOutputs
     from .video import FPS_RANGE
@@ -93,7 +92,7 @@ def _trial(args: argparse.Namespace, parser: argparse.ArgumentParser):
             alpha_m=args.alpha,
             tolerance_m=args.tolerance,
             seed=args.seed,
-            gains=controller_gains(args.controller, args.gains, plant.gain_scale),
+            gain_scale=plant.gain_scale,
             settings=settings.values,
         )
     except ValueError as exc:

@@ -16,11 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mantaray.host.session import PAPER_AXES, controller_axes
-from mantaray.protocol import messages as m
-
 from .bridge import TrialSpec
-from .gains import Gains
 from .objects import OBJECTS
 from .plant import DEFAULT_PLANT, Plant
 from .rig import DEFAULT_FIDELITY, Fabric, Rig, Solver
@@ -42,7 +38,6 @@ class Experiment:
     duration_s: float = 10.0  # [s] T (the paper: 10 s)
     alpha_m: float = 0.0  # [m] noise amplitude
     seed: int = 2026
-    gains: tuple[float, float, float, float] | None = None  # (kp, ki, kd, integral limit); None: the paper's
     resolution: int = DEFAULT_FIDELITY.resolution  # [vertices per side] of the fabric (sim/rig.py, FIDELITIES)
     timestep_s: float = DEFAULT_FIDELITY.timestep_s  # [s] physics step
     only_cells: tuple[int, ...] | None = None  # run just these cell indices (samples, tests); None: all
@@ -62,10 +57,6 @@ class Experiment:
             (self.seed >= 0, f"seed must be >= 0, got {self.seed}"),
             (0 <= self.start_shift_m <= 0.01, f"start shift must be 0..0.01 m, got {self.start_shift_m}"),
             (
-                self.gains is None or len(self.gains) == 4,
-                f"gains must be four numbers (kp, ki, kd, integral limit), got {self.gains}",
-            ),
-            (
                 self.only_cells is None or all(0 <= c < self.cells**2 for c in self.only_cells),
                 f"cell indices must be 0..{self.cells**2 - 1}",
             ),
@@ -80,7 +71,7 @@ class Experiment:
         Fabric(resolution=self.resolution)  # refuses an even or too small resolution
         Solver(timestep_s=self.timestep_s)  # ... and a step no fidelity takes
         self.plant_model()  # refuses an unknown plant or a value outside its range
-        trial_spec(self, Trial(0, 0, (0.0, 0.0), (0.0, 0.0), 1))  # the controller, tolerance, alpha, gains: schema's
+        trial_spec(self, Trial(0, 0, (0.0, 0.0), (0.0, 0.0), 1))  # the controller, tolerance, alpha, settings: schema's
 
     def plant_model(self) -> Plant:
         return Plant(self.plant, self.plant_set)
@@ -100,6 +91,11 @@ class Experiment:
         fields = {k: (tuple(v) if isinstance(v, list) else v) for k, v in data.items()}
         fields["plant_set"] = tuple(tuple(kv) for kv in fields.get("plant_set", ()))
         fields["settings"] = tuple(tuple(kv) for kv in fields.get("settings", ()))
+        if fields.pop("gains", None) is not None:  # files written before --gains became settings keys
+            raise ValueError(
+                "its gains were given apart from the settings, in the paper's units (before 2026-12-07); its trials "
+                "cannot be continued or compared with a run that gives them as settings: rerun it"
+            )
         return cls(**fields)
 
 
@@ -162,22 +158,9 @@ def trial_spec(experiment: Experiment, trial: Trial) -> TrialSpec:
         alpha_m=experiment.alpha_m,
         tolerance_m=experiment.tolerance_m,
         seed=trial.seed,
-        gains=controller_gains(experiment.controller, experiment.gains, experiment.plant_model().gain_scale),
+        gain_scale=experiment.plant_model().gain_scale,
         stop_when_reached=experiment.stop_when_reached,
         settings=experiment.settings,
     )
 
 
-def controller_gains(
-    controller: str, gains: tuple[float, float, float, float] | None, scale: float = 1.0
-) -> dict[str, Gains]:
-    """The gains to configure per axis: the given ones, else the paper's; kp, ki, kd times scale (the plant's reading of
-    the PID's unit: 180/pi when the paper's gains are per radian). Empty: the firmware's own defaults as they are."""
-    if gains is None and scale == 1.0:
-        return {}
-    out = {}
-    for axis in controller_axes(controller):
-        kp, ki, kd, limit = gains if gains is not None else m.PID_DEFAULTS[axis].values()
-        k = scale if axis in PAPER_AXES else 1.0  # the cascade's velocity PIDs are no gains of the paper
-        out[axis.name.lower()] = Gains(kp * k, ki * k, kd * k, limit)
-    return out

@@ -6,11 +6,38 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
+from mantaray.protocol import messages as m
+
 from . import parameters as P
 from .rig import Rig
 from .tracking import Tracking
 
 DEFAULT_PLANT = "polyester"  # the physically calibrated rig of sim/README.md
+PAPER_GAINS = ("kp", "ki", "kd")  # the gains the paper gives of its PIDs (PAPER_AXES); the integral bound is in degrees
+PID_MAX = {spec.name: spec.max for spec in m.ConfigurePid.FIELDS if spec.name != "axis"}  # the schema's bounds
+
+
+def firmware_gain(axis: m.Axis, name: str, paper_value: float, gain_scale: float) -> float:
+    """The unit rule, applied here alone: a gain of the paper's (kp, ki, kd of the x, y and radial PIDs) in the
+    paper's units is gain_scale (Plant.gain_scale) times that for the firmware, clipped to the schema's bound;
+    every other setting, and every gain a user gives (--gains, a settings file), is the firmware's number already."""
+    if axis in m.PAPER_AXES and name in PAPER_GAINS:
+        return min(paper_value * gain_scale, PID_MAX[name])
+    return paper_value
+
+
+def paper_gain(axis: m.Axis, name: str, firmware_value: float, gain_scale: float) -> float:
+    """firmware_gain's inverse: a firmware's setting in the paper's units (a gain the bound clipped reads as its
+    bound's)."""
+    return firmware_value / gain_scale if axis in m.PAPER_AXES and name in PAPER_GAINS else firmware_value
+
+
+def boot_gains(gain_scale: float) -> dict[m.Axis, dict]:
+    """axis -> configure_pid fields: the firmware's boot gains (the paper's) read with gain_scale (firmware_gain)."""
+    return {
+        axis: {name: firmware_gain(axis, name, value, gain_scale) for name, value in fields.items()}
+        for axis, fields in m.PID_DEFAULTS.items()
+    }
 
 
 def plant_for(settings, given: str | None) -> str:

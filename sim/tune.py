@@ -23,27 +23,25 @@ from mantaray.protocol import messages as m
 
 from . import findings as F
 from .experiment import Experiment, trials
-from .plant import Plant
+from .plant import Plant, firmware_gain, paper_gain
 from .rig import DEFAULT_FIDELITY, Fidelity
 from .study import best_trial, completed, finished, open_study
 
 EVERY_PID = "pid.*."  # a knob on every PID the controller runs (x and y alike: the rig is symmetric)
-PID_MAX = {spec.name: spec.max for spec in m.ConfigurePid.FIELDS if spec.name != "axis"}
 
 
 @dataclass(frozen=True)
 class Knob:
     """One searched setting: a key of host/controller_settings.py (or pid.*.NAME) and its range.
 
-    A paper_gain knob is in the paper's units (its kP, kI, kD): the firmware gets it times the plant's reading of
-    them (Plant.gain_scale, 180/pi on a plant that reads them per radian), so the paper's own gains are in range
-    on every plant and the search starts from them."""
+    A knob on a gain the paper gives (kP, kI, kD of its PIDs) is in the paper's units: the firmware gets it as the
+    plant reads them (plant.firmware_gain: 180/pi times on a plant that reads them per radian), so the paper's own
+    gains are in range on every plant and the search starts from them."""
 
     key: str
     low: float
     high: float
     scale: str = "linear"  # linear | log
-    paper_gain: bool = False
     choices = None  # (study.Dimension's: a knob is never categorical)
 
     def search_bounds(self) -> tuple[float, float]:
@@ -53,9 +51,9 @@ class Knob:
 TILT = Knob("configure.tilt_limit", 5.0, m.Configure().tilt_limit)  # [deg] at most the geometric limit
 VELOCITY_FILTER = Knob("configure.velocity_filter", 0.0, 0.5)  # [s]
 POSITION_PID = [
-    Knob("pid.*.kp", 3.0, 150.0, "log", paper_gain=True),
-    Knob("pid.*.ki", 0.0, 100.0, paper_gain=True),
-    Knob("pid.*.kd", 0.0, 100.0, paper_gain=True),
+    Knob("pid.*.kp", 3.0, 150.0, "log"),
+    Knob("pid.*.ki", 0.0, 100.0),
+    Knob("pid.*.kd", 0.0, 100.0),
     Knob("pid.*.integral_limit", 1.0, m.PID_DEFAULTS[m.Axis.X]["integral_limit"]),
 ]
 #                 the paper's [deg/m], [deg/(m s)], [deg s/m]; [deg]
@@ -104,20 +102,25 @@ def knobs(controller: str, per_axis: bool = False) -> list[Knob]:
 
 
 def settings_of(controller: str, values: dict[str, float], gain_scale: float = 1.0) -> ControllerSettings:
-    """The controller's settings for a candidate: pid.*.NAME set on each of its PIDs (pid.AXIS.NAME on that one), a
-    paper_gain knob times gain_scale (clipped to the schema's bound)."""
-    paper = {k.key for k in [*knobs(controller), *knobs(controller, per_axis=True)] if k.paper_gain}
+    """The controller's settings for a candidate: pid.*.NAME set on each of its PIDs (pid.AXIS.NAME on that one),
+    each as the firmware takes it (plant.firmware_gain with gain_scale)."""
     flat = {}
     for key, value in values.items():
-        if key in paper:
-            value = min(value * gain_scale, PID_MAX[key.rsplit(".", 1)[1]])
-        if key.startswith(EVERY_PID):
-            flat.update(
-                {f"pid.{axis.name.lower()}.{key[len(EVERY_PID) :]}": value for axis in controller_axes(controller)}
-            )
-        else:
+        for axis, name in _pids(controller, key):
+            flat[f"pid.{axis.name.lower()}.{name}"] = firmware_gain(axis, name, value, gain_scale)
+        if not key.startswith("pid."):
             flat[key] = value
     return ControllerSettings(controller, tuple(flat.items()))
+
+
+def _pids(controller: str, key: str) -> list[tuple[m.Axis, str]]:
+    """(axis, field) of each PID a knob's key sets: pid.*.NAME every PID the controller runs, pid.AXIS.NAME one."""
+    if not key.startswith("pid."):
+        return []
+    section, _, name = key.rpartition(".")
+    if key.startswith(EVERY_PID):
+        return [(axis, name) for axis in controller_axes(controller)]
+    return [(m.Axis[section[len("pid.") :].upper()], name)]
 
 
 def firmware_boot(controller: str) -> dict[str, float]:
@@ -145,7 +148,7 @@ def start_values(
     settings: ControllerSettings, per_axis: bool = False, gain_scale: float = 1.0
 ) -> tuple[dict[str, float], list[str]]:
     """The knobs that set up these settings as the firmware runs them (settings_of's inverse: a paper_gain knob is
-    the firmware's number divided by gain_scale; a setting the file leaves out is the firmware's boot value), each
+    the firmware's number in the paper's units, plant.paper_gain; a setting the file leaves out is the firmware's boot value), each
     clipped into its range, and the knobs that had to be clipped: a candidate to start a search from, such as
     settings tuned for another object. Without per_axis a pid.* knob needs the same value on every PID
     (SettingsError otherwise)."""
@@ -164,7 +167,8 @@ def start_values(
             value = each.pop()
         else:
             value = given.get(knob.key, boot[knob.key])
-        value = value / gain_scale if knob.paper_gain else value
+        pids = _pids(settings.controller, knob.key)
+        value = paper_gain(*pids[0], value, gain_scale) if pids else value
         out[knob.key] = float(np.clip(value, knob.low, knob.high))
         if out[knob.key] != value:
             clipped.append(knob.key)
@@ -185,7 +189,7 @@ class TuningEvidence:
     seed: int = 31  # the sample's and the sampler's; the final check uses another
     resolution: int = DEFAULT_FIDELITY.resolution  # [vertices per side] (sim/rig.py, FIDELITIES)
     timestep_s: float = DEFAULT_FIDELITY.timestep_s  # [s]
-    gains_in_paper_units: bool = True  # paper_gain knobs x Plant.gain_scale (part of the study's record)
+    gains_in_paper_units: bool = True  # the paper's gains' knobs read by plant.firmware_gain (the study's record)
     prune: bool = False  # score in rungs of the sample and stop a hopeless candidate early
     kind: str = "tuning"
     objective_names: tuple[str, ...] = ("targets missed under both success rules, per trial",)
@@ -510,7 +514,7 @@ def write_report(
             "number": best.number,
             "misses": best.values[0],
             **best.user_attrs["details"],
-            "knobs": best.user_attrs["values"],  # SPACE's units: paper_gain ones the paper's
+            "knobs": best.user_attrs["values"],  # SPACE's units: the paper's gains' in the paper's
             "settings": dict(settings.values),
         },  # the firmware's numbers
         "confirmation": confirmation,

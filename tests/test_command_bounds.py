@@ -539,27 +539,24 @@ def test_a_trial_spec_is_refused_exactly_when_the_firmware_would_refuse_its_comm
 ):
     """The host checks a trial's settings against the schema before any firmware sees them (TrialSpec), and
     that check agrees with the firmware: what it lets through is accepted, what it refuses the firmware refuses."""
+    from mantaray.host.controller_settings import PID_KEYS
+    from mantaray.host.session import controller_axes
     from mantaray.sim.bridge import TrialSpec
-    from mantaray.sim.experiment import controller_gains
 
     name = controller.name.lower()
-    fields = dict(
-        start_m=(0.0, 0.0),
-        target_m=(0.1, -0.1),
-        controller=name,
-        tolerance_m=tolerance,
-        alpha_m=alpha,
-        gains=controller_gains(name, gains),
-    )
+    axes = controller_axes(name) if gains is not None else ()
+    fields = dict(start_m=(0.0, 0.0), target_m=(0.1, -0.1), controller=name, tolerance_m=tolerance, alpha_m=alpha)
+    pids = tuple((f"pid.{a.name.lower()}.{k}", v) for a in axes for k, v in zip(PID_KEYS, gains or (), strict=True))
     try:
-        TrialSpec(**fields)
+        TrialSpec(**fields, settings=pids)  # --gains, as every command carries them: settings keys
         refused_by_host = None
     except ValueError as exc:
         refused_by_host = exc
     link = Link(InProcessTransport(simulated_clock=True))
     link.identify()
     refused_by_firmware = []
-    for command in _unchecked_spec(**fields).setup().commands():
+    given = [m.ConfigurePid(a, *gains) for a in axes]  # what those keys become, unchecked
+    for command in [*_unchecked_spec(**fields).setup().commands(), *given]:
         try:
             link.command(command, checked=False)
         except CommandRefused as refused:

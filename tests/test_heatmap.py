@@ -81,15 +81,14 @@ def test_a_subset_of_cells_draws_the_same_trials_as_the_full_run():
         ({"object_name": "teapot"}, "object"),
         ({"tolerance_m": 0}, "tolerance"),
         ({"duration_s": -1}, "runtime"),
-        ({"gains": (1, 2, float("nan"), 3)}, "kd"),
+        ({"settings": (("pid.x.kd", float("nan")),)}, "kd"),
         ({"resolution": 14}, "odd"),
         ({"only_cells": (400,)}, "cell indices"),
         ({"timestep_s": 0.1}, "timestep"),
         # the schema's bounds (protocol/schema.toml), not retyped here: epsilon from 1 mm, alpha to 0.25 m, gains to 1e4
         ({"tolerance_m": 0.0005}, r"tolerance epsilon: 0.0005 m is outside 0.001..0.5 m"),
         ({"alpha_m": 0.3}, "noise_amplitude"),
-        ({"gains": (2e4, 0, 0, 10)}, r"kp of the x PID: 20000 deg/m is outside 0..10000"),
-        ({"gains": (1, 2, 3)}, "four numbers"),
+        ({"settings": (("pid.x.kp", 2e4),)}, r"pid.x.kp: 20000 deg/m is outside 0..10000"),
         ({"only_cells": (1, 1)}, "must not repeat"),
         ({"seed": -1}, "seed"),
     ],
@@ -97,6 +96,15 @@ def test_a_subset_of_cells_draws_the_same_trials_as_the_full_run():
 def test_a_bad_protocol_is_refused_with_a_reason(kwargs, needle):
     with pytest.raises(ValueError, match=needle):
         E.Experiment(**kwargs)
+
+
+def test_a_results_header_with_gains_apart_from_the_settings_is_refused_and_a_null_one_read():
+    """Headers written before --gains became settings keys: gains null (every committed file) reads as before; gains
+    given were the paper's units, which a run today would not reproduce."""
+    header = E.Experiment(cells=2).to_json()
+    assert E.Experiment.from_json({**header, "gains": None}) == E.Experiment(cells=2)
+    with pytest.raises(ValueError, match="paper's units"):
+        E.Experiment.from_json({**header, "gains": [30.9, 26.78, 15.45, 26.5]})
 
 
 # ------------------------------------------------------------------------------------------- success rule

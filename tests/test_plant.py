@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
 from mantaray.sim import parameters as P
-from mantaray.sim.experiment import Experiment, controller_gains, trial_spec, trials
-from mantaray.sim.plant import Plant, parse_setting
+from mantaray.sim.experiment import Experiment, trial_spec, trials
+from mantaray.sim.plant import Plant, boot_gains, parse_setting
 from mantaray.sim.rig import Rig
 
 PHYSICAL = [p for p in P.parameters().values() if p.section not in ("tracking", "reading")]
@@ -94,18 +94,37 @@ def test_the_readme_table_is_generated_from_the_declared_table():
     )
 
 
-def test_the_radian_reading_scales_the_papers_gains_and_nothing_else():
-    gains = controller_gains("manhattan", None, Plant().set({"reading.pid_unit": "rad"}).gain_scale)
-    paper = m.PID_DEFAULTS[m.Axis.X]
-    assert gains["x"].kp == pytest.approx(paper["kp"] * 180 / math.pi)
-    assert gains["y"].kd == pytest.approx(paper["kd"] * 180 / math.pi)
-    assert gains["x"].integral_limit == paper["integral_limit"]
-    assert controller_gains("euclidean", None, 1.0) == {}  # degrees: the firmware's own defaults
+def test_the_radian_reading_scales_the_papers_boot_gains_and_nothing_else():
+    scale = Plant().set({"reading.pid_unit": "rad"}).gain_scale
+    boot, paper = boot_gains(scale), m.PID_DEFAULTS
+    assert boot[m.Axis.X]["kp"] == pytest.approx(paper[m.Axis.X]["kp"] * 180 / math.pi)
+    assert boot[m.Axis.Y]["kd"] == pytest.approx(paper[m.Axis.Y]["kd"] * 180 / math.pi)
+    assert boot[m.Axis.X]["integral_limit"] == paper[m.Axis.X]["integral_limit"]
+    assert boot[m.Axis.VX] == paper[m.Axis.VX]  # the cascade's velocity PIDs are no gains of the paper
+    assert boot_gains(1.0) == paper  # degrees: the firmware's own boot gains
     experiment = Experiment(
         cells=2, trials_per_cell=1, plant_set=(("reading.pid_unit", "rad"),), controller="euclidean"
     )
-    spec = trial_spec(experiment, trials(experiment)[0])
-    assert spec.gains["radial"].ki == pytest.approx(m.PID_DEFAULTS[m.Axis.RADIAL]["ki"] * 180 / math.pi)
+    gains = trial_spec(experiment, trials(experiment)[0]).setup().gains
+    assert gains[m.Axis.RADIAL]["ki"] == pytest.approx(paper[m.Axis.RADIAL]["ki"] * 180 / math.pi)
+
+
+def test_a_users_gains_are_the_firmwares_numbers_on_every_plant():
+    """--gains (pid.AXIS.NAME settings) reach the firmware as given, whatever the plant's reading; the PIDs they
+    leave out keep the plant's reading of the paper's."""
+    given = (("pid.radial.kp", 50.0),)
+    for reading in ("deg", "rad"):
+        experiment = Experiment(
+            cells=2,
+            trials_per_cell=1,
+            controller="euclidean",
+            plant_set=(("reading.pid_unit", reading),),
+            settings=given,
+        )
+        gains = trial_spec(experiment, trials(experiment)[0]).setup().gains
+        scale = 180 / math.pi if reading == "rad" else 1.0
+        assert gains[m.Axis.RADIAL]["kp"] == 50.0
+        assert gains[m.Axis.RADIAL]["kd"] == pytest.approx(m.PID_DEFAULTS[m.Axis.RADIAL]["kd"] * scale)
 
 
 def test_the_corner_clamp_holds_its_edge_vertices_at_the_carriage():

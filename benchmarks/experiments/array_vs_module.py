@@ -49,7 +49,6 @@ from mantaray.host.transport import InProcessTransport
 from mantaray.protocol import messages as m
 from mantaray.protocol import rig as rig_description
 from mantaray.sim.bridge import Bridge, TrialSpec
-from mantaray.sim.experiment import controller_gains
 from mantaray.sim.fidelity import parse_fidelity
 from mantaray.sim.findings import FIG3_ALPHA_M
 from mantaray.sim.objects import OBJECTS
@@ -172,7 +171,7 @@ def run_trial(
         duration_s=duration_s,
         alpha_m=FIG3_ALPHA_M[case.object_name],
         seed=case.seed,
-        gains=controller_gains("manhattan", None, Plant(PLANT).gain_scale),
+        gain_scale=Plant(PLANT).gain_scale,
         settings=(("configure.tilt_limit", array_tilt_limit_deg),)
         if which == "array" and array_tilt_limit_deg is not None
         else (),

@@ -36,7 +36,6 @@ from mantaray.protocol import messages as m
 from mantaray.protocol import rig as rig_description
 from mantaray.protocol.rig import rig_file
 from mantaray.sim.bridge import Bridge, TrialSpec
-from mantaray.sim.experiment import controller_gains
 from mantaray.sim.fidelity import parse_fidelity
 from mantaray.sim.parameters import plant_names
 from mantaray.sim.plant import DEFAULT_PLANT, Plant, plant_for
@@ -101,7 +100,7 @@ def main() -> int:
                 duration_s=args.seconds,
                 controller=settings.controller,
                 settings=settings.values,
-                gains=controller_gains(settings.controller, None, plant.gain_scale),
+                gain_scale=plant.gain_scale,
             )
         )
         bridge.link.close()
