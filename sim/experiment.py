@@ -162,5 +162,3 @@ def trial_spec(experiment: Experiment, trial: Trial) -> TrialSpec:
         stop_when_reached=experiment.stop_when_reached,
         settings=experiment.settings,
     )
-
-
