@@ -127,9 +127,10 @@ def test_the_arrays_mega_image_builds_within_its_budgets(tmp_path):
 
 @needs_toolchain
 def test_the_image_leaves_room_below_its_budgets(build):
-    """Room for what comes next: 1.5 KB of flash and 100 B of static RAM below the budgets (once 210 B and 10 B)."""
+    """Room for what comes next: 1,746 B of flash (the image at most 22,446 B, what it was before the arrays' last
+    additions) and 100 B of static RAM below the budgets (once 210 B and 10 B)."""
     _, sizes = build
-    assert sizes["flash"]["budget"] - sizes["flash"]["used"] >= 1536, sizes["flash"]
+    assert sizes["flash"]["budget"] - sizes["flash"]["used"] >= 1746, sizes["flash"]
     assert sizes["ram"]["budget"] - sizes["ram"]["used"] >= 100, sizes["ram"]
 
 

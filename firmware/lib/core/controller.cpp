@@ -2,7 +2,7 @@
 // PIDs -> tilt -> plane -> noisy, clamped actuator commands.
 #include "controller.h"
 
-#include <math.h>  // fabsf, hypotf, isfinite
+#include <math.h>  // fabsf, isfinite
 
 #include "route.h"  // module_centre_x, module_centre_y
 
@@ -77,7 +77,7 @@ float TiltController::step(const ControllerConfig& config, float target_x, float
   if (!rate_known) dt = 0.0f;
   const float ex = target_x - x;
   const float ey = target_y - y;
-  const float distance = hypotf(ex, ey);  // no underflow or overflow of the squares
+  const float distance = mr::distance(ex, ey);
   // The object's velocity [m/s]: camera-frame differences through a first-order low-pass of velocity_filter [s].
   const float last_vx = vx_;
   const float last_vy = vy_;
@@ -99,7 +99,7 @@ float TiltController::step(const ControllerConfig& config, float target_x, float
       if (rate_known) {
         const float px = target_x - prev_x_;
         const float py = target_y - prev_y_;
-        rate = (distance - hypotf(px, py)) / dt;
+        rate = (distance - mr::distance(px, py)) / dt;
       }
       const float theta = pid_[kRadial].update(config.pid[kRadial], distance, rate, dt, config.tilt_limit);
       const float ux = distance > 0.0f ? ex / distance : 0.0f;

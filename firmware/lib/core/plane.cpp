@@ -1,7 +1,7 @@
 // Plane normal and actuator commands from tilt angles, as in the paper's equations for n, z_i and a_i.
 #include "plane.h"
 
-#include <math.h>  // sinf, cosf, hypotf, atanf
+#include <math.h>  // sinf, cosf, fabsf, sqrtf, atanf
 
 namespace mr {
 
@@ -11,8 +11,16 @@ Normal manhattan_normal(float tilt_zx_deg, float tilt_zy_deg) {
   return Normal{sinf(zx), sinf(zy), cosf(zx)};
 }
 
+float distance(float x, float y) {
+  const float ax = fabsf(x), ay = fabsf(y);
+  const float big = ax > ay ? ax : ay, small = ax > ay ? ay : ax;
+  if (!(big > 0.0f)) return big;  // 0, or NaN passed on
+  const float r = small / big;
+  return big * sqrtf(1.0f + r * r);
+}
+
 Normal euclidean_normal(float theta_deg, float error_x, float error_y) {
-  const float d = hypotf(error_x, error_y);  // no underflow or overflow of the squares
+  const float d = distance(error_x, error_y);
   if (!(d > 0.0f)) return Normal{0.0f, 0.0f, 1.0f};
   const float theta = theta_deg * kDegToRad;
   const float s = sinf(theta);

@@ -24,6 +24,10 @@ struct Normal {
 // Manhattan (Algorithm 1): n = (sin theta_zx, sin theta_zy, cos theta_zx).
 Normal manhattan_normal(float tilt_zx_deg, float tilt_zy_deg);
 
+// |(x, y)| as max * sqrt(1 + (min / max)^2): no underflow or overflow of the squares, as hypotf, from the square root
+// and division the image links anyway (avr-libc's hypot is 218 bytes of its own on the Uno); 0 for (0, 0).
+float distance(float x, float y);
+
 // Euclidean (Algorithm 2): n = (e_x/d sin theta, e_y/d sin theta, cos theta), d = |e|; (0, 0, 1) when d = 0.
 Normal euclidean_normal(float theta_deg, float error_x, float error_y);
 

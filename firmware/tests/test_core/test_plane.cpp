@@ -2,9 +2,9 @@
 #include <doctest/doctest.h>
 
 #include <initializer_list>  // range-for over braced lists
-#include <math.h>            // tanf, sinf, cosf, atanf, fabsf, sqrtf
+#include <math.h>            // tanf, sinf, cosf, atanf, fabsf, sqrtf, hypotf
 
-#include "plane.h"       // manhattan_normal, euclidean_normal, plane_commands, max_tilt_deg
+#include "plane.h"       // manhattan_normal, euclidean_normal, plane_commands, max_tilt_deg, distance
 #include "rig_config.h"  // kActuatorRangeM, kActuatorCount
 
 namespace {
@@ -192,5 +192,18 @@ TEST_CASE("plane: Euclidean with a subnormal error still gives a finite, in-rang
     }
     euclidean(limit, e, -e, 1.0f, 1.0f, a);
     for (float ai : a) CHECK(ai == ai);
+  }
+}
+
+TEST_CASE("plane: distance is hypot's |(x, y)| without its squares' underflow or overflow") {
+  CHECK(mr::distance(3.0f, -4.0f) == Approx(5.0f).epsilon(1e-7));
+  CHECK(mr::distance(0.0f, 0.0f) == 0.0f);
+  CHECK(mr::distance(0.0f, -0.02f) == 0.02f);
+  CHECK(mr::distance(1e-30f, 1e-30f) == Approx(1.4142135e-30f).epsilon(1e-6));  // x * x would be 0
+  CHECK(mr::distance(1e30f, -1e30f) == Approx(1.4142135e30f).epsilon(1e-6));    // x * x would be inf
+  for (float x : {0.013f, -0.21f, 0.25f, 1e-3f}) {
+    for (float y : {0.0f, 0.07f, -0.18f, 2e-4f}) {
+      CHECK(mr::distance(x, y) == Approx(hypotf(x, y)).epsilon(2e-7));
+    }
   }
 }
