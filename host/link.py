@@ -87,7 +87,9 @@ class Link:
         self.last_rx_seq: int | None = None
         self.lost_frames = 0  # firmware frames missing from the firmware's sequence
         self.stale_frames = 0  # firmware frames that came twice or after a newer one (a duplicating or reordering link)
-        self.rig_differences: list[str] = []  # rig constants the firmware reported otherwise (identify)
+        self.rig_differences: list[
+            str
+        ] = []  # what identify reported otherwise than this host: rig constants, boot gains
         self.resyncs = 0  # times a frame came behind the firmware's count and the link identified again
         self.resets = 0  # boot messages seen
         self.retransmissions = 0  # commands sent again for want of an answer
@@ -221,6 +223,12 @@ class Link:
                 f"and flash the firmware built from it"
             )
         self.rig_differences = list(differences.values())
+        if reply.boot_gains_crc != m.BOOT_GAINS_CRC:  # not refused: every PID a run sets is sent, the rest boot so
+            self.rig_differences.append(
+                f"the firmware boots its PIDs with other gains than this host's protocol/schema.toml [pid_defaults] "
+                f"(CRC 0x{reply.boot_gains_crc:08X}, here 0x{m.BOOT_GAINS_CRC:08X}): a PID the run does not set "
+                f"runs the board's"
+            )
         return reply
 
     def close(self) -> None:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import struct
 import sys
 import tomllib
 import zlib
@@ -79,8 +80,8 @@ def check_behaviour(schema: dict) -> None:
 
 
 def canonical(schema: dict) -> bytes:
-    """The schema without its prose and its behaviour (message states, controller tables): what two ends must agree
-    on byte for byte."""
+    """The schema without its prose and its behaviour (message states, controller tables, the PIDs' boot gains): what
+    two ends must agree on byte for byte. The boot gains cross no wire; identify reports them (boot_gains_crc)."""
 
     def strip(obj):
         if isinstance(obj, dict):
@@ -89,7 +90,7 @@ def canonical(schema: dict) -> bytes:
             return [strip(v) for v in obj]
         return obj
 
-    layout = {k: v for k, v in schema.items() if k != "controllers"}
+    layout = {k: v for k, v in schema.items() if k not in ("controllers", "pid_defaults")}
     layout["protocol"] = {k: v for k, v in schema["protocol"].items() if k != "state_error"}
     return json.dumps(strip(layout), sort_keys=True, separators=(",", ":")).encode()
 
@@ -97,6 +98,15 @@ def canonical(schema: dict) -> bytes:
 def schema_hash(schema: dict) -> int:
     """CRC-32 (zlib) of the canonical schema."""
     return zlib.crc32(canonical(schema))
+
+
+def boot_gains_crc(schema: dict) -> int:
+    """CRC-32 (zlib) of every PID's boot gains as the firmware holds them: kp, ki, kd, integral_limit as f32
+    little-endian, the PIDs in Axis order. identify_reply reports it, so a host can tell which gains a PID it does not
+    set runs, without a retuned default making it refuse the board."""
+    axes = sorted(schema["enums"]["axis"]["values"].items(), key=lambda kv: kv[1])
+    names = ("kp", "ki", "kd", "integral_limit")
+    return zlib.crc32(b"".join(struct.pack("<4f", *(schema["pid_defaults"][a][n] for n in names)) for a, _ in axes))
 
 
 def payload_size(msg: dict) -> int:
@@ -257,6 +267,7 @@ def render_cpp(schema: dict) -> str:
         "",
         f"constexpr uint16_t kProtocolVersion = {proto['version']};",
         f"constexpr uint32_t kSchemaHash = 0x{schema_hash(schema):08X}u;",
+        f"constexpr uint32_t kBootGainsCrc = 0x{boot_gains_crc(schema):08X}u;  // of kPidDefaults, for identify",
         f"constexpr uint8_t kMaxPacket = {proto['max_packet']};  // [bytes] id + seq + payload + CRC",
         f"constexpr uint8_t kMaxWire = {proto['max_wire']};  // [bytes] COBS packet + delimiter",
         "constexpr uint8_t kNoField = 255;  // nack.field when no single field is at fault",
@@ -392,6 +403,7 @@ def render_py(schema: dict) -> str:
         "",
         f"PROTOCOL_VERSION = {proto['version']}",
         f"SCHEMA_HASH = 0x{schema_hash(schema):08X}",
+        f"BOOT_GAINS_CRC = 0x{boot_gains_crc(schema):08X}  # of PID_DEFAULTS, as identify_reply reports the board's",
         f"MAX_PACKET = {proto['max_packet']}  # [bytes] id + seq + payload + CRC",
         f"MAX_WIRE = {proto['max_wire']}  # [bytes] COBS packet + delimiter",
         "NO_FIELD = 255",

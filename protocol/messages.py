@@ -9,7 +9,8 @@ from typing import ClassVar
 from .codec import FieldSpec, Message
 
 PROTOCOL_VERSION = 2
-SCHEMA_HASH = 0x3DC51A84
+SCHEMA_HASH = 0xFDED63ED
+BOOT_GAINS_CRC = 0x6DD8DF21  # of PID_DEFAULTS, as identify_reply reports the board's
 MAX_PACKET = 44  # [bytes] id + seq + payload + CRC
 MAX_WIRE = 46  # [bytes] COBS packet + delimiter
 NO_FIELD = 255
@@ -379,7 +380,7 @@ class IdentifyReply(Message):
     NAME: ClassVar[str] = 'identify_reply'
     DIRECTION: ClassVar[str] = 'mcu_to_host'
     REPLY: ClassVar[str | None] = None
-    SIZE: ClassVar[int] = 28  # [bytes] payload
+    SIZE: ClassVar[int] = 32  # [bytes] payload
     STATES: ClassVar[frozenset[int]] = frozenset()
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('protocol_version', 'H', 1, None, None, None, None, ''),
@@ -396,6 +397,7 @@ class IdentifyReply(Message):
         FieldSpec('actuator_period', 'I', 1, None, None, None, None, 'us'),
         FieldSpec('modules_x', 'B', 1, None, None, None, None, ''),
         FieldSpec('modules_y', 'B', 1, None, None, None, None, ''),
+        FieldSpec('boot_gains_crc', 'I', 1, None, None, None, None, ''),
     )
 
     protocol_version: int = 0  # [protocol] version of the firmware's schema.
@@ -412,6 +414,7 @@ class IdentifyReply(Message):
     actuator_period: int = 0  # [us] Period of the firmware's actuator position loops.
     modules_x: int = 0  # Modules along x: the firmware drives a modules_x x modules_y array (1 x 1: one module).
     modules_y: int = 0  # Modules along y.
+    boot_gains_crc: int = 0  # CRC-32 of the PIDs' boot gains the firmware was built with ([pid_defaults] as f32, in axis order); outside schema_hash, so a retuned default is reported, not refused.
 
 
 @dataclass(frozen=True)

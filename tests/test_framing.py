@@ -304,6 +304,19 @@ def test_the_behaviour_tables_are_not_in_the_schema_hash():
     assert gen.schema_hash(schema) == before
 
 
+def test_the_boot_gains_are_reported_at_identify_not_hashed():
+    """A retuned boot gain keeps the schema hash (no byte on the wire changes) and changes the CRC identify reports;
+    a changed field of a message changes the hash."""
+    gen = _load_generate(PROTOCOL / "generate.py")
+    schema = gen.load_schema()
+    hash_before, crc_before = gen.schema_hash(schema), gen.boot_gains_crc(schema)
+    schema["pid_defaults"]["x"]["kp"] = 40.0
+    assert gen.schema_hash(schema) == hash_before
+    assert gen.boot_gains_crc(schema) != crc_before
+    schema["messages"][1]["fields"][0]["type"] = "u16"
+    assert gen.schema_hash(schema) != hash_before
+
+
 def test_vectors_are_what_their_generator_writes():
     """vectors.json is written by protocol/make_vectors.py from cases stated once; a hand edit is caught."""
     result = subprocess.run(

@@ -15,7 +15,7 @@ import pytest
 from mantaray.host.faults import FaultInjector
 from mantaray.host.link import IncompatibleFirmware, Link, LinkError
 from mantaray.host.session import BoardLost, RigSession, Setup, connect
-from mantaray.host.transport import SerialTransport
+from mantaray.host.transport import InProcessTransport, SerialTransport
 from mantaray.host.vmcu import VirtualMcu
 from mantaray.protocol import messages as m
 from mantaray.protocol.codec import FieldRefused
@@ -317,6 +317,18 @@ def test_a_firmware_of_another_protocol_is_refused_at_once_saying_what_to_do(mon
         with pytest.raises(IncompatibleFirmware, match="flash the firmware built from this checkout"):
             connect(vmcu.path, timeout_s=10.0)
         assert time.monotonic() - started < 2.0  # no waiting out the timeout
+
+
+def test_a_firmware_built_with_other_boot_gains_is_accepted_and_the_difference_reported(monkeypatch):
+    """The boot gains are outside the schema hash: a board built with retuned defaults still speaks this protocol,
+    and identify says the PIDs a run leaves unset run the board's gains."""
+    link = Link(InProcessTransport(simulated_clock=True))
+    link.identify()
+    assert not any("boots its PIDs" in text for text in link.rig_differences)
+    monkeypatch.setattr(m, "BOOT_GAINS_CRC", m.BOOT_GAINS_CRC ^ 1)  # this host's schema has other defaults
+    link.identify()
+    assert any("boots its PIDs with other gains" in text for text in link.rig_differences), link.rig_differences
+    link.close()
 
 
 def test_a_port_that_goes_away_while_identifying_is_opened_again():

@@ -68,6 +68,7 @@ class Connection:
 
         self.vmcu = None
         self.link = None
+        self.boot: m.Boot | None = None  # the boot message the firmware sent as the session began, if one came
         port = config.getoption("port")
         try:
             try:
@@ -85,12 +86,16 @@ class Connection:
                 self.where = f"virtual MCU on {port}"
             else:
                 self.where = port
+                if _is_pty(port):  # read before anything opens it with pyserial, which empties its queue
+                    self.boot = _boot_waiting(port)
                 from mantaray.host.ports import PortError, check_port
 
                 try:
                     check_port(port)  # every form that is no serial device, in one line, as every command does
                 except PortError as exc:
                     raise ConnectError(f"--port {exc}") from None
+            if self.vmcu is not None:  # it booted as it started: its boot message waits on the pty unread
+                self.boot = _boot_waiting(port)
             try:
                 self.link = Link(SerialTransport(port), description=description)
             except (OSError, serial.SerialException) as exc:
@@ -121,7 +126,8 @@ class Connection:
         frame it sends meanwhile ends the wait too."""
         deadline = time.monotonic() + BOOT_WAIT_S
         while (remaining := deadline - time.monotonic()) > 0:
-            if self.link.receive(remaining) is not None:
+            if (msg := self.link.receive(remaining)) is not None:
+                self.boot = msg if isinstance(msg, m.Boot) else self.boot
                 return
 
     def close(self) -> None:
@@ -131,6 +137,39 @@ class Connection:
         if self.vmcu is not None:
             self.vmcu.close()
             self.vmcu = None
+
+
+def _is_pty(port: str) -> bool:
+    """A pseudo-terminal (a virtual MCU, simavr): no line to reset the firmware and no baud rate to set."""
+    import os
+
+    return os.path.realpath(port).startswith("/dev/pts/")
+
+
+def _boot_waiting(port: str) -> m.Boot | None:
+    """The boot message a firmware on a pty (a virtual MCU, simavr) wrote before anyone opened it, read raw: pyserial's
+    open empties the input queue, so the link would never see it (PROTOCOL.md, physical layer)."""
+    import os
+    import select
+
+    from mantaray.protocol.framing import Frame, FrameDecoder
+
+    try:
+        fd = os.open(port, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
+    except OSError:
+        return None  # check_port names what is wrong with it
+    try:
+        decoder, deadline = FrameDecoder(), time.monotonic() + BOOT_WAIT_S
+        while (remaining := deadline - time.monotonic()) > 0:
+            if not select.select([fd], [], [], remaining)[0]:
+                return None
+            for item in decoder.feed(os.read(fd, 256)):
+                if isinstance(item, Frame):
+                    msg = item.message()
+                    return msg if isinstance(msg, m.Boot) else None
+        return None
+    finally:
+        os.close(fd)
 
 
 _CONNECTION = pytest.StashKey[Connection]()
@@ -180,6 +219,16 @@ def _prepare_session(dut: Dut) -> None:
         dut.set_sim_clock((t.time + 1) * 1000)
     dut.first_start = dut.result(m.Start())
     dut.stop()
+
+
+@pytest.fixture
+def session_boot(conformance_session: Dut, request: pytest.FixtureRequest) -> m.Boot:
+    """The boot message the firmware sent as the session began: a board that resets when its port opens (an Uno),
+    or a virtual MCU this session started; skipped where none came (a board that was up already)."""
+    boot = _connect(request.config).boot
+    if boot is None:
+        pytest.skip(f"no boot message within {BOOT_WAIT_S:g} s of opening the port: the firmware was up already")
+    return boot
 
 
 @pytest.fixture

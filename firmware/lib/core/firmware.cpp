@@ -184,7 +184,8 @@ void Firmware::send_identify_reply() {
                                    kPulleyCircumferenceM,
                                    kActuatorPeriodUs,
                                    kModulesX,
-                                   kModulesY};
+                                   kModulesY,
+                                   proto::kBootGainsCrc};
   uint8_t payload[proto::IdentifyReply::kSize];
   proto::encode(reply, payload);
   send(proto::IdentifyReply::kId, payload, sizeof payload);

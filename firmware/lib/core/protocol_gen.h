@@ -9,7 +9,8 @@ namespace mr {
 namespace proto {
 
 constexpr uint16_t kProtocolVersion = 2;
-constexpr uint32_t kSchemaHash = 0x3DC51A84u;
+constexpr uint32_t kSchemaHash = 0xFDED63EDu;
+constexpr uint32_t kBootGainsCrc = 0x6DD8DF21u;  // of kPidDefaults, for identify
 constexpr uint8_t kMaxPacket = 44;  // [bytes] id + seq + payload + CRC
 constexpr uint8_t kMaxWire = 46;  // [bytes] COBS packet + delimiter
 constexpr uint8_t kNoField = 255;  // nack.field when no single field is at fault
@@ -478,7 +479,7 @@ inline ErrorCode validate(const ObjectPosition& m, uint8_t& field) {
 // Answer to identify.
 struct IdentifyReply {
   static constexpr uint8_t kId = 0x81;
-  static constexpr uint8_t kSize = 28;  // [bytes] payload
+  static constexpr uint8_t kSize = 32;  // [bytes] payload
   uint16_t protocol_version;  // [protocol] version of the firmware's schema.
   uint8_t firmware_major;  // Firmware version, major.
   uint8_t firmware_minor;  // Firmware version, minor.
@@ -493,6 +494,7 @@ struct IdentifyReply {
   uint32_t actuator_period;  // [us] Period of the firmware's actuator position loops.
   uint8_t modules_x;  // Modules along x: the firmware drives a modules_x x modules_y array (1 x 1: one module).
   uint8_t modules_y;  // Modules along y.
+  uint32_t boot_gains_crc;  // CRC-32 of the PIDs' boot gains the firmware was built with ([pid_defaults] as f32, in axis order); outside schema_hash, so a retuned default is reported, not refused.
   static constexpr uint8_t kFieldProtocolVersion = 0;
   static constexpr uint8_t kFieldFirmwareMajor = 1;
   static constexpr uint8_t kFieldFirmwareMinor = 2;
@@ -507,6 +509,7 @@ struct IdentifyReply {
   static constexpr uint8_t kFieldActuatorPeriod = 11;
   static constexpr uint8_t kFieldModulesX = 12;
   static constexpr uint8_t kFieldModulesY = 13;
+  static constexpr uint8_t kFieldBootGainsCrc = 14;
 };
 inline void encode(const IdentifyReply& m, uint8_t* out) {
   put_u16(out + 0, m.protocol_version);
@@ -523,6 +526,7 @@ inline void encode(const IdentifyReply& m, uint8_t* out) {
   put_u32(out + 22, m.actuator_period);
   put_u8(out + 26, m.modules_x);
   put_u8(out + 27, m.modules_y);
+  put_u32(out + 28, m.boot_gains_crc);
 }
 inline void decode(const uint8_t* in, IdentifyReply& m) {
   m.protocol_version = get_u16(in + 0);
@@ -539,6 +543,7 @@ inline void decode(const uint8_t* in, IdentifyReply& m) {
   m.actuator_period = get_u32(in + 22);
   m.modules_x = get_u8(in + 26);
   m.modules_y = get_u8(in + 27);
+  m.boot_gains_crc = get_u32(in + 28);
 }
 
 // The command with this id and seq was applied (or was a retransmission of one that was).
