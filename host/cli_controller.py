@@ -53,10 +53,12 @@ def controller_settings(parser: argparse.ArgumentParser, args: argparse.Namespac
     args.controller = settings.controller
     if getattr(args, "gains", None) is None:
         return settings
+    if any(k.startswith("pid.") for k, _ in settings.values):
+        parser.error(f"--gains and {args.settings} both set the PIDs' gains: give them in one place")
     try:
         return settings.with_gains(args.gains)
     except SettingsError as exc:
-        parser.error(f"{args.settings}: {exc}")
+        parser.error(f"--gains: {exc}")
 
 
 def add_controller_arguments(parser: argparse.ArgumentParser) -> None:

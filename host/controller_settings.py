@@ -118,9 +118,8 @@ class ControllerSettings:
 
     def with_gains(self, gains: tuple[float, float, float, float]) -> ControllerSettings:
         """These settings with (kp, ki, kd, integral_limit), the firmware's numbers (configure_pid's), on every PID
-        the controller runs: what --gains sets. SettingsError where these settings give a PID's gain already."""
-        if any(key.startswith("pid.") for key, _ in self.values):
-            raise SettingsError("--gains and these settings both set the PIDs' gains: give them in one place")
+        the controller runs: what --gains sets. SettingsError for a gain outside the schema's bounds, or one these
+        settings give already (a key given twice)."""
         pids = [
             (f"pid.{axis.name.lower()}.{name}", value)
             for axis in controller_axes(self.controller)

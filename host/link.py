@@ -87,9 +87,8 @@ class Link:
         self.last_rx_seq: int | None = None
         self.lost_frames = 0  # firmware frames missing from the firmware's sequence
         self.stale_frames = 0  # firmware frames that came twice or after a newer one (a duplicating or reordering link)
-        self.rig_differences: list[
-            str
-        ] = []  # what identify reported otherwise than this host: rig constants, boot gains
+        # what identify reported otherwise than this host: rig constants, boot gains
+        self.rig_differences: list[str] = []
         self.resyncs = 0  # times a frame came behind the firmware's count and the link identified again
         self.resets = 0  # boot messages seen
         self.retransmissions = 0  # commands sent again for want of an answer

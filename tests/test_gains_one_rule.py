@@ -102,3 +102,10 @@ def test_gains_and_a_file_that_sets_gains_are_refused_together(tmp_path):
     with pytest.raises(SystemExit) as exit_:
         _rig(["--settings", str(path), "--gains", "1,2,3"])
     assert exit_.value.code == 2
+
+
+def test_gains_outside_the_schema_are_named_as_the_options(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        _rig(["--gains", "20000,0,0"])
+    assert exit_.value.code == 2
+    assert "error: --gains: pid.x.kp: 20000 deg/m is outside 0..10000" in capsys.readouterr().err

@@ -127,7 +127,8 @@ class Connection:
         deadline = time.monotonic() + BOOT_WAIT_S
         while (remaining := deadline - time.monotonic()) > 0:
             if (msg := self.link.receive(remaining)) is not None:
-                self.boot = msg if isinstance(msg, m.Boot) else self.boot
+                if isinstance(msg, m.Boot):
+                    self.boot = msg
                 return
 
     def close(self) -> None:
