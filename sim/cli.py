@@ -60,7 +60,8 @@ per controller that would decide it; --until-decided grows the sample (more tria
 corners), and the flips (trials whose outcome the candidate changes) against a floor: the finer run with every start
 moved by the rig's repeatability (2 mm; --shift, repeatable: --shift 0.002 --shift 0.0001 adds the 0.1 mm diagnostic
 of chaos). Trials go to --trials-dir as they finish, shared by every gate that needs the same run: interrupt it and
-the same command continues. --runs compares existing heatmap results files instead. The trials go round the runs in
+the same command continues; --candidate-only runs a new candidate alone on the trials a finer run holds already.
+--runs compares existing heatmap results files instead. The trials go round the runs in
 an order whose every prefix is a stratified sample, so Ctrl-C writes the report of the trials paired so far (no
 verdict; exit 130). Exit status: 0 keeps, 1 changes, 2 a usage error, 3 no verdict (undecided, the sample
 incomplete, or the physics diverged)."""
@@ -385,7 +386,8 @@ def _add_fidelity(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> Non
         help="[m] how far a floor's run moves every start; repeatable, one floor each (default: 0.002, the rig's "
         "repeatability)",
     )
-    gate.add_argument(
+    grows = gate.add_mutually_exclusive_group()
+    grows.add_argument(
         "--until-decided",
         action="store_true",
         help="while undecided, grow the sample to the pairs its intervals say would decide it, and go on",
@@ -396,10 +398,17 @@ def _add_fidelity(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> Non
         default=1000,
         help="with --until-decided, the most pairs per controller the sample grows to",
     )
-    gate.add_argument(
+    grows.add_argument(
         "--report-only",
         action="store_true",
         help="judge the trials --trials-dir holds and run none (a sample too costly here, or still running elsewhere)",
+    )
+    grows.add_argument(
+        "--candidate-only",
+        action="store_true",
+        help="run the candidate alone, on the trials the finer run and its floors hold already (read as they stand, "
+        "so a gate adding to them may run beside): another candidate judged against a costly finer run at the "
+        "candidate's cost",
     )
     gate.add_argument(
         "--runs",

@@ -57,7 +57,11 @@ def _compared(args: argparse.Namespace, sample, runs, candidate, finer):
     from . import fidelity as G
 
     while True:
-        interrupted = sample is not None and not args.report_only and not _run_missing(sample, runs, args.jobs)
+        interrupted = (
+            sample is not None
+            and not args.report_only
+            and not _run_missing(sample, runs, args.jobs, args.candidate_only)
+        )
         report = G.compare(runs)
         if (
             interrupted
@@ -129,7 +133,15 @@ def _gate(args: argparse.Namespace):
     )
     for shift_m in _shifts(args):
         sample.experiment(arms[0], candidate, shift_m)  # the protocol's own checks, before any work
-    runs = G.open_runs(sample, candidate, finer, Path(args.trials_dir), _shifts(args), create=not args.report_only)
+    runs = G.open_runs(
+        sample,
+        candidate,
+        finer,
+        Path(args.trials_dir),
+        _shifts(args),
+        create=not args.report_only,
+        candidate_only=args.candidate_only,
+    )
     return sample, runs, candidate, finer, _described(sample)
 
 
@@ -142,17 +154,25 @@ def _described(sample) -> str:
     )
 
 
-def _run_missing(sample, runs: list, jobs: int | None) -> bool:
-    """Every arm's missing trials run, with progress; False if interrupted (what finished is kept)."""
+def _run_missing(sample, runs: list, jobs: int | None, candidate_only: bool) -> bool:
+    """Every arm's missing trials run (with candidate_only, the candidate's on the finer run's trials), with
+    progress; False if interrupted (what finished is kept)."""
     from . import fidelity as G
     from .progress import Progress
 
-    left = G.missing_trials(runs)
-    total = sum(len(r.finer.experiment.cell_ids()) * r.finer.experiment.trials_per_cell * len(r.files()) for r in runs)
+    left = G.missing_trials(runs, candidate_only)
+    if candidate_only:
+        total = left + sum(len(r.candidate.records) for r in runs)
+    else:
+        total = sum(
+            len(r.finer.experiment.cell_ids()) * r.finer.experiment.trials_per_cell * len(r.files()) for r in runs
+        )
     bar = Progress(total, initial=total - left, unit="trial", label="fidelity")
     interruptible()
     try:
-        G.run_missing(sample, runs, workers(jobs), on_record=lambda record: bar.update(1))
+        G.run_missing(
+            sample, runs, workers(jobs), on_record=lambda record: bar.update(1), candidate_only=candidate_only
+        )
     except KeyboardInterrupt:  # the trials paired so far still get their report (a few seconds: a second Ctrl-C,
         signal.signal(signal.SIGINT, signal.SIG_IGN)  # or one forwarded by a driver, must not cut it), no verdict
         return False

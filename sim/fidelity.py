@@ -30,7 +30,7 @@ import numpy as np
 from . import findings as F
 from .equivalence import DIFFERENT, EQUIVALENT, LEVEL, Judged, mean_difference
 from .equivalence import UNDECIDED as OPEN
-from .experiment import Experiment
+from .experiment import Experiment, Trial
 from .paired import MIN_BOOTSTRAP_N, discordance, mean_interval, median_difference_interval
 from .plant import DEFAULT_PLANT
 from .results_file import ResultsFile, write_whole
@@ -519,10 +519,12 @@ def open_runs(
     trials_dir: Path,
     shifts_m: tuple[float, ...] = (REPEATABILITY_M,),
     create: bool = True,
+    candidate_only: bool = False,
 ) -> list[Runs]:
     """Every arm's runs, opened (created, or continued where an earlier gate left them): the candidate, the finer
-    fidelity and one floor per shift (with create False, a run that has no file yet is left without one). Different
-    runs: a candidate that is the finer fidelity, or a floor that moves
+    fidelity and one floor per shift (with create False, a run that has no file yet is left without one). With
+    candidate_only the finer runs and floors are read as they stand, not held (a gate running them may go on
+    beside), and each must exist. Different runs: a candidate that is the finer fidelity, or a floor that moves
     nothing, would be the finer run again."""
     if candidate == finer:
         raise ValueError(f"the candidate and the finer fidelity are both {finer.label}: nothing to compare")
@@ -538,26 +540,47 @@ def open_runs(
             return ResultsFile(path, experiment)
         return ResultsFile.open(path, experiment)
 
+    def held(arm: Arm, fidelity: Fidelity, shift_m: float = 0.0) -> ResultsFile:
+        path = sample.results_path(trials_dir, arm, fidelity, shift_m)
+        if not path.exists():
+            raise ValueError(
+                f"--candidate-only judges the candidate on the trials the finer run holds, and {path} holds none: "
+                f"run the gate without it first"
+            )
+        return ResultsFile.read(path, sample.experiment(arm, fidelity, shift_m))
+
+    other = held if candidate_only else opened
     return [
-        Runs(arm.label, opened(arm, candidate), opened(arm, finer), tuple(opened(arm, finer, s) for s in shifts_m))
+        Runs(arm.label, opened(arm, candidate), other(arm, finer), tuple(other(arm, finer, s) for s in shifts_m))
         for arm in sample.arms
     ]
 
 
-def missing_trials(runs: list[Runs]) -> int:
-    return sum(len(f.missing()) for r in runs for f in r.files())
+def _missing(runs: list[Runs], candidate_only: bool) -> list[tuple[ResultsFile, list[Trial]]]:
+    """(run, the trials it lacks) for every run the gate adds to: all of them, or with candidate_only the candidate
+    alone, for the trials its finer run and every floor hold."""
+    if not candidate_only:
+        return [(f, f.missing()) for r in runs for f in r.files()]
+    held = [(r.candidate, set(_common(r.finer, *r.floors))) for r in runs]
+    return [(f, [t for t in f.missing() if t.key in keys]) for f, keys in held]
 
 
-def run_missing(sample: GateSample, runs: list[Runs], jobs: int, on_record=None) -> None:
-    """Run what each run lacks on `jobs` local workers, appending every trial to its file as it finishes. The
-    trials go round every arm's runs in the sample's run order (GateSample.run_order), so that a gate stopped part
-    way holds the same trials in each run: a smaller stratified sample, already paired."""
+def missing_trials(runs: list[Runs], candidate_only: bool = False) -> int:
+    return sum(len(trials) for _, trials in _missing(runs, candidate_only))
+
+
+def run_missing(sample: GateSample, runs: list[Runs], jobs: int, on_record=None, candidate_only: bool = False) -> None:
+    """Run what each run lacks (with candidate_only, what the candidate lacks of its finer run's trials) on `jobs`
+    local workers, appending every trial to its file as it finishes. The trials go round every arm's runs in the
+    sample's run order (GateSample.run_order), so that a gate stopped part way holds the same trials in each run: a
+    smaller stratified sample, already paired."""
     from . import executors as X
 
     position = sample.run_order()
-    files = [f for r in runs for f in r.files()]
+    missing = _missing(runs, candidate_only)
+    files = [f for f, _ in missing]
     todo = sorted(
-        ((i, t) for i, results in enumerate(files) for t in results.missing()),
+        ((i, t) for i, (_, trials) in enumerate(missing) for t in trials),
         key=lambda job: (*position(job[1]), job[0]),
     )
     X.run_into(files, todo, jobs, on_record)

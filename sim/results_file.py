@@ -120,22 +120,7 @@ class ResultsFile:
                 f"gunzip it first (or start from its uncompressed copy)"
             )
         stored = _read(path)
-        now = results.plant_values
-        if stored.plant_values is not None and stored.plant_values != now:
-            changed = sorted(k for k in now if stored.plant_values.get(k) != now[k])
-            raise ExperimentMismatch(
-                f"{path} was run on the plant {experiment.plant!r} when its values were others "
-                f"({', '.join(changed)} differ in sim/plant.toml since); use another --out"
-            )
-        if stored.experiment != experiment and not _extends(stored.experiment, experiment):
-            changed = sorted(k for k, v in experiment.to_json().items() if stored.experiment.to_json().get(k) != v)
-            raise ExperimentMismatch(
-                f"{path} holds a run with other options ({', '.join(changed)} differ); "
-                f"use another --out, the same options to continue it, or more trials or "
-                f"cells to add to it"
-            )
-        if stored.model != results.model:
-            raise ExperimentMismatch(_other_model(path, stored.model, results.model))
+        _refuse_another_run(path, stored, results)
         if stored.bad_lines:  # kept aside, never lost
             with open(path.with_name(path.name + ".rejected"), "ab") as f:
                 f.write(b"".join(line + b"\n" for line in stored.bad_lines))
@@ -145,6 +130,20 @@ class ResultsFile:
                 path,
                 json.dumps(_header(results)).encode() + b"\n" + b"".join(line + b"\n" for line in stored.good_lines),
             )
+        results.records, results.rejected = stored.records, stored.rejected
+        return results
+
+    @classmethod
+    def read(cls, path: str | Path, experiment: Experiment) -> ResultsFile:
+        """Read a run of this protocol as it stands, without holding or changing it (another process may be adding
+        to it: a last line cut off as it is written is left out); refused as open() refuses a run of other options,
+        plant values or model."""
+        path = Path(path)
+        results = cls(
+            path, experiment, model=model_identity(experiment.rig()), plant_values=experiment.plant_model().values
+        )
+        stored = _read(path)
+        _refuse_another_run(path, stored, results)
         results.records, results.rejected = stored.records, stored.rejected
         return results
 
@@ -169,6 +168,28 @@ class ResultsFile:
             f"the line is kept in {self.path.name}.rejected)"
             for line, why in self.rejected
         ]
+
+
+def _refuse_another_run(path: Path, stored: _Contents, wanted: ResultsFile) -> None:
+    """ExperimentMismatch where the stored run is not one of wanted's: its plant's values, its options (but for
+    more trials or cells) or its model differ."""
+    experiment = wanted.experiment
+    now = wanted.plant_values
+    if stored.plant_values is not None and stored.plant_values != now:
+        changed = sorted(k for k in now if stored.plant_values.get(k) != now[k])
+        raise ExperimentMismatch(
+            f"{path} was run on the plant {experiment.plant!r} when its values were others "
+            f"({', '.join(changed)} differ in sim/plant.toml since); use another --out"
+        )
+    if stored.experiment != experiment and not _extends(stored.experiment, experiment):
+        changed = sorted(k for k, v in experiment.to_json().items() if stored.experiment.to_json().get(k) != v)
+        raise ExperimentMismatch(
+            f"{path} holds a run with other options ({', '.join(changed)} differ); "
+            f"use another --out, the same options to continue it, or more trials or "
+            f"cells to add to it"
+        )
+    if stored.model != wanted.model:
+        raise ExperimentMismatch(_other_model(path, stored.model, wanted.model))
 
 
 def _other_model(path: Path, stored: dict | None, now: dict) -> str:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -508,6 +509,8 @@ def test_the_command_says_what_is_wrong_with_its_input_in_one_line(tmp_path):
         (("--shift", "0.002", "--shift", "0.002"), "each shift once"),
         (("--runs", "only.jsonl"), "--runs takes"),
         (("--max-pairs", "0"), "--max-pairs"),
+        (("--candidate-only", "--until-decided"), "not allowed with argument"),
+        (("--candidate-only",), "run the gate without it first"),
     ):
         run = _gate(tmp_path, *extra)
         assert run.returncode == 2 and said in run.stderr and "Traceback" not in run.stderr, run.stderr
@@ -549,6 +552,57 @@ def test_a_gate_stopped_part_way_holds_the_same_stratified_trials_in_each_run(tm
     assert keys[0] == keys[1] == keys[2] and len(keys[0]) == 2  # the same two trials in each run
     drawn = list(F.stratified_draw(E.Experiment.cells, 2, sample.seed).values())
     assert keys[0] == {f"{drawn[0][0]}:0", f"{drawn[1][0]}:0"}  # the first drawn cell of two strata, first trial
+
+
+def test_candidate_only_runs_the_candidate_on_the_trials_the_finer_run_holds_and_leaves_it_untouched(tmp_path):
+    """A second candidate judged on a finer run stopped part way: it runs only those trials, reads the finer run and
+    its floor without holding them (a gate adding to them may run beside), and writes nothing to them."""
+    import fcntl
+
+    sample = G.GateSample(
+        arms=(G.Arm("manhattan", "manhattan"),), cells_per_stratum=2, trials_per_cell=2, duration_s=0.2
+    )
+    finer = G.parse_fidelity("7:0.002")
+    runs = G.open_runs(sample, G.parse_fidelity("5:0.002"), finer, tmp_path, (1e-4,))
+    seen = []
+
+    def stop_after_three_positions(record):
+        seen.append(record)
+        if len(seen) == 9:
+            raise _Stop
+
+    with pytest.raises(_Stop):
+        G.run_missing(sample, runs, 1, on_record=stop_after_three_positions)
+    held = {f.path: f.path.read_bytes() for f in (runs[0].finer, *runs[0].floors)}
+    R._release(os.getpid())  # as if the first gate were another process ...
+    R._HELD.clear()
+    locks = [open(path.with_name(path.name + ".lock"), "w") for path in held]
+    for lock in locks:  # ... that holds its runs still
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    other = G.open_runs(sample, G.parse_fidelity("5:0.001"), finer, tmp_path, (1e-4,), candidate_only=True)
+    assert G.missing_trials(other, candidate_only=True) == 3
+    G.run_missing(sample, other, 1, candidate_only=True)
+    assert set(other[0].candidate.records) == set(runs[0].finer.records) and len(runs[0].finer.records) == 3
+    assert {path: path.read_bytes() for path in held} == held
+    report = G.compare(other)
+    assert report["pairs"] == 3 and report["verdict"] is None  # the sample is not complete: no verdict
+    for lock in locks:
+        lock.close()
+
+
+def test_candidate_only_refuses_a_finer_run_that_does_not_exist_or_is_another_one(tmp_path):
+    sample = G.GateSample(arms=(G.Arm("manhattan", "manhattan"),), cells_per_stratum=1, trials_per_cell=1)
+    candidate, finer = G.parse_fidelity("5:0.001"), G.parse_fidelity("7:0.002")
+    with pytest.raises(ValueError, match="run the gate without it first"):
+        G.open_runs(sample, candidate, finer, tmp_path, (1e-4,), candidate_only=True)
+    longer = dataclasses.replace(sample, duration_s=5.0)
+    for shift_m in (0.0, 1e-4):  # a finer run and floor of another duration lie where this sample's would
+        R.ResultsFile.open(
+            sample.results_path(tmp_path, sample.arms[0], finer, shift_m),
+            longer.experiment(sample.arms[0], finer, shift_m),
+        )
+    with pytest.raises(E.ExperimentMismatch, match="duration_s"):
+        G.open_runs(sample, candidate, finer, tmp_path, (1e-4,), candidate_only=True)
 
 
 def test_a_runner_keeps_the_models_a_gate_alternates_loaded_once_each():

@@ -43,7 +43,8 @@ CHAOS = "0.0001"  # [m] the floor of the mesh-contact gates: a diagnostic of cha
 @dataclass(frozen=True)
 class Gate:
     """One gate: the plant, the candidate and finer fidelities, the values it fixes over the plant, its object, how
-    far its floor moves every start [m], and the cells it draws from each stratum (5 trials each, per controller)."""
+    far its floor moves every start [m], the cells it draws from each stratum (5 trials each, per controller), and
+    whether it runs its candidate alone on the trials another gate's finer run holds (`--candidate-only`)."""
 
     plant: str
     candidate: str
@@ -52,6 +53,7 @@ class Gate:
     object_name: str = "sphere"
     shift: str = CHAOS
     cells_per_stratum: int = 8
+    candidate_only: bool = False
 
     def arms(self) -> tuple[str, str]:
         return ("manhattan", CASCADES[self.object_name][1]) if self.plant == "paper" else ("manhattan", "euclidean")
@@ -81,6 +83,10 @@ GATES = {  # name: its gate, in the order they run
     # the reference candidate of issue 39: the kernel contact on threads, 15 x 15 at 1 ms, against 21 x 21 at 0.25 ms
     # (21 x 21 at 0.5 ms, its `finer`, diverges on threads), beside the rig's repeatability
     "paper_kernel_15x15_1ms_vs_21x21_0.25ms": Gate("paper", "15:0.001", "21:0.00025", KERNEL, shift=REPEATABILITY),
+    # ... and at 0.5 ms, whose `finer` that is: its candidate alone, on the finer trials the 1 ms gate made
+    "paper_kernel_15x15_0.5ms_vs_21x21_0.25ms": Gate(
+        "paper", "15:0.0005", "21:0.00025", KERNEL, shift=REPEATABILITY, candidate_only=True
+    ),
     "paper_kernel_cube_15x15_1ms_vs_21x21_0.25ms": Gate(
         "paper", "15:0.001", "21:0.00025", KERNEL, "cube", REPEATABILITY
     ),
@@ -119,7 +125,7 @@ def command(name: str, jobs: int | None, report_only: bool = False) -> list[str]
         "--out",
         f"out/fidelity/{name}",
         *(["--jobs", str(jobs)] if jobs else []),
-        *(["--report-only"] if report_only else []),
+        *(["--report-only"] if report_only else ["--candidate-only"] if g.candidate_only else []),
     ]
 
 
