@@ -235,3 +235,17 @@ def pareto_figure(
     axes[0][0].legend(fontsize=7)
     fig.suptitle(title, fontsize=9)
     return _save(fig, path)
+
+
+def savings_figure(points: list[tuple[str, float, float]], aim: tuple[float, float], title: str, path) -> Path:
+    """Each run's (label, trials saved [x], cells moved [%]) beside the aim's bounds (dashed): right of and below."""
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for label, saved, moved in points:
+        ax.scatter(saved, moved, color="tab:blue")
+        ax.annotate(label, (saved, moved), fontsize=6, xytext=(3, 2), textcoords="offset points")
+    ax.axvline(aim[0], color="grey", ls="--", lw=0.8)
+    ax.axhline(aim[1], color="grey", ls="--", lw=0.8)
+    ax.set_xlabel("trials of the full map / trials of its adaptive twin")
+    ax.set_ylabel("cells whose region moves [%]")
+    ax.set_title(title, fontsize=8)
+    return _save(fig, path)

@@ -207,6 +207,13 @@ def _add_heatmap(sim_sub: argparse._SubParsersAction, shared: dict, fmt) -> None
         "under the paper's stopping rule is the same, but 'ends within ε at T' is then not measured",
     )
     heat.add_argument(
+        "--adaptive",
+        action="store_true",
+        help="stop a cell's trials once the region its N trials would put it in (success >= 0.9, failure <= 0.1, "
+        "uncertain between) is decided at 95 %%, after at least 2 (sim/adaptive.py): fewer trials, in rounds; "
+        "its results file is its own (never merged with a full run's)",
+    )
+    heat.add_argument(
         "--only-cells", type=O.cells, metavar="I,J,...", help="run only these cells (index ix + iy*cells)"
     )
     add_view_arguments(heat)

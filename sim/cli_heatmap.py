@@ -33,7 +33,8 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     bar = Progress(total, initial=total - len(todo), unit="trial", label="heatmap")  # on stderr, beside --json
     interruptible()
     try:
-        run(results, _records(args, experiment, todo, live), progress=lambda record: bar.update(1))
+        for batch in _rounds(experiment, results, todo, bar):
+            run(results, _records(args, experiment, batch, live), progress=lambda record: bar.update(1))
         if live is not None:
             live.linger(args.linger, _report)
     except KeyboardInterrupt:
@@ -58,6 +59,22 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     bar.close()
     _write_outputs(args, experiment, results, out)
     return 0
+
+
+def _rounds(experiment, results, todo: list, bar):
+    """The missing trials to run, in one go; for an adaptive run round by round (sim/adaptive.py), each round's
+    open cells found from the trials before it, and the bar's total from the cells still open."""
+    if not experiment.adaptive:
+        yield todo
+        return
+    from .adaptive import open_cells, trials_left
+
+    for r in range(experiment.trials_per_cell):
+        cells = open_cells(experiment.cell_ids(), results.records, experiment.trials_per_cell, r)
+        later = sum(1 for record in results.records.values() if record["k"] >= r)
+        bar.set_total(len(results.records) - later + trials_left(cells, experiment.trials_per_cell, r))
+        keep = set(cells)
+        yield [t for t in results.missing() if t.k == r and t.cell in keep]
 
 
 def _live(parser: argparse.ArgumentParser, args: argparse.Namespace):
@@ -94,7 +111,12 @@ def _write_outputs(args: argparse.Namespace, experiment, results, out: Path) -> 
 
     title = (
         f"{args.object}, {args.controller}, α = {args.alpha:g} m, ε = {args.tolerance:g} m, T = {args.duration:g} s, "
-        f"{experiment.trials_per_cell} trials/cell"
+        + (
+            f"adaptive, at most {experiment.trials_per_cell}"
+            if experiment.adaptive
+            else f"{experiment.trials_per_cell}"
+        )
+        + " trials/cell"
     )
     summary = heatmap_outputs(results, out, title)
     print(json.dumps(summary) if args.json else _summary_line(args, summary, len(experiment.cell_ids()), out))
@@ -126,6 +148,7 @@ def _experiment(args: argparse.Namespace, parser: argparse.ArgumentParser):
             plant_set=tuple(sorted(args.set)),
             stop_when_reached=args.stop_when_reached,
             settings=settings.values,
+            adaptive=args.adaptive,
         )
     except ValueError as exc:
         parser.error(str(exc))
@@ -137,7 +160,8 @@ def _default_out(args: argparse.Namespace, experiment) -> str:
 
     plant = ("" if args.plant == DEFAULT_PLANT else f"_{args.plant}") + fixed_slug(experiment.plant_set)
     tuned = f"_{Path(args.settings).stem}" if args.settings else ""
-    return f"out/heatmap/{args.object}_{args.controller}{tuned}_alpha{args.alpha:g}{plant}"
+    adaptive = "_adaptive" if args.adaptive else ""
+    return f"out/heatmap/{args.object}_{args.controller}{tuned}_alpha{args.alpha:g}{plant}{adaptive}"
 
 
 def _records(args: argparse.Namespace, experiment, todo: list, live):
@@ -154,6 +178,7 @@ def _summary_line(args: argparse.Namespace, summary: dict, cells: int, out: Path
         f"{args.object}, {args.controller}: score {summary['score']:.1f} of {cells} cells "
         f"(within ε at any frame: {summary['reach_score']:.1f}); regions: "
         + ", ".join(f"{name} {r['cells']} cells ({r['area_m2']:.4f} m²)" for name, r in summary["regions"].items())
+        + (f"; adaptive: {summary['trials']} of {cells * args.trials} trials" if args.adaptive else "")
         + f"; {out}/results.jsonl, cells.csv, summary.json, heatmap.png"
     )
 

@@ -47,6 +47,7 @@ class Experiment:
     settings: tuple[tuple[str, float], ...] = ()  # the controller's own settings (host/controller_settings.py)
     start_shift_m: float = 0.0  # [m] every start moved this far, each in its own direction drawn from
     # (seed, cell, k): the same trials, perturbed (the fidelity gate's floor)
+    adaptive: bool = False  # each cell's trials stop once its region is decided (sim/adaptive.py): at most N
 
     def __post_init__(self) -> None:
         checks = [
@@ -65,6 +66,16 @@ class Experiment:
                 f"cell indices must not repeat, got {self.only_cells}",
             ),
         ]
+        if self.adaptive:
+            from .adaptive import MIN_TRIALS
+
+            checks.append(
+                (
+                    self.trials_per_cell > MIN_TRIALS,
+                    f"an adaptive run needs more than {MIN_TRIALS} trials per cell (every cell runs "
+                    f"{MIN_TRIALS}), got {self.trials_per_cell}",
+                )
+            )
         for ok, message in checks:
             if not ok:
                 raise ValueError(message)

@@ -37,6 +37,13 @@ class Progress:
                 total=total, initial=initial, unit=unit, desc=label or None, file=self.stream, smoothing=0.05
             )
 
+    def set_total(self, total: float) -> None:
+        """A total found as the run goes (an adaptive run's, as its cells close)."""
+        self.total = total
+        if self._bar is not None:
+            self._bar.total = total
+            self._bar.refresh()
+
     def eta_s(self) -> float | None:
         """[s] seconds left at the rate of this run so far (None before anything finished in it)."""
         ran = self.done - self._initial
