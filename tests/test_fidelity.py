@@ -533,20 +533,26 @@ class _Stop(Exception):
     pass
 
 
-def test_a_gate_stopped_part_way_holds_the_same_stratified_trials_in_each_run(tmp_path):
+def _gate_stopped_after(tmp_path, records: int):
+    """(sample, runs) of a 5 x 5 against 7 x 7 gate with a 0.1 mm floor, stopped once `records` trials finished."""
     sample = G.GateSample(
         arms=(G.Arm("manhattan", "manhattan"),), cells_per_stratum=2, trials_per_cell=2, duration_s=0.2
     )
     runs = G.open_runs(sample, G.parse_fidelity("5:0.002"), G.parse_fidelity("7:0.002"), tmp_path, (1e-4,))
     seen = []
 
-    def stop_after_two_positions(record):
+    def stop(record):
         seen.append(record)
-        if len(seen) == 6:
+        if len(seen) == records:
             raise _Stop
 
     with pytest.raises(_Stop):
-        G.run_missing(sample, runs, 1, on_record=stop_after_two_positions)
+        G.run_missing(sample, runs, 1, on_record=stop)
+    return sample, runs
+
+
+def test_a_gate_stopped_part_way_holds_the_same_stratified_trials_in_each_run(tmp_path):
+    sample, runs = _gate_stopped_after(tmp_path, 6)  # two positions of the run order, in each of the three runs
     files = [R.ResultsFile.open(f.path, f.experiment) for f in runs[0].files()]
     keys = [set(f.records) for f in files]
     assert keys[0] == keys[1] == keys[2] and len(keys[0]) == 2  # the same two trials in each run
@@ -559,20 +565,8 @@ def test_candidate_only_runs_the_candidate_on_the_trials_the_finer_run_holds_and
     its floor without holding them (a gate adding to them may run beside), and writes nothing to them."""
     import fcntl
 
-    sample = G.GateSample(
-        arms=(G.Arm("manhattan", "manhattan"),), cells_per_stratum=2, trials_per_cell=2, duration_s=0.2
-    )
+    sample, runs = _gate_stopped_after(tmp_path, 9)  # three positions of the run order, in each of the three runs
     finer = G.parse_fidelity("7:0.002")
-    runs = G.open_runs(sample, G.parse_fidelity("5:0.002"), finer, tmp_path, (1e-4,))
-    seen = []
-
-    def stop_after_three_positions(record):
-        seen.append(record)
-        if len(seen) == 9:
-            raise _Stop
-
-    with pytest.raises(_Stop):
-        G.run_missing(sample, runs, 1, on_record=stop_after_three_positions)
     held = {f.path: f.path.read_bytes() for f in (runs[0].finer, *runs[0].floors)}
     R._release(os.getpid())  # as if the first gate were another process ...
     R._HELD.clear()
