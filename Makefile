@@ -2,7 +2,7 @@
 # `make lint` (the style gates, first in CI) and `make test-fast` (the tests not marked slow, for development).
 .PHONY: setup run test test-fast lint
 
-FIRMWARE_SOURCES = $(shell git ls-files 'firmware/*.c' 'firmware/*.cpp' 'firmware/*.h' 'sim/plugin/*.c' | grep -v '_gen\.h$$')
+FIRMWARE_SOURCES = $(shell git ls-files 'firmware/*.c' 'firmware/*.cpp' 'firmware/*.h' 'sim/model/plugin/*.c' | grep -v '_gen\.h$$')
 
 setup:
 	bash scripts/setup.sh

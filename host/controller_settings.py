@@ -37,7 +37,7 @@ SETTINGS_MESSAGES = {cls.NAME: cls for cls in m.SETTINGS_MESSAGES}
 PID_KEYS = tuple(spec.name for spec in m.ConfigurePid.FIELDS if spec.name != "axis")
 
 
-PLANT_NAME = re.compile(r"[A-Za-z0-9_.-]+")  # a plant's name as sim/plant.toml's [plant.NAME] tables give it
+PLANT_NAME = re.compile(r"[A-Za-z0-9_.-]+")  # a plant's name as sim/model/plant.toml's [plant.NAME] tables give it
 TILT_SLACK_DEG = 1e-4  # [deg] the firmware's slack on the derived limit (float rounding)
 
 
@@ -53,7 +53,7 @@ class SettingsError(ValueError):
 @dataclass(frozen=True)
 class ControllerSettings:
     """controller and flat (key, value) pairs, kept sorted: "configure.tilt_limit", "configure_schedule.edge_zone",
-    "pid.x.kp"; plant, when given, names the simulated plant (sim/plant.toml) the values were tuned for: the gains
+    "pid.x.kp"; plant, when given, names the simulated plant (sim/model/plant.toml) the values were tuned for: the gains
     are the firmware's numbers, which a plant reading the paper's gains per radian needs 180/pi times larger."""
 
     controller: str = "manhattan"

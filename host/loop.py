@@ -1,16 +1,18 @@
 """The closed loop, one for the rig and the simulation: camera frames in, position frames out, telemetry and the
 trajectory recorded, the target's tolerance judged, the run ended by its stop rules.
 
-What differs between the two is outside it: where a frame comes from (`frames`: the tracker on the rig's camera, the
-plant in the simulation) and how a position frame reaches the firmware (`send`: a RigSession on the rig, a Link in
-lock-step in the simulation). Times are trial time [s] from the start; positions [m] in the fabric frame.
+What differs between the two is outside it, behind two interfaces: the plant (`LoopPlant`: the rig's camera and
+tracker, or the simulated physics and camera), which gives the frames and takes the answers, and how a position frame
+reaches the firmware (`send`: a RigSession on the rig, a Link in lock-step in the simulation). Times are trial time
+[s] from the start; positions [m] in the fabric frame.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 
@@ -48,10 +50,28 @@ class CameraFrame:
     target_m: tuple[float, float]  # [m] the target at this frame
     judged_xy_m: object = None  # (x, y) [m] where the tolerance is judged (None: not judged at this frame)
     dropped: bool = False  # taken, but never reaches the firmware
-    deliver: Callable[[], bool] | None = None  # called before it is sent (the simulation's latency); False ends the run
 
 
 STOPPED_REACHED, STOPPED_BY_SOURCE = "reached", "source"  # why ClosedLoop.run ended
+
+
+class LoopPlant(Protocol):
+    """What ClosedLoop.run drives. Each frame, in this order: frames() yields it as captured; the loop judges it;
+    deliver(frame) makes it what reaches the firmware (the simulation's drop, noise and latency; a rig's moving
+    target); the loop sends it (or records it dropped); answered(frame, telemetry) takes the answer (the simulation
+    applies its commands) and records or shows the frame."""
+
+    def frames(self) -> Iterator[CameraFrame]:
+        """The camera's frames until the source ends (camera stopped, timeout, object fell)."""
+        ...
+
+    def deliver(self, frame: CameraFrame) -> bool:
+        """Before the frame is sent: False ends the run there (the object fell on the way)."""
+        ...
+
+    def answered(self, frame: CameraFrame, telemetry: m.Telemetry | None) -> None:
+        """After the frame was sent (or dropped): its answer, None when none came."""
+        ...
 
 
 @dataclass
@@ -65,7 +85,6 @@ class ClosedLoop:
     send: Callable[[m.ObjectPosition], m.Telemetry | None]
     time_base_us: int = 0  # [us] the firmware's clock at trial time 0
     frame: int = 0  # the last frame number sent (u16, runs on across trials)
-    on_telemetry: Callable[[m.Telemetry], None] | None = None  # each answer, as it comes (the plant applies it)
     t_s: list = field(default_factory=list)  # [s] capture times
     measured_xy_m: list = field(default_factory=list)  # [m] what the firmware was sent (NaN: not seen, dropped)
     target_m: list = field(default_factory=list)  # [m] the target at each frame
@@ -87,41 +106,31 @@ class ClosedLoop:
             flags=0 if visible else m.PositionFlags.NOT_VISIBLE,
         )
         telemetry = self.send(msg)
-        if telemetry is not None and self.on_telemetry is not None:
-            self.on_telemetry(telemetry)
         self._record(capture_s, measured_xy_m if visible else None, target_m, telemetry)
         return telemetry
 
-    def run(
-        self,
-        frames: Iterable[CameraFrame],
-        judge: Tolerance,
-        *,
-        stop_when_reached: bool,
-        on_frame: Callable[[CameraFrame, m.Telemetry | None], None] | None = None,
-    ) -> str:
-        """Drive the loop with a source's frames until a stop rule ends it; returns why (STOPPED_*).
+    def run(self, plant: LoopPlant, judge: Tolerance, *, stop_when_reached: bool) -> str:
+        """Drive the loop with a plant's frames until a stop rule ends it; returns why (STOPPED_*).
 
-        Each frame, in order: the tolerance is judged, and once it holds a run with stop_when_reached ends there
-        (reached: that frame is neither sent nor recorded, as the paper's loop stops at it); deliver() runs; the frame
-        is sent (or recorded as dropped); on_frame sees it with its answer. A source that ends (camera stopped,
-        timeout, object fell) ends the run by its own reason."""
-        for frame in frames:
+        Each frame, in order (LoopPlant): the tolerance is judged, and once it holds a run with stop_when_reached ends
+        there (reached: that frame is neither delivered, sent nor recorded, as the paper's loop stops at it); the
+        plant delivers it; it is sent (or recorded as dropped); the plant takes the answer. A plant whose frames end
+        (camera stopped, timeout, object fell) ends the run by its own reason."""
+        for frame in plant.frames():
             if (
                 frame.judged_xy_m is not None
                 and judge.update(frame.capture_s, frame.judged_xy_m, frame.target_m)
                 and stop_when_reached
             ):
                 return STOPPED_REACHED
-            if frame.deliver is not None and not frame.deliver():
+            if not plant.deliver(frame):
                 return STOPPED_BY_SOURCE
             telemetry = None
             if frame.dropped:
                 self.dropped(frame.capture_s, frame.target_m)
             else:
                 telemetry = self.step(frame.capture_s, frame.measured_xy_m, frame.target_m)
-            if on_frame is not None:
-                on_frame(frame, telemetry)
+            plant.answered(frame, telemetry)
         return STOPPED_BY_SOURCE
 
     def dropped(self, capture_s: float, target_m) -> None:

@@ -134,12 +134,7 @@ class RigRun:
                 print(f"mantaray rig: {KEYS_HELP}", file=sys.stderr)
             self.session.start()
             if (
-                self.loop.run(
-                    self._frames(),
-                    Tolerance(self.rules.tolerance_m, self.rules.hold_s),
-                    stop_when_reached=True,
-                    on_frame=self._record,
-                )
+                self.loop.run(self, Tolerance(self.rules.tolerance_m, self.rules.hold_s), stop_when_reached=True)
                 == STOPPED_REACHED
             ):
                 self.outcome = "reached"
@@ -165,7 +160,8 @@ class RigRun:
         self._interrupted = True
         signal.signal(signal.SIGINT, signal.default_int_handler)
 
-    def _frames(self):
+    # ------------------------------------------------------------------ the rig as the loop's plant (LoopPlant)
+    def frames(self):
         """The camera's frames, tracked, until Ctrl-C, a key, the end of the video, the timeout or the object off
         the fabric."""
         t0 = wall0 = None
@@ -199,7 +195,6 @@ class RigRun:
                 obs.xy_m if obs.visible else None,
                 target,
                 judged_xy_m=judged,  # knows no better
-                deliver=(lambda target=target: self._move_target(target)) if self.course.moving else None,
             )
 
     def _stopped_by_key(self) -> bool:
@@ -262,12 +257,14 @@ class RigRun:
         self.report(f"new target {x:+.3f},{y:+.3f} m")
         return True
 
-    def _move_target(self, target) -> bool:
+    def deliver(self, frame: CameraFrame) -> bool:
         """Before a frame along a path: the target moves on (the run goes on)."""
-        self.session.set_target(*target)
+        if self.course.moving:
+            self.session.set_target(*frame.target_m)
         return True
 
-    def _record(self, frame: CameraFrame, telemetry: m.Telemetry | None) -> None:
+    def answered(self, frame: CameraFrame, telemetry: m.Telemetry | None) -> None:
+        """The frame and its answer logged and shown."""
         obs = self._seen
         assert obs is not None  # a frame is recorded after it was observed
         self.log.write(

@@ -1,6 +1,6 @@
 """A run's streams in the Rerun viewer: a recording (.rrd) beside the run's outputs, and a live view in a browser.
 
-One RunView serves the rig (host/rig_run.py) and the simulation (sim/bridge.py): the same entity paths, so a recording
+One RunView serves the rig (host/rig_run.py) and the simulation (sim/trial/bridge.py): the same entity paths, so a recording
 of either opens in the same layout. Time is the trial time [s] on the `trial_time` timeline; positions are [m] in
 the fabric frame; tilts [deg]; commands and measured positions [m], + lowers the corner (protocol/schema.toml).
 

@@ -140,7 +140,7 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
 
     add_rig(sub)
     if _command(argv) in (None, "sim"):
-        from mantaray.sim.cli import add_parser as add_sim
+        from mantaray.sim.cli.commands import add_parser as add_sim
 
         add_sim(sub, SIM_HELP)
     else:
@@ -164,7 +164,7 @@ def main(argv: list[str] | None = None) -> int:
         from mantaray.paths import NotBuilt
 
         expected = [LinkError, NotBuilt, OSError]
-        simulation = sys.modules.get("mantaray.sim.model")  # only a command that loaded it can have failed in it
+        simulation = sys.modules.get("mantaray.sim.model.model")  # only a command that loaded it can have failed in it
         if simulation is not None:  # (importing it here would load MuJoCo for the rig)
             expected.append(simulation.SimulationUnstable)
         if isinstance(exc, tuple(expected)):

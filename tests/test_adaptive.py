@@ -12,9 +12,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mantaray.sim import adaptive as A
-from mantaray.sim import experiment as E
-from mantaray.sim import results_file as R
+from mantaray.sim.evaluation import adaptive as A
+from mantaray.sim.evaluation import experiment as E
+from mantaray.sim.evaluation import results_file as R
 
 N = 10
 

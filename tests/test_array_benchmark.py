@@ -11,7 +11,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from mantaray.paths import REPO
-from mantaray.sim import mjcf as J
+from mantaray.sim.model import mjcf as J
 
 _spec = importlib.util.spec_from_file_location("array_vs_module", REPO / "benchmarks/experiments/array_vs_module.py")
 B = sys.modules["array_vs_module"] = importlib.util.module_from_spec(_spec)  # dataclasses look their module up

@@ -18,13 +18,13 @@ from mantaray.host.link import Link
 from mantaray.host.runlog import RunLogError, read_run_log
 from mantaray.host.transport import InProcessTransport
 from mantaray.paths import REPO
-from mantaray.sim import calibrate as C
-from mantaray.sim import logfit as L
-from mantaray.sim import parameters as P
-from mantaray.sim import study as S
-from mantaray.sim.bridge import Bridge, TrialSpec
-from mantaray.sim.executors import LocalPool
-from mantaray.sim.plant import Plant
+from mantaray.sim.evaluation.executors import LocalPool
+from mantaray.sim.model import parameters as P
+from mantaray.sim.model.plant import Plant
+from mantaray.sim.search import calibrate as C
+from mantaray.sim.search import logfit as L
+from mantaray.sim.search import study as S
+from mantaray.sim.trial.bridge import Bridge, TrialSpec
 
 FAST = {"resolution": 11, "timestep_s": 0.002}
 TINY = [
@@ -246,7 +246,7 @@ class _Toy:
     penalty = (1.0,)
 
     def evaluate(self, values, pool):
-        from mantaray.sim.model import SimulationUnstable
+        from mantaray.sim.model.model import SimulationUnstable
 
         if values["fabric.size_m"] > 0.58:
             raise SimulationUnstable("toy divergence")

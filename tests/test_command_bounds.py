@@ -507,7 +507,7 @@ def _unchecked_spec(**fields):
     """A TrialSpec built without its own checks, to see what its commands would do to a firmware."""
     from dataclasses import fields as dc_fields
 
-    from mantaray.sim.bridge import TrialSpec
+    from mantaray.sim.trial.bridge import TrialSpec
 
     spec = object.__new__(TrialSpec)
     for f in dc_fields(TrialSpec):
@@ -541,7 +541,7 @@ def test_a_trial_spec_is_refused_exactly_when_the_firmware_would_refuse_its_comm
     that check agrees with the firmware: what it lets through is accepted, what it refuses the firmware refuses."""
     from mantaray.host.controller_settings import PID_KEYS
     from mantaray.host.session import controller_axes
-    from mantaray.sim.bridge import TrialSpec
+    from mantaray.sim.trial.bridge import TrialSpec
 
     name = controller.name.lower()
     axes = controller_axes(name) if gains is not None else ()

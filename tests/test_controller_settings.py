@@ -184,7 +184,7 @@ def test_settings_run_on_the_plant_they_were_tuned_for_and_refuse_another(tmp_pa
         text=True,
         timeout=300,
     )
-    assert unknown.returncode == 2 and "'nowhere' that sim/plant.toml does not declare" in unknown.stderr
+    assert unknown.returncode == 2 and "'nowhere' that sim/model/plant.toml does not declare" in unknown.stderr
 
 
 def test_a_file_that_is_not_text_is_one_clear_error(tmp_path):

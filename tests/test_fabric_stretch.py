@@ -10,11 +10,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from mantaray.sim import mjcf as J
-from mantaray.sim import model as M
-from mantaray.sim import results_file as R
-from mantaray.sim.parameters import ParameterError
-from mantaray.sim.plant import Plant
+from mantaray.sim.evaluation import results_file as R
+from mantaray.sim.model import mjcf as J
+from mantaray.sim.model import model as M
+from mantaray.sim.model.parameters import ParameterError
+from mantaray.sim.model.plant import Plant
 
 RESOLUTION = 11  # [vertices per side] the cheapest mesh: what is tested holds on every one
 STEP_S = 0.0005  # [s]

@@ -16,12 +16,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mantaray.sim import equivalence as Q
-from mantaray.sim import experiment as E
-from mantaray.sim import fidelity as G
-from mantaray.sim import findings as F
-from mantaray.sim import paired as P
-from mantaray.sim import results_file as R
+from mantaray.sim.evaluation import equivalence as Q
+from mantaray.sim.evaluation import experiment as E
+from mantaray.sim.evaluation import fidelity as G
+from mantaray.sim.evaluation import findings as F
+from mantaray.sim.evaluation import paired as P
+from mantaray.sim.evaluation import results_file as R
 
 MODULE = (0.5, 0.5)
 
@@ -422,7 +422,7 @@ def test_a_results_file_of_another_model_is_not_continued_and_says_how_to_start_
 
 
 def test_a_results_file_written_before_a_parameter_was_declared_continues_as_run_at_its_value(tmp_path):
-    """sim/plant.toml: a parameter is added with the value that reproduces the model before it."""
+    """sim/model/plant.toml: a parameter is added with the value that reproduces the model before it."""
     experiment, path, stored = _written(tmp_path)
     del stored["plant_values"]["fabric.stretch"]  # as a file written before it was declared
     _rewrite(path, stored)
@@ -601,7 +601,7 @@ def test_candidate_only_refuses_a_finer_run_that_does_not_exist_or_is_another_on
 
 def test_a_runner_keeps_the_models_a_gate_alternates_loaded_once_each():
     """A gate's trials alternate two meshes on each worker: each model is loaded once, not once a trial."""
-    from mantaray.sim.executors import TrialRunner
+    from mantaray.sim.evaluation.executors import TrialRunner
 
     sample = G.GateSample(arms=(G.Arm("manhattan", "manhattan"),), duration_s=0.2)
     coarse, fine = (sample.experiment(sample.arms[0], G.parse_fidelity(f)) for f in ("5:0.002", "7:0.002"))

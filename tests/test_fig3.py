@@ -6,8 +6,8 @@ import numpy as np
 
 from mantaray.host.controller_settings import ControllerSettings
 from mantaray.plots import fig3_figure
-from mantaray.sim import findings as F
-from mantaray.sim.fig3 import fig3_jobs
+from mantaray.sim.evaluation import findings as F
+from mantaray.sim.evaluation.fig3 import fig3_jobs
 
 
 def test_every_object_gets_five_targets_in_the_square_with_its_papers_alpha():

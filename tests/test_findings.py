@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mantaray.sim import findings as F
+from mantaray.sim.evaluation import findings as F
 
 CELLS = 20
 

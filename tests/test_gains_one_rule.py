@@ -12,10 +12,11 @@ from mantaray.host import cli as host_cli
 from mantaray.host.controller_settings import ControllerSettings
 from mantaray.host.session import controller_axes
 from mantaray.protocol import messages as m
-from mantaray.sim import cli_heatmap, cli_run
-from mantaray.sim import tune as T
-from mantaray.sim.experiment import Experiment, trial_spec, trials
-from mantaray.sim.plant import Plant
+from mantaray.sim.cli import heatmap as cli_heatmap
+from mantaray.sim.cli import run as cli_run
+from mantaray.sim.evaluation.experiment import Experiment, trial_spec, trials
+from mantaray.sim.model.plant import Plant
+from mantaray.sim.search import tune as T
 
 PLANTS = ("polyester", "paper")  # degrees and radians: the two readings of the paper's gains
 CASES = 6  # (controller, gains) drawn from the seed

@@ -10,12 +10,12 @@ MAX_LINES = 45  # a handler's length, its signature and docstring included
 
 
 def _handlers():
-    """(file, name, lines) of every command handler: a host or top-level cmd_* function, a sim/cli_*.py run()."""
-    files = [*(REPO / "host").glob("cli*.py"), REPO / "mantaray" / "cli.py", *(REPO / "sim").glob("cli_*.py")]
+    """(file, name, lines) of every command handler: a host or top-level cmd_* function, a sim/cli/*.py run()."""
+    files = [*(REPO / "host").glob("cli*.py"), REPO / "mantaray" / "cli.py", *(REPO / "sim" / "cli").glob("*.py")]
     for path in files:
         for node in ast.parse(path.read_text()).body:
             if isinstance(node, ast.FunctionDef) and (
-                node.name.startswith("cmd_") or (path.parent.name == "sim" and node.name == "run")
+                node.name.startswith("cmd_") or (path.parent == REPO / "sim" / "cli" and node.name == "run")
             ):
                 assert node.end_lineno is not None
                 yield path.relative_to(REPO), node.name, node.end_lineno - node.lineno + 1
@@ -23,7 +23,7 @@ def _handlers():
 
 def test_the_handlers_are_found():
     names = {(str(path), name) for path, name, _ in _handlers()}
-    assert ("host/cli.py", "cmd_rig") in names and ("sim/cli_heatmap.py", "run") in names and len(names) >= 15
+    assert ("host/cli.py", "cmd_rig") in names and ("sim/cli/heatmap.py", "run") in names and len(names) >= 15
 
 
 def test_no_command_handler_is_over_45_lines():

@@ -20,12 +20,12 @@ from mantaray.host.link import Link
 from mantaray.host.transport import InProcessTransport, SerialTransport
 from mantaray.host.vmcu import VirtualMcu
 from mantaray.paths import REPO
-from mantaray.sim import executors as X
-from mantaray.sim import experiment as E
-from mantaray.sim import results_file as R
-from mantaray.sim import summary as S
-from mantaray.sim.bridge import Bridge, TrialSpec, is_success
-from mantaray.sim.rig import Rig
+from mantaray.sim.evaluation import executors as X
+from mantaray.sim.evaluation import experiment as E
+from mantaray.sim.evaluation import results_file as R
+from mantaray.sim.evaluation import summary as S
+from mantaray.sim.model.rig import Rig
+from mantaray.sim.trial.bridge import Bridge, TrialSpec, is_success
 
 MODULE = (0.5, 0.5)
 SMALL = E.Experiment(
@@ -259,7 +259,7 @@ def test_a_header_cut_off_as_the_run_began_starts_the_run_afresh(tmp_path):
 
 
 _HOLD = (
-    "import json, sys; from mantaray.sim import experiment as E, results_file as R; "
+    "import json, sys; from mantaray.sim.evaluation import experiment as E, results_file as R; "
     "R.ResultsFile.open(sys.argv[1], E.Experiment.from_json(json.loads(sys.argv[2]))); print('open', flush=True); "
     "sys.stdin.read()"
 )  # a run that holds a results file until it is killed
@@ -541,7 +541,7 @@ def test_a_results_file_of_a_plant_whose_values_changed_is_not_continued(tmp_pat
     R.ResultsFile.open(path, SMALL)
     header = json.loads(path.read_text().splitlines()[0])
     assert header["plant_values"]["fabric.size_m"] == SMALL.plant_model().values["fabric.size_m"]
-    header["plant_values"]["fabric.size_m"] = 0.51  # as if sim/plant.toml had been refitted since
+    header["plant_values"]["fabric.size_m"] = 0.51  # as if sim/model/plant.toml had been refitted since
     path.write_text(json.dumps(header) + "\n")
     with pytest.raises(E.ExperimentMismatch, match="fabric.size_m differ"):
         R.ResultsFile.open(path, SMALL)

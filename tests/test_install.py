@@ -64,8 +64,8 @@ def test_the_wheel_carries_the_native_firmware_and_the_data_files(installed):
         "mantaray/protocol/rigs/array_2x2.toml",
         "mantaray/native/mantaray-vmcu-array_2x2",
         "mantaray/native/libmantaray_capi_array_2x2.so",
-        "mantaray/sim/plant.toml",
-        "mantaray/sim/assets/bunny.obj",
+        "mantaray/sim/model/plant.toml",
+        "mantaray/sim/model/assets/bunny.obj",
         "mantaray/protocol/conformance/plugin.py",
     ):
         assert name in names, name
@@ -78,7 +78,7 @@ def test_the_installed_package_runs_the_main_job_outside_the_checkout(installed,
         bin_dir,
         "python",
         "-c",
-        "import mantaray.paths as p, mantaray.sim.bridge as b; "
+        "import mantaray.paths as p, mantaray.sim.trial.bridge as b; "
         "print(p.native_artifact('libmantaray_capi.so')); print(b.__file__)",
         cwd=tmp_path,
     )

@@ -1,4 +1,4 @@
-"""The kernel contact (sim/kernel_contact.py, its C plugin): objects rest on the smoothed sheet and load it, bad config is refused."""
+"""The kernel contact (sim/model/kernel_contact.py, its C plugin): objects rest on the smoothed sheet and load it, bad config is refused."""
 
 from __future__ import annotations
 
@@ -10,10 +10,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from mantaray.sim import kernel_contact as K
-from mantaray.sim import mjcf as J
-from mantaray.sim import model as M
-from mantaray.sim.plant import Plant
+from mantaray.sim.model import kernel_contact as K
+from mantaray.sim.model import mjcf as J
+from mantaray.sim.model import model as M
+from mantaray.sim.model.plant import Plant
 
 KERNEL = {"fabric.stretch": "threads", "contact.model": "kernel"}
 GRAVITY_M_PER_S2 = 9.81

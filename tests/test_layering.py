@@ -24,6 +24,8 @@ ALLOWED = {
 PACKAGE_OF = {"mantaray": "", "protocol": "protocol", "protocol/conformance": "protocol", "host": "host", "sim": "sim"}
 ENTRY_POINT = "mantaray/cli.py"  # the command line: it builds every package's parsers, so it may import them all
 BOTTOM = {f"mantaray.{path.stem}" for path in (REPO / "mantaray").glob("*.py")} - {"mantaray.__init__", "mantaray.cli"}
+# sim/'s sub-packages along its flow (sim/README.md, Layout): each may import those before it, never one after
+SIM_LAYERS = ("model", "trial", "evaluation", "search", "cli")
 
 
 def _imports(path: Path) -> set[str]:
@@ -41,7 +43,7 @@ def _imports(path: Path) -> set[str]:
 def test_each_package_imports_only_the_layers_below_it(folder):
     own = PACKAGE_OF[folder]
     offending = []
-    for path in sorted((REPO / folder).glob("*.py")):
+    for path in sorted((REPO / folder).rglob("*.py") if folder == "sim" else (REPO / folder).glob("*.py")):
         if path.relative_to(REPO).as_posix() == ENTRY_POINT:
             continue
         for name in _imports(path):
@@ -51,6 +53,32 @@ def test_each_package_imports_only_the_layers_below_it(folder):
             if parts[0] == "mantaray" and len(parts) > 1 and name not in BOTTOM:
                 if parts[1] != own and parts[1] not in ALLOWED[folder]:
                     offending.append((path.name, name))
+    assert offending == []
+
+
+def _resolved_imports(path: Path) -> set[str]:
+    """The module names a file of sim/ imports, its relative imports made absolute (mantaray.sim.<layer>...)."""
+    package = ["mantaray", *path.parent.relative_to(REPO).parts]
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names |= {alias.name for alias in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            base = package[: len(package) - node.level + 1] if node.level else []
+            names.add(".".join([*base, *([node.module] if node.module else [])]))
+    return names
+
+
+def test_the_sim_layers_import_only_the_layers_before_them():
+    layers = {name: i for i, name in enumerate(SIM_LAYERS)}
+    assert {p.name for p in (REPO / "sim").iterdir() if p.is_dir() and (p / "__init__.py").exists()} == set(layers)
+    offending = []
+    for own in SIM_LAYERS:
+        for path in sorted((REPO / "sim" / own).glob("*.py")):
+            for name in _resolved_imports(path):
+                parts = name.split(".")
+                if parts[:2] == ["mantaray", "sim"] and len(parts) > 2 and layers.get(parts[2], -1) > layers[own]:
+                    offending.append((f"{own}/{path.name}", name))
     assert offending == []
 
 

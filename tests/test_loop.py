@@ -1,5 +1,6 @@
 """The closed loop the rig and the simulation share: frames numbered and timed as the protocol says, unseen and
-dropped frames recorded without an answer, the tolerance judged with and without a hold, the run ended by its stop rules."""
+dropped frames recorded without an answer, the tolerance judged with and without a hold, the run ended by its stop rules,
+the plant called in one order each frame."""
 
 from __future__ import annotations
 
@@ -41,14 +42,15 @@ def test_frames_are_numbered_timed_and_flagged_as_the_protocol_says():
 
 
 def test_a_dropped_frame_uses_up_its_number_and_records_no_answer():
-    applied = []
-    loop = ClosedLoop(lambda msg: _telemetry(msg.frame) if msg.frame != 3 else None, on_telemetry=applied.append)
-    loop.step(0.0, (0.0, 0.0), (0.0, 0.0))
-    loop.dropped(0.1, (0.0, 0.0))
-    loop.step(0.2, (0.0, 0.0), (0.0, 0.0))  # frame 3: no telemetry came
-    loop.step(0.3, (0.0, 0.0), (0.0, 0.0))
+    loop = ClosedLoop(lambda msg: _telemetry(msg.frame) if msg.frame != 3 else None)
+    answers = [
+        loop.step(0.0, (0.0, 0.0), (0.0, 0.0)),
+        loop.dropped(0.1, (0.0, 0.0)),
+        loop.step(0.2, (0.0, 0.0), (0.0, 0.0)),  # frame 3: no telemetry came
+        loop.step(0.3, (0.0, 0.0), (0.0, 0.0)),
+    ]
     rows = loop.arrays()
-    assert loop.frame == 4 and [t.position_frame for t in applied] == [1, 4]
+    assert loop.frame == 4 and [t.position_frame for t in answers if t is not None] == [1, 4]
     assert rows["state"].tolist() == [int(m.State.RUNNING), -1, -1, int(m.State.RUNNING)]
     assert np.isnan(rows["tilt_deg"][1:3]).all() and np.isnan(rows["command_m"][1:3]).all()
     assert rows["t_s"].tolist() == [0.0, 0.1, 0.2, 0.3] and rows["target_m"].shape == (4, 2)
@@ -79,29 +81,67 @@ def test_a_setup_is_sent_in_the_order_the_firmware_takes_it():
         assert isinstance(link.command(command), m.Ack)
 
 
-def _frames(xs, target=(0.0, 0.0), **fields):
-    return [CameraFrame(0.1 * k, (x, 0.0), target, judged_xy_m=(x, 0.0), **fields) for k, x in enumerate(xs)]
+class _Plant:
+    """A plant whose frames are given: it logs every call the loop makes, and its deliver() says False at `falls`."""
+
+    def __init__(self, frames, falls: int | None = None) -> None:
+        self._frames, self.falls, self.calls = frames, falls, []
+
+    def frames(self):
+        for k, frame in enumerate(self._frames):
+            self.calls.append(("frame", k))
+            yield frame
+
+    def deliver(self, frame) -> bool:
+        k = self._frames.index(frame)
+        self.calls.append(("deliver", k))
+        return k != self.falls
+
+    def answered(self, frame, telemetry) -> None:
+        self.calls.append(
+            ("answered", self._frames.index(frame), None if telemetry is None else telemetry.position_frame)
+        )
+
+
+def _frames(xs, target=(0.0, 0.0)):
+    return [CameraFrame(0.1 * k, (x, 0.0), target, judged_xy_m=(x, 0.0)) for k, x in enumerate(xs)]
 
 
 @given(st.lists(st.floats(-0.3, 0.3), min_size=1, max_size=30), st.booleans())
 def test_run_ends_at_the_first_frame_within_only_when_told_to_stop_there(xs, stop):
-    sent, seen = [], []
+    sent = []
     loop = ClosedLoop(lambda msg: sent.append(msg.frame) or _telemetry(msg.frame))
-    why = loop.run(_frames(xs), Tolerance(0.02), stop_when_reached=stop, on_frame=lambda f, t: seen.append(t))
+    plant = _Plant(_frames(xs))
+    why = loop.run(plant, Tolerance(0.02), stop_when_reached=stop)
     first = next((k for k, x in enumerate(xs) if abs(x) < 0.02), None)
     if stop and first is not None:
         assert why == STOPPED_REACHED and len(sent) == first  # the frame judged within is not sent
     else:
         assert why == STOPPED_BY_SOURCE and len(sent) == len(xs)
-    assert [t.position_frame for t in seen] == sent  # on_frame sees each sent frame's answer
+    assert [c[2] for c in plant.calls if c[0] == "answered"] == sent  # the plant takes each sent frame's answer
+
+
+@given(st.lists(st.booleans(), min_size=1, max_size=20), st.integers(0, 25))
+def test_the_loop_calls_its_plant_in_one_order_each_frame(dropped, falls):
+    frames = _frames([0.2] * len(dropped))
+    for frame, drop in zip(frames, dropped, strict=True):
+        frame.dropped = drop
+    plant = _Plant(frames, falls)
+    ClosedLoop(lambda msg: _telemetry(msg.frame)).run(plant, Tolerance(0.02), stop_when_reached=True)
+    expected = []
+    for k in range(min(falls, len(frames) - 1) + 1):
+        expected += [("frame", k), ("deliver", k)] + ([("answered", k)] if k != falls else [])
+    assert [c[:2] for c in plant.calls] == expected  # a frame not delivered is neither sent nor answered
+    answered = [c for c in plant.calls if c[0] == "answered"]
+    assert [c[2] is None for c in answered] == dropped[: len(answered)]  # a dropped frame has no answer
 
 
 def test_run_records_dropped_frames_and_ends_when_a_delivery_says_so():
-    delivered = []
     frames = _frames([0.2, 0.2, 0.2, 0.2])
     frames[1].dropped = True
-    frames[2].deliver = lambda: delivered.append(2) or False  # the object fell on the way to the firmware
+    plant = _Plant(frames, falls=2)  # the object fell on the way to the firmware with frame 2
     loop = ClosedLoop(lambda msg: _telemetry(msg.frame))
-    assert loop.run(frames, Tolerance(0.02), stop_when_reached=True) == STOPPED_BY_SOURCE
+    assert loop.run(plant, Tolerance(0.02), stop_when_reached=True) == STOPPED_BY_SOURCE
     rows = loop.arrays()
-    assert delivered == [2] and len(rows["t_s"]) == 2 and rows["state"].tolist() == [int(m.State.RUNNING), -1]
+    assert ("deliver", 2) in plant.calls and ("frame", 3) not in plant.calls
+    assert len(rows["t_s"]) == 2 and rows["state"].tolist() == [int(m.State.RUNNING), -1]

@@ -1,6 +1,6 @@
 """The paired comparison of a tuned controller's trials with the paper's (McNemar's counts and z, the outer band's
-falls: sim/paired.py, what benchmarks/experiments/beyond_paper.py publishes), and the committed trials a run starts from
-(sim/committed.py)."""
+falls: sim/evaluation/paired.py, what benchmarks/experiments/beyond_paper.py publishes), and the committed trials a run starts from
+(sim/evaluation/committed.py)."""
 
 import gzip
 import math
@@ -8,8 +8,8 @@ import math
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mantaray.sim import committed as K
-from mantaray.sim import paired as B
+from mantaray.sim.evaluation import committed as K
+from mantaray.sim.evaluation import paired as B
 
 FLAGS = ("success", "reached", "fell_off")
 record = st.fixed_dictionaries(

@@ -1,4 +1,4 @@
-"""The declared parameter space (sim/plant.toml) and plants: ranges honoured, defaults in one place, the README in step."""
+"""The declared parameter space (sim/model/plant.toml) and plants: ranges honoured, defaults in one place, the README in step."""
 
 from __future__ import annotations
 
@@ -12,10 +12,10 @@ from hypothesis import strategies as st
 
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
-from mantaray.sim import parameters as P
-from mantaray.sim.experiment import Experiment, trial_spec, trials
-from mantaray.sim.plant import Plant, boot_gains, parse_setting
-from mantaray.sim.rig import Rig
+from mantaray.sim.evaluation.experiment import Experiment, trial_spec, trials
+from mantaray.sim.model import parameters as P
+from mantaray.sim.model.plant import Plant, boot_gains, parse_setting
+from mantaray.sim.model.rig import Rig
 
 PHYSICAL = [p for p in P.parameters().values() if p.section not in ("tracking", "reading")]
 
@@ -90,7 +90,7 @@ def test_the_readme_table_is_generated_from_the_declared_table():
     block = re.search(r"<!-- parameters: begin.*?-->\n(.*?)\n<!-- parameters: end -->", readme, re.S)
     assert block, "sim/README.md has no generated parameter table"
     assert block.group(1).strip() == P.markdown_table().strip(), (
-        "sim/README.md's parameter table is stale: python3 -m mantaray.sim.parameters --write-readme"
+        "sim/README.md's parameter table is stale: python3 -m mantaray.sim.model.parameters --write-readme"
     )
 
 
@@ -128,8 +128,8 @@ def test_a_users_gains_are_the_firmwares_numbers_on_every_plant():
 
 
 def test_the_corner_clamp_holds_its_edge_vertices_at_the_carriage():
-    from mantaray.sim import mjcf as J
-    from mantaray.sim import model as M
+    from mantaray.sim.model import mjcf as J
+    from mantaray.sim.model import model as M
 
     plant = Plant().set({"fabric.corner_clamp_m": 0.08})
     rig = plant.rig(resolution=11, timestep_s=0.002)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import io
 import re
 
-from mantaray.sim.progress import Progress
+from mantaray.sim.evaluation.progress import Progress
 
 
 def test_progress_to_a_log_prints_lines_with_the_count_and_what_is_left():

@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from mantaray.sim import executors as X
+from mantaray.sim.evaluation import executors as X
 
 RAY = importlib.util.find_spec("ray") is not None
 needs_ray = pytest.mark.skipif(not RAY, reason="Ray is not installed (pip install 'mantaray[ray]')")
@@ -113,7 +113,7 @@ def test_an_address_that_answers_but_not_as_ray_gives_up_within_a_minute_in_exit
 
 _LISTENING = """
 import json, os
-from mantaray.sim.executors import RayPool
+from mantaray.sim.evaluation.executors import RayPool
 pool = RayPool(1, None)
 assert pool.map_calls(lambda runner, x: 2 * x, [21]) == [42]          # a worker started and answered
 import psutil                                                          # Ray's own copy

@@ -17,9 +17,9 @@ from mantaray.host.transport import InProcessTransport
 from mantaray.protocol import generate_rig as G
 from mantaray.protocol import rig
 from mantaray.protocol.generate import load_schema
-from mantaray.sim import parameters as P
-from mantaray.sim.bridge import Bridge
-from mantaray.sim.rig import Actuators, Rig
+from mantaray.sim.model import parameters as P
+from mantaray.sim.model.rig import Actuators, Rig
+from mantaray.sim.trial.bridge import Bridge
 
 ARRAY = rig.RIGS / "array_2x2.toml"
 

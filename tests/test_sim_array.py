@@ -14,11 +14,11 @@ import pytest
 from mantaray.host.link import Link, LinkError
 from mantaray.host.transport import InProcessTransport
 from mantaray.protocol import rig as rig_description
-from mantaray.sim import mjcf as J
-from mantaray.sim import model as M
-from mantaray.sim.bridge import Bridge, TrialSpec
-from mantaray.sim.plant import Plant
-from mantaray.sim.rig import Rig
+from mantaray.sim.model import mjcf as J
+from mantaray.sim.model import model as M
+from mantaray.sim.model.plant import Plant
+from mantaray.sim.model.rig import Rig
+from mantaray.sim.trial.bridge import Bridge, TrialSpec
 
 REPO = Path(__file__).resolve().parents[1]
 ARRAY = rig_description.named("array_2x2")
@@ -139,7 +139,7 @@ def test_sim_run_refuses_a_rig_file_it_cannot_run_in_one_line(tmp_path, text, ne
 
 def test_a_rendered_frame_shows_the_borders_between_modules():
     """The video's overlay draws the line x = 0 between the modules: a column of pixels brighter than beside it."""
-    from mantaray.sim.video import Recorder
+    from mantaray.sim.trial.video import Recorder
 
     rig = _array(resolution=5)
     model, data = M.load(rig, fabric_settle_s=0.1)

@@ -17,13 +17,13 @@ from mantaray.host.vmcu import VirtualMcu
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
 from mantaray.protocol.framing import Frame, FrameDecoder, encode_packet
-from mantaray.sim import experiment as E
-from mantaray.sim import findings as F
-from mantaray.sim import model as M
-from mantaray.sim.bridge import Bridge, TrialSpec
-from mantaray.sim.model import SimulationUnstable
-from mantaray.sim.rig import Rig
-from mantaray.sim.tracking import Tracking
+from mantaray.sim.evaluation import experiment as E
+from mantaray.sim.evaluation import findings as F
+from mantaray.sim.model import model as M
+from mantaray.sim.model.model import SimulationUnstable
+from mantaray.sim.model.rig import Rig
+from mantaray.sim.model.tracking import Tracking
+from mantaray.sim.trial.bridge import Bridge, TrialSpec
 
 CENTRAL_SEED = 1  # the draw of the central trials below
 

@@ -8,10 +8,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from mantaray.sim import mjcf as J
-from mantaray.sim import model as M
-from mantaray.sim.objects import OBJECTS
-from mantaray.sim.rig import STRETCH_MODELS, Rig
+from mantaray.sim.model import mjcf as J
+from mantaray.sim.model import model as M
+from mantaray.sim.model.objects import OBJECTS
+from mantaray.sim.model.rig import STRETCH_MODELS, Rig
 
 RIG = Rig()
 GRID = RIG.module.grid  # one module: actuators 0..3 at its corners (PROTOCOL.md §5)

@@ -9,13 +9,13 @@ import pytest
 from mantaray.host import tracker as T
 from mantaray.host.link import Link
 from mantaray.host.transport import InProcessTransport
-from mantaray.sim import mjcf as J
-from mantaray.sim import model as M
-from mantaray.sim.bridge import Bridge, TrialSpec
-from mantaray.sim.objects import OBJECTS
-from mantaray.sim.rig import Rig
-from mantaray.sim.tracking import Tracking
-from mantaray.sim.vision import FRAME_PX, CameraVision, blob_colour
+from mantaray.sim.model import mjcf as J
+from mantaray.sim.model import model as M
+from mantaray.sim.model.objects import OBJECTS
+from mantaray.sim.model.rig import Rig
+from mantaray.sim.model.tracking import Tracking
+from mantaray.sim.trial.bridge import Bridge, TrialSpec
+from mantaray.sim.trial.vision import FRAME_PX, CameraVision, blob_colour
 
 
 @pytest.fixture(scope="module")

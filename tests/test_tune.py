@@ -20,8 +20,8 @@ from mantaray.host.controller_settings import ControllerSettings, SettingsError
 from mantaray.host.session import controller_axes
 from mantaray.paths import REPO
 from mantaray.protocol import messages as m
-from mantaray.sim import tune as T
-from mantaray.sim.executors import LocalPool
+from mantaray.sim.evaluation.executors import LocalPool
+from mantaray.sim.search import tune as T
 
 TINY = [
     "--controller",
@@ -282,7 +282,7 @@ class _ByGain:
 
 
 def test_the_rungs_are_nested_stratified_samples_that_end_at_the_whole_sample():
-    from mantaray.sim import findings as F
+    from mantaray.sim.evaluation import findings as F
 
     evidence = T.TuningEvidence(cells_per_stratum=6, seed=31)
     assert evidence.rungs() == [1, 2, 4, 6]
@@ -295,7 +295,7 @@ def test_the_rungs_are_nested_stratified_samples_that_end_at_the_whole_sample():
 
 
 def test_a_pruned_search_stops_hopeless_candidates_early_and_keeps_the_good_one(tmp_path):
-    from mantaray.sim import study as S
+    from mantaray.sim.search import study as S
 
     evidence = T.TuningEvidence(
         controller="manhattan", plant="polyester", cells_per_stratum=4, trials_per_cell=3, prune=True
@@ -320,7 +320,7 @@ def test_replaying_an_unpruned_search_through_the_pruner_runs_what_the_pruned_se
     candidates after the same trials, and scores the completed ones as the pruned search did."""
     import optuna
 
-    from mantaray.sim import study as S
+    from mantaray.sim.search import study as S
 
     runs = {}
     for prune in (True, False):
@@ -357,8 +357,8 @@ class _ByGainAndMesh(_ByGain):
 
 
 def test_confirming_the_best_candidates_at_a_finer_fidelity_takes_the_best_there_and_resumes(tmp_path):
-    from mantaray.sim import study as S
-    from mantaray.sim.rig import Fidelity
+    from mantaray.sim.model.rig import Fidelity
+    from mantaray.sim.search import study as S
 
     evidence = T.TuningEvidence(
         controller="manhattan",
@@ -378,7 +378,7 @@ def test_confirming_the_best_candidates_at_a_finer_fidelity_takes_the_best_there
     best = confirmation["best"]["number"]
     assert scores[str(best)]["confirmed"] == min(v["confirmed"] for v in scores.values())
     assert T.confirmed_best(study).number == best  # the answer is the finer fidelity's
-    from mantaray.sim import findings as F
+    from mantaray.sim.evaluation import findings as F
 
     screened = [v["screened"] for v in scores.values()]
     assert confirmation["rank_correlation"] == pytest.approx(

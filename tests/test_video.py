@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from mantaray.sim import model as M
-from mantaray.sim.rig import Rig
-from mantaray.sim.video import FPS_RANGE, Recorder
+from mantaray.sim.model import model as M
+from mantaray.sim.model.rig import Rig
+from mantaray.sim.trial.video import FPS_RANGE, Recorder
 
 RIG = Rig()
 

@@ -2,7 +2,7 @@
 
 Run: python3 benchmarks/experiments/adaptive_savings.py
 An adaptive run's trials are each cell's first trials of the full run of its seed (trials are drawn from (seed, cell,
-k) alone), and which it runs is a function of those trials (sim/adaptive.py; tests/test_adaptive.py checks the
+k) alone), and which it runs is a function of those trials (sim/evaluation/adaptive.py; tests/test_adaptive.py checks the
 command runs exactly this twin), so the twin of every committed 20 x 20, N = 10 map (docs/results/*.jsonl.gz) is
 found from its trials without running one. For each: the trials the twin runs against the full run's, the cells
 whose region (success >= 0.9, failure <= 0.1, uncertain between) moves, on the map the run is judged by and on the
@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from mantaray.plots import savings_figure
-from mantaray.sim import adaptive as A
-from mantaray.sim.results_file import ResultsFile
+from mantaray.sim.evaluation import adaptive as A
+from mantaray.sim.evaluation.results_file import ResultsFile
 
 REPO = Path(__file__).resolve().parents[2]
 OUT = REPO / "docs" / "results" / "adaptive"
@@ -61,7 +61,7 @@ def table(rows: list[dict]) -> str:
         "",
         "Written by `python3 benchmarks/experiments/adaptive_savings.py`: each committed 20 x 20, N = 10 map "
         "(docs/results/*.jsonl.gz; fidelity, plant and seed in the row) against its adaptive twin of the same seed, "
-        "found from its trials (sim/adaptive.py). Moved: the share of the 400 cells whose region differs, on the "
+        "found from its trials (sim/evaluation/adaptive.py). Moved: the share of the 400 cells whose region differs, on the "
         "map the run is judged by and on the map of reached; score: the change of the sum of the cells' rates. "
         f"The aim (issue 40): at least {AIM_SAVED:g}x fewer trials with at most {AIM_MOVED:.0%} of the cells moved.",
         "",

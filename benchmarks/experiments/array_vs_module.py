@@ -48,13 +48,13 @@ from mantaray.host.link import Link
 from mantaray.host.transport import InProcessTransport
 from mantaray.protocol import messages as m
 from mantaray.protocol import rig as rig_description
-from mantaray.sim.bridge import Bridge, TrialSpec
-from mantaray.sim.fidelity import parse_fidelity
-from mantaray.sim.findings import FIG3_ALPHA_M
-from mantaray.sim.objects import OBJECTS
-from mantaray.sim.paired import discordance
-from mantaray.sim.plant import Plant
-from mantaray.sim.rig import Rig
+from mantaray.sim.evaluation.fidelity import parse_fidelity
+from mantaray.sim.evaluation.findings import FIG3_ALPHA_M
+from mantaray.sim.evaluation.paired import discordance
+from mantaray.sim.model.objects import OBJECTS
+from mantaray.sim.model.plant import Plant
+from mantaray.sim.model.rig import Rig
+from mantaray.sim.trial.bridge import Bridge, TrialSpec
 
 ARRAY = rig_description.named("array_2x2")
 GRID = ARRAY.grid  # the 2 x 2 array: the workspace both rigs cover
@@ -281,7 +281,7 @@ def summarise(records: list[dict], objects: list[str]) -> dict:
 
 def paired(records: list[dict]) -> None:
     """Every object's trials pooled, the array against the module on the same trials: each rule's count on both, and
-    McNemar's exact test on the trials where they differ (sim/paired.py)."""
+    McNemar's exact test on the trials where they differ (sim/evaluation/paired.py)."""
     by_rig = {which: {(r["object"], r["k"]): r for r in records if r["rig"] == which} for which in RIGS}
     both = sorted(set(by_rig["array"]) & set(by_rig["module"]))
     if not both:

@@ -1,7 +1,7 @@
 """Beyond the paper: the controllers tuned for the fitted plant, checked on the paper's protocol beside its Manhattan.
 
 Run: python3 benchmarks/experiments/beyond_paper.py [--runs sphere_scheduled,sphere_cascade] [--jobs 2] [--collect]
-Each run is `mantaray sim tune` (sim/tune.py) for one object and controller on the `paper` plant into
+Each run is `mantaray sim tune` (sim/search/tune.py) for one object and controller on the `paper` plant into
 out/tune/<run>/: the search on its own sample, then the full protocol (20 x 20 cells, N = 10, T = 10 s, seed 2026,
 to the end of T) with the best settings. The baseline is the paper's Manhattan on the same trials, run by
 `python3 benchmarks/experiments/paper_heatmaps.py --plant paper --to-end --runs <object run>` (same seed: trial for trial
@@ -27,9 +27,9 @@ from pathlib import Path
 
 import paper_heatmaps  # a sibling script: the baselines' committed trials, and the zones of the paper's maps
 
-from mantaray.sim import committed
-from mantaray.sim.paired import edge_falls, mcnemar
-from mantaray.sim.results_file import write_whole
+from mantaray.sim.evaluation import committed
+from mantaray.sim.evaluation.paired import edge_falls, mcnemar
+from mantaray.sim.evaluation.results_file import write_whole
 
 REPO = Path(__file__).resolve().parents[2]
 COMMITTED = REPO / "docs" / "results" / "tune"
@@ -90,8 +90,8 @@ def baseline(run: str) -> Path:
 
 def compare(run: str) -> dict | None:
     """Scores, falls and McNemar of a run's final check against its baseline; None, saying why, until both are done."""
-    from mantaray.sim import results_file as R
-    from mantaray.sim import summary as S
+    from mantaray.sim.evaluation import results_file as R
+    from mantaray.sim.evaluation import summary as S
 
     tuned_path, base_path = out_dir(run) / "final" / "results.jsonl", baseline(run)
     runs_it = {

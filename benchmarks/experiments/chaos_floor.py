@@ -2,7 +2,7 @@
 
 Run: python3 benchmarks/experiments/chaos_floor.py [--fidelity 15:0.00025] [--plant polyester]
      [--set fabric.stretch=threads] [--shifts 0.0001,0.001,0.003] [--pairs 60] [--jobs 2]
-The gate (`mantaray sim fidelity`, sim/fidelity.py) reports the trials a cheaper configuration flips beside those the
+The gate (`mantaray sim fidelity`, sim/evaluation/fidelity.py) reports the trials a cheaper configuration flips beside those the
 finer one flips with every start moved (2 mm, the rig's repeatability; 0.1 mm, a diagnostic of chaos). A rolling
 sphere's path is chaotic, so how many flips a
 start moved d brings grows with d; this measures that growth on one configuration, on the gate's own sample (the
@@ -23,12 +23,12 @@ from pathlib import Path
 
 import numpy as np
 
-from mantaray.sim import executors as X
-from mantaray.sim import fidelity as G
-from mantaray.sim.experiment import trials
-from mantaray.sim.parameters import ParameterError
-from mantaray.sim.plant import parse_setting
-from mantaray.sim.results_file import ResultsFile
+from mantaray.sim.evaluation import executors as X
+from mantaray.sim.evaluation import fidelity as G
+from mantaray.sim.evaluation.experiment import trials
+from mantaray.sim.evaluation.results_file import ResultsFile
+from mantaray.sim.model.parameters import ParameterError
+from mantaray.sim.model.plant import parse_setting
 
 REPO = Path(__file__).resolve().parents[2]
 TRIALS = REPO / "out" / "fidelity" / "trials"

@@ -5,7 +5,7 @@ Run: python3 benchmarks/experiments/check_candidates.py [--study out/calibration
 A search scores candidates on a small sample (12-15 trials a stratum), so the best of many is partly the luckiest.
 This takes the --top candidates of a findings study (most findings holding, then the smallest sum of objectives)
 and scores each again, with the same code, on --cells-per-stratum cells of each stratum and --trials-per-cell
-trials each, drawn from --seed (not the search's). --plants scores named plants (sim/plant.toml) on the same
+trials each, drawn from --seed (not the search's). --plants scores named plants (sim/model/plant.toml) on the same
 hold-out sample, beside them. Prints each one's F1-F5 (for a candidate, on both samples) and writes them as
 JSON to --out.
 """
@@ -21,10 +21,10 @@ from pathlib import Path
 
 import optuna
 
-from mantaray.sim import calibrate as C
-from mantaray.sim import study as S
-from mantaray.sim.executors import LocalPool
-from mantaray.sim.parameters import plant_names
+from mantaray.sim.evaluation.executors import LocalPool
+from mantaray.sim.model.parameters import plant_names
+from mantaray.sim.search import calibrate as C
+from mantaray.sim.search import study as S
 
 
 def main() -> int:

@@ -1,7 +1,7 @@
 """The convergence study: the fidelity gate on each mesh and step against a finer one, for two plants; its table.
 
 Run: python3 benchmarks/experiments/fidelity_study.py [--gates paper_15x15_2ms,...] [--jobs 2] [--collect]
-Each gate is `mantaray sim fidelity` (sim/fidelity.py) on one object (the sphere unless the gate names another), to
+Each gate is `mantaray sim fidelity` (sim/evaluation/fidelity.py) on one object (the sphere unless the gate names another), to
 the end of T, with the gate's sample (by default 40 cells, 8 from each stratum, 5 trials each, seed 77) for two
 controllers: on the `paper` plant the paper's Manhattan and the cascade tuned for that object on it (docs/results/tune/), on the
 polyester plant the paper's Manhattan and Euclidean. Gates that share a run share its trials (out/fidelity/trials/).
@@ -23,9 +23,9 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from mantaray.sim.cli_common import interruptible
-from mantaray.sim.committed import keep
-from mantaray.sim.results_file import write_whole
+from mantaray.sim.cli.common import interruptible
+from mantaray.sim.evaluation.committed import keep
+from mantaray.sim.evaluation.results_file import write_whole
 
 REPO = Path(__file__).resolve().parents[2]
 COMMITTED = REPO / "docs" / "results" / "fidelity"

@@ -5,7 +5,7 @@ With --settings (a controller's settings, as mantaray sim tune writes them) the 
 controller instead of the paper's Manhattan, on the plant the file was tuned for, and the outputs' names end in
 _<controller>.
 For each plant: every object of Table I from the centre to five targets uniform in [-0.2, 0.2]^2 m with the
-paper's alpha for it (sim/fig3.py), ending at the first frame within eps; prints reached/fell per object and
+paper's alpha for it (sim/evaluation/fig3.py), ending at the first frame within eps; prints reached/fell per object and
 finding F6, draws the figure in the style of Fig. 3 (each object's paths with the targets' tolerance circles
 above the phase plot of the tilts within the square of the controller's tilt limit, the paper's +-26.6 deg) to docs/figures/fig3_<plant>.png and writes
 the trials (paths and tilts included) to docs/results/fig3_<plant>.json.
@@ -22,12 +22,12 @@ from pathlib import Path
 from mantaray.host.cli_controller import controller_settings
 from mantaray.plots import fig3_figure
 from mantaray.protocol import messages as m
-from mantaray.sim.executors import LocalPool
-from mantaray.sim.experiment import Experiment
-from mantaray.sim.fig3 import run_fig3
-from mantaray.sim.findings import MODULE_M, fig3_finding
-from mantaray.sim.parameters import plant_names
-from mantaray.sim.plant import plant_for
+from mantaray.sim.evaluation.executors import LocalPool
+from mantaray.sim.evaluation.experiment import Experiment
+from mantaray.sim.evaluation.fig3 import run_fig3
+from mantaray.sim.evaluation.findings import MODULE_M, fig3_finding
+from mantaray.sim.model.parameters import plant_names
+from mantaray.sim.model.plant import plant_for
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -35,7 +35,8 @@ REPO = Path(__file__).resolve().parents[2]
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument(
-        "--plants", help="named plants of sim/plant.toml (default: every one, or the one --settings was tuned for)"
+        "--plants",
+        help="named plants of sim/model/plant.toml (default: every one, or the one --settings was tuned for)",
     )
     parser.add_argument("--seed", type=int, default=3, help="seed of the targets and the noise")
     parser.add_argument("--jobs", type=int, default=2)

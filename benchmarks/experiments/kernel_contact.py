@@ -2,9 +2,9 @@
 
 Run: python3 benchmarks/experiments/kernel_contact.py [--object sphere] [--meshes reference,finer]
      [--widths 0.04,0.08,0.12] [--drops 12] [--seed 5] [--plant polyester] [--set KEY=VALUE ...]
-The sweep behind contact.kernel_width_m (sim/plant.toml; sim/README.md, Convergence 9). The drops are
+The sweep behind contact.kernel_width_m (sim/model/plant.toml; sim/README.md, Convergence 9). The drops are
 rest_positions.py's (the same points from the same seed, the same rule for at rest). For each width h [m] the object
-meets the sheet through the kernel contact (contact.model kernel, sim/kernel_contact.py) with that support radius,
+meets the sheet through the kernel contact (contact.model kernel, sim/model/kernel_contact.py) with that support radius,
 and the run prints the rest positions on each mesh, their gap to the finest mesh's (median, largest, within 1 cm),
 and the wall time of each mesh against the flex's own contact (contact.model mesh) on it, measured in the same run.
 The kernel contact wants the sheet free to stretch between vertices: pass --set fabric.stretch=threads.
@@ -20,9 +20,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # rest_positions.py's 
 
 from rest_positions import plant_meshes_drops, print_gaps, rest_positions  # noqa: E402
 
-from mantaray.sim import model as M  # noqa: E402
-from mantaray.sim.objects import OBJECTS  # noqa: E402
-from mantaray.sim.parameters import ParameterError, plant_names  # noqa: E402
+from mantaray.sim.model import model as M
+from mantaray.sim.model.objects import OBJECTS  # noqa: E402
+from mantaray.sim.model.parameters import ParameterError, plant_names  # noqa: E402
 
 
 def main() -> int:

@@ -2,7 +2,7 @@
 
 Run: python3 benchmarks/experiments/kernel_settling.py [--object sphere] [--at 0.05,0.02] [--mesh fast]
      [--duration 6] [--every 0.5] [--plant polyester] [--set KEY=VALUE ...]
-The object is placed at --at [m] on the settled level sheet (sim/model.py, place_object, given 0.05 s to settle so
+The object is placed at --at [m] on the settled level sheet (sim/model/model.py, place_object, given 0.05 s to settle so
 that a contact which never settles still starts from the same state), then left for --duration s of simulated time;
 its speed [mm/s] is printed every --every s, and its position at the end. The contact is the kernel's
 (contact.model kernel) on threads unless --set says otherwise. This is how sim/README.md, Convergence 9, tells which
@@ -23,11 +23,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # rest_positions.py's 
 
 from rest_positions import plant_of  # noqa: E402
 
-from mantaray.sim import model as M  # noqa: E402
-from mantaray.sim.fidelity import parse_fidelity  # noqa: E402
-from mantaray.sim.mjcf import OBJECT  # noqa: E402
-from mantaray.sim.objects import OBJECTS  # noqa: E402
-from mantaray.sim.parameters import plant_names  # noqa: E402
+from mantaray.sim.evaluation.fidelity import parse_fidelity  # noqa: E402
+from mantaray.sim.model import model as M
+from mantaray.sim.model.mjcf import OBJECT  # noqa: E402
+from mantaray.sim.model.objects import OBJECTS  # noqa: E402
+from mantaray.sim.model.parameters import plant_names  # noqa: E402
 
 PLACE_S = 0.05  # [s, simulated] how long place_object may settle the object before the record starts
 

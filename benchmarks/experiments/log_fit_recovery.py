@@ -18,11 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from mantaray.sim import calibrate as C
-from mantaray.sim import study as S
-from mantaray.sim.executors import LocalPool
-from mantaray.sim.logfit import LogEvidence, write_log
-from mantaray.sim.parameters import default
+from mantaray.sim.evaluation.executors import LocalPool
+from mantaray.sim.model.parameters import default
+from mantaray.sim.search import calibrate as C
+from mantaray.sim.search import study as S
+from mantaray.sim.search.logfit import LogEvidence, write_log
 
 HIDDEN = {"contact.rolling_damping_per_s": 2.0, "actuators.pulley_circumference_m": 0.06}
 RUN_S = 8.0  # [s] each logged run
@@ -33,8 +33,8 @@ def make_logs(out: Path, n: int, seed: int) -> list[Path]:
     """n closed-loop runs on the hidden plant, as rig logs (written once; reused on a rerun)."""
     from mantaray.host.link import Link
     from mantaray.host.transport import InProcessTransport
-    from mantaray.sim.bridge import Bridge, TrialSpec
-    from mantaray.sim.plant import Plant
+    from mantaray.sim.model.plant import Plant
+    from mantaray.sim.trial.bridge import Bridge, TrialSpec
 
     paths = [out / f"run{k}.jsonl" for k in range(n)]
     if all(p.exists() for p in paths):

@@ -2,13 +2,13 @@
 
 Run: python3 benchmarks/experiments/mesh_statics.py [--plants polyester,paper] [--meshes 11:0.001,15:0.001,21:0.001]
      [--clamps plant,0] [--stretch edges,threads] [--set KEY=VALUE ...]
-For each plant, corner clamp (the plant's own, or a length in metres), stretch model (sim/plant.toml,
+For each plant, corner clamp (the plant's own, or a length in metres), stretch model (sim/model/plant.toml,
 fabric.stretch) and mesh (RESOLUTION:TIMESTEP, or a named fidelity), with any other --set value fixed over the
-plant, it loads the model, lets the bare sheet settle as every trial does (sim/model.py, load), and prints the
+plant, it loads the model, lets the bare sheet settle as every trial does (sim/model/model.py, load), and prints the
 lowest vertex's depth below the corners and the sheet's mean depth [mm], the edges' (or threads') least, mean and
 largest strain [%] (a thread pulls only when stretched: one shorter than its rest length is slack), the wall time
 of compiling the model and settling it (2 s simulated; compare rows of one run), and the time constant MuJoCo is
-given for the edges or threads on that mesh (sim/rig.py, Fabric.edge_timeconst_s), marking one it runs longer
+given for the edges or threads on that mesh (sim/model/rig.py, Fabric.edge_timeconst_s), marking one it runs longer
 than given (refsafe: two steps at least). A mesh whose physics diverges (threads under Euler need a smaller step on
 a finer mesh: the bending is explicit) is reported as such.
 """
@@ -21,11 +21,11 @@ import time
 
 import numpy as np
 
-from mantaray.sim import model as M
-from mantaray.sim.fidelity import parse_fidelity
-from mantaray.sim.parameters import ParameterError
-from mantaray.sim.plant import Plant, parse_setting
-from mantaray.sim.rig import MIN_STEPS_PER_TIMECONST, STRETCH_MODELS, Fidelity
+from mantaray.sim.evaluation.fidelity import parse_fidelity
+from mantaray.sim.model import model as M
+from mantaray.sim.model.parameters import ParameterError
+from mantaray.sim.model.plant import Plant, parse_setting
+from mantaray.sim.model.rig import MIN_STEPS_PER_TIMECONST, STRETCH_MODELS, Fidelity
 
 
 def statics(plant: Plant, fidelity: Fidelity) -> dict:

@@ -3,7 +3,7 @@
 Run: python3 benchmarks/experiments/paper_heatmaps.py [--runs sphere_manhattan,sphere_euclidean] [--jobs 2] [--plant paper]
      [--fidelity reference]
 Each run is `mantaray sim heatmap` with the paper's protocol (20 x 20 cells, 10 trials, T = 10 s,
-eps = 0.02 m) on the named plant (sim/plant.toml) at the named fidelity (sim/rig.py, FIDELITIES; default the
+eps = 0.02 m) on the named plant (sim/model/plant.toml) at the named fidelity (sim/model/rig.py, FIDELITIES; default the
 reference) into out/heatmap/<run>/ (a plant other than polyester suffixes the run's name with _<plant>, a fidelity
 other than the fast mode, which the committed runs of docs/results.md were made in, with its mesh and step, such as
 _15x15_0.5ms); runs are resumable, so an interrupted script continues where it
@@ -12,7 +12,7 @@ from the committed trials (docs/results/<run>.jsonl.gz) when out/ has none, and 
 there (also when interrupted; --collect writes back a run still going), so a fresh clone continues the committed
 runs instead of repeating them. The wall time of every session of a run is kept in docs/figures/heatmaps.json, so
 the total a run took is known even when it was split. The figures are copied to docs/figures/ beside the scores,
-regions and zone rates, and the paper's findings F1-F5 (sim/findings.py) on the two sphere maps, under both success
+regions and zone rates, and the paper's findings F1-F5 (sim/evaluation/findings.py) on the two sphere maps, under both success
 rules. A plant that reads the paper's success rule as "reached" ends each trial at its first frame within eps
 (--stop-when-reached), unless --to-end runs every trial to T (both success rules measured; the run's name gets
 _to_end).
@@ -31,11 +31,11 @@ from pathlib import Path
 
 import numpy as np
 
-from mantaray.sim.committed import keep, restore, trials_in
-from mantaray.sim.fidelity import parse_fidelity
-from mantaray.sim.findings import CENTRAL_HALF_M, CORNER_FROM_M
-from mantaray.sim.plant import DEFAULT_PLANT, Plant
-from mantaray.sim.rig import FIDELITIES
+from mantaray.sim.evaluation.committed import keep, restore, trials_in
+from mantaray.sim.evaluation.fidelity import parse_fidelity
+from mantaray.sim.evaluation.findings import CENTRAL_HALF_M, CORNER_FROM_M
+from mantaray.sim.model.plant import DEFAULT_PLANT, Plant
+from mantaray.sim.model.rig import FIDELITIES
 
 REPO = Path(__file__).resolve().parents[2]
 COMMITTED = REPO / "docs" / "results"  # every trial of each run, <run>.jsonl.gz
@@ -58,8 +58,8 @@ ZONES = {  # name: which cells, from the cell centres' |x|, |y| [m] on the paper
 
 def zone_rates(results_path: Path) -> dict:
     """Mean success, reach and fall rates over the zones of the workspace, and the regions under the reach rule."""
-    from mantaray.sim import results_file as R
-    from mantaray.sim import summary as S
+    from mantaray.sim.evaluation import results_file as R
+    from mantaray.sim.evaluation import summary as S
 
     results = R.ResultsFile.load(results_path)
     s, p = S.summarize(results), results.experiment
@@ -88,7 +88,9 @@ def main() -> int:
     parser.add_argument("--trials", type=int, default=10, help="trials per cell (the paper: 10)")
     parser.add_argument("--out", default="out/heatmap")
     parser.add_argument("--figures", default="docs/figures")
-    parser.add_argument("--plant", default=DEFAULT_PLANT, help="the simulated plant (a [plant.NAME] of sim/plant.toml)")
+    parser.add_argument(
+        "--plant", default=DEFAULT_PLANT, help="the simulated plant (a [plant.NAME] of sim/model/plant.toml)"
+    )
     parser.add_argument(
         "--to-end",
         action="store_true",
@@ -110,7 +112,7 @@ def main() -> int:
         fidelity = parse_fidelity(args.fidelity)
     except ValueError as exc:
         parser.error(str(exc))
-    from mantaray.sim.parameters import plant_names
+    from mantaray.sim.model.parameters import plant_names
 
     if args.plant not in plant_names():
         parser.error(f"unknown plant {args.plant!r}; the plants are: {', '.join(plant_names())}")
@@ -259,8 +261,8 @@ def main() -> int:
 
 def findings(euclidean_path: Path, manhattan_path: Path) -> dict:
     """F1-F5 on the full sphere maps, under each success rule."""
-    from mantaray.sim import findings as F
-    from mantaray.sim import results_file as R
+    from mantaray.sim.evaluation import findings as F
+    from mantaray.sim.evaluation import results_file as R
 
     runs = {c: R.ResultsFile.load(p) for c, p in (("euclidean", euclidean_path), ("manhattan", manhattan_path))}
     out = {}

@@ -17,11 +17,11 @@ import time
 
 import numpy as np
 
-from mantaray.sim import executors as X
-from mantaray.sim import experiment as E
-from mantaray.sim.objects import OBJECTS
-from mantaray.sim.parameters import ParameterError, plant_names
-from mantaray.sim.plant import parse_setting
+from mantaray.sim.evaluation import executors as X
+from mantaray.sim.evaluation import experiment as E
+from mantaray.sim.model.objects import OBJECTS
+from mantaray.sim.model.parameters import ParameterError, plant_names
+from mantaray.sim.model.plant import parse_setting
 
 
 def sample_stats(records: list[dict]) -> dict:

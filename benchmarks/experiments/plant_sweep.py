@@ -5,7 +5,7 @@ are drawn uniformly within RADIUS of the centre; success = within the tolerance 
 Each grid point runs those same trials (same seeds) with each controller, over the pty, in lock-step.
 
 Run:  python3 benchmarks/experiments/plant_sweep.py --set fabric.size_m=0.5,0.55,0.6 --set 'contact.friction[2]=0.0001,0.001'
-      (keys and ranges of sim/plant.toml; several --set make the Cartesian product; --jobs splits grid points
+      (keys and ranges of sim/model/plant.toml; several --set make the Cartesian product; --jobs splits grid points
       over cores). `mantaray sim calibrate` searches the whole space; this sweeps a grid of a few parameters.
 Prints one line per grid point and controller, and writes them as JSON lines to --out.
 """
@@ -24,10 +24,10 @@ import numpy as np
 from mantaray.host.link import Link
 from mantaray.host.transport import SerialTransport
 from mantaray.host.vmcu import VirtualMcu
-from mantaray.sim.bridge import Bridge, TrialSpec
-from mantaray.sim.model import SimulationUnstable
-from mantaray.sim.plant import Plant
-from mantaray.sim.tracking import Tracking
+from mantaray.sim.model.model import SimulationUnstable
+from mantaray.sim.model.plant import Plant
+from mantaray.sim.model.tracking import Tracking
+from mantaray.sim.trial.bridge import Bridge, TrialSpec
 
 RADIUS_M = 0.10  # [m] starts and targets within this distance of the centre (the issue's central region)
 
@@ -93,7 +93,7 @@ def main() -> int:
         action="append",
         default=[],
         metavar="KEY=V1,V2",
-        help="a parameter of sim/plant.toml and the values to try (e.g. fabric.size_m=0.5,0.55)",
+        help="a parameter of sim/model/plant.toml and the values to try (e.g. fabric.size_m=0.5,0.55)",
     )
     parser.add_argument("--controllers", default="manhattan,euclidean")
     parser.add_argument("--trials", type=int, default=10)

@@ -5,7 +5,7 @@ Run: python3 benchmarks/experiments/rest_positions.py [--plant polyester] [--obj
 The bare sheet's sag converges with the mesh on threads (mesh_statics.py); this asks the same of the sheet with an
 object on it, which is what a trial's outcome rests on. --drops points are drawn from --seed, uniformly over
 |x|, |y| <= 0.15 m (the drop points do not depend on the mesh). On each mesh the object is dropped at each point on
-the settled sheet with the actuators level (sim/model.py, place_object: at rest means slower than 1 cm/s and 0.5 rad/s
+the settled sheet with the actuators level (sim/model/model.py, place_object: at rest means slower than 1 cm/s and 0.5 rad/s
 for 0.2 s, simulated; a drop still moving after 6 s is reported) and its rest position [cm] is printed; the last mesh
 is the finest. Per coarser mesh it then prints
 how far each rest position lies from the finest mesh's [mm] (median, largest) and in how many drops that distance
@@ -22,11 +22,11 @@ import time
 import mujoco
 import numpy as np
 
-from mantaray.sim import model as M
-from mantaray.sim.fidelity import parse_fidelity
-from mantaray.sim.objects import OBJECTS
-from mantaray.sim.parameters import ParameterError, plant_names
-from mantaray.sim.plant import Plant, parse_setting
+from mantaray.sim.evaluation.fidelity import parse_fidelity
+from mantaray.sim.model import model as M
+from mantaray.sim.model.objects import OBJECTS
+from mantaray.sim.model.parameters import ParameterError, plant_names
+from mantaray.sim.model.plant import Plant, parse_setting
 
 DROP_HALF_WIDTH_M = 0.15  # [m] drops are uniform over |x|, |y| within this
 SETTLE_MAX_S = 6.0  # [s, simulated] a drop still moving after this is reported as such

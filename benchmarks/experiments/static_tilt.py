@@ -28,12 +28,12 @@ import sys
 import numpy as np
 
 import mantaray.sim  # noqa: F401  (headless GL before mujoco)
-from mantaray.sim import experiment as E
-from mantaray.sim import model as M
-from mantaray.sim.objects import OBJECTS
-from mantaray.sim.parameters import plant_names
-from mantaray.sim.plant import parse_setting
-from mantaray.sim.rig import Rig
+from mantaray.sim.evaluation import experiment as E
+from mantaray.sim.model import model as M
+from mantaray.sim.model.objects import OBJECTS
+from mantaray.sim.model.parameters import plant_names
+from mantaray.sim.model.plant import parse_setting
+from mantaray.sim.model.rig import Rig
 
 SLID_M = 0.02  # [m] a slide this long counts as the object set going (the protocol's ε)
 AT_TILT_DEG = 1.0  # [deg] the carriages count as at the commanded tilt within this
@@ -101,14 +101,14 @@ def main() -> int:
         "--integrator",
         choices=("Euler", "discrete"),
         default=None,
-        help="MuJoCo's integrator (default: the rig's, sim/rig.py Solver)",
+        help="MuJoCo's integrator (default: the rig's, sim/model/rig.py Solver)",
     )
     parser.add_argument(
         "--set",
         action="append",
         default=[],
         metavar="KEY=VALUE",
-        help="set a plant parameter over each plant (a key of sim/plant.toml, in its range); repeatable",
+        help="set a plant parameter over each plant (a key of sim/model/plant.toml, in its range); repeatable",
     )
     args = parser.parse_args()
     try:

@@ -35,10 +35,10 @@ from mantaray.paths import REPO
 from mantaray.protocol import messages as m
 from mantaray.protocol import rig as rig_description
 from mantaray.protocol.rig import rig_file
-from mantaray.sim.bridge import Bridge, TrialSpec
-from mantaray.sim.fidelity import parse_fidelity
-from mantaray.sim.parameters import plant_names
-from mantaray.sim.plant import DEFAULT_PLANT, Plant, plant_for
+from mantaray.sim.evaluation.fidelity import parse_fidelity
+from mantaray.sim.model.parameters import plant_names
+from mantaray.sim.model.plant import DEFAULT_PLANT, Plant, plant_for
+from mantaray.sim.trial.bridge import Bridge, TrialSpec
 
 ARDUINO_RX_BUFFER_BYTES = 64  # HardwareSerial's receive buffer unless an environment sets SERIAL_RX_BUFFER_SIZE
 
@@ -62,7 +62,7 @@ def main() -> int:
     parser.add_argument(
         "--plant",
         choices=plant_names(),
-        help=f"the plant of the bench-side trial (sim/plant.toml) (default: the one --settings was "
+        help=f"the plant of the bench-side trial (sim/model/plant.toml) (default: the one --settings was "
         f"tuned for, else {DEFAULT_PLANT})",
     )
     parser.add_argument("--rig", type=rig_file, default=rig_description.default(), metavar="FILE", help="rig file")

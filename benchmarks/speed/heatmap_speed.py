@@ -2,8 +2,8 @@
 
 Run: python3 benchmarks/speed/heatmap_speed.py [--configs reference,15:0.001,15:0.002,fast] [--jobs 2] [--plant paper]
      [--variant plant --variant fabric.stretch=threads,contact.model=kernel]
-Each config (a named fidelity of sim/rig.py, or RESOLUTION:TIMESTEP [vertices per side : s]), under each variant
-of the plant (`plant`: as it is; else KEY=VALUE,... of sim/plant.toml fixed over it; the plant alone unless
+Each config (a named fidelity of sim/model/rig.py, or RESOLUTION:TIMESTEP [vertices per side : s]), under each variant
+of the plant (`plant`: as it is; else KEY=VALUE,... of sim/model/plant.toml fixed over it; the plant alone unless
 --variant is given), runs the same
 sample of cells (a 4 x 4 spread over the 20 x 20 grid, the paper's 10 trials each, T = 10 s) on --jobs workers,
 firmware core in-process. Prints, per config: trials per wall second and its ratio to the first config,
@@ -26,12 +26,12 @@ from pathlib import Path
 
 import numpy as np
 
-from mantaray.sim import executors as X
-from mantaray.sim import experiment as E
-from mantaray.sim import fidelity as G
-from mantaray.sim import results_file as R
-from mantaray.sim.parameters import ParameterError
-from mantaray.sim.plant import DEFAULT_PLANT, parse_setting
+from mantaray.sim.evaluation import executors as X
+from mantaray.sim.evaluation import experiment as E
+from mantaray.sim.evaluation import fidelity as G
+from mantaray.sim.evaluation import results_file as R
+from mantaray.sim.model.parameters import ParameterError
+from mantaray.sim.model.plant import DEFAULT_PLANT, parse_setting
 
 SAMPLE_IX = (2, 7, 12, 17)  # cells ix, iy of the sample: centres at -0.1875, -0.0625, 0.0625, 0.1875 m
 FULL_TRIALS = 4000  # the paper's protocol: 20 x 20 cells x 10 trials
@@ -46,7 +46,7 @@ def batched_stepping(steps: int = 500) -> None:
     import mujoco
     from mujoco import rollout
 
-    from mantaray.sim import model as M
+    from mantaray.sim.model import model as M
 
     fast = G.FIDELITIES["fast"]
     model, data = M.load(E.Experiment(resolution=fast.resolution, timestep_s=fast.timestep_s).rig())
@@ -108,12 +108,12 @@ def main() -> int:
     parser.add_argument("--controller", default="manhattan")
     parser.add_argument("--object", default="sphere")
     parser.add_argument("--alpha", type=float, default=0.0)
-    parser.add_argument("--plant", default=DEFAULT_PLANT, help="a named plant of sim/plant.toml")
+    parser.add_argument("--plant", default=DEFAULT_PLANT, help="a named plant of sim/model/plant.toml")
     parser.add_argument(
         "--variant",
         action="append",
         help="a variant of the plant to run each config under: plant (as it is) or KEY=VALUE,... of "
-        "sim/plant.toml (like fabric.stretch=threads,contact.model=kernel); repeatable",
+        "sim/model/plant.toml (like fabric.stretch=threads,contact.model=kernel); repeatable",
     )
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     parser.add_argument("--out", default="out/bench/heatmap_speed")

@@ -2,11 +2,11 @@
 
 Run: python3 benchmarks/speed/search_budget.py [--controller cascade] [--plant paper] [--candidates 60] [--ratio 3]
      [--screen-at fast] [--jobs 2] [--out out/bench/search_budget]
-One unpruned `sim tune` search at the reference fidelity (sim/rig.py, FIDELITIES) with Optuna's random sampler,
+One unpruned `sim tune` search at the reference fidelity (sim/model/rig.py, FIDELITIES) with Optuna's random sampler,
 seeded, so that its candidates do not depend on their scores; every candidate keeps its misses per cell. Resumable:
 the study is OUT/study.db. From it, with no trial run again:
 - the pruned search: the same candidates in the same order put to the pruned search's own pruner (successive
-  halving over the same nested rungs, sim/tune.py replay_pruned), which is exactly what `sim tune --prune` with this
+  halving over the same nested rungs, sim/search/tune.py replay_pruned), which is exactly what `sim tune --prune` with this
   sampler runs;
 - the same budget: the unpruned search given 1/--ratio of its trials (its first candidates) against the pruned one
   given those trials; each one's best (fewest misses on the search's sample), then both bests scored again on a
@@ -31,13 +31,13 @@ from pathlib import Path
 import numpy as np
 import optuna
 
-from mantaray.sim import findings as F
-from mantaray.sim import study as S
-from mantaray.sim import tune as T
-from mantaray.sim.executors import LocalPool
-from mantaray.sim.fidelity import parse_fidelity
-from mantaray.sim.parameters import plant_names
-from mantaray.sim.results_file import write_whole
+from mantaray.sim.evaluation import findings as F
+from mantaray.sim.evaluation.executors import LocalPool
+from mantaray.sim.evaluation.fidelity import parse_fidelity
+from mantaray.sim.evaluation.results_file import write_whole
+from mantaray.sim.model.parameters import plant_names
+from mantaray.sim.search import study as S
+from mantaray.sim.search import tune as T
 
 HOLDOUT_SEED = 77  # [-] the held-out sample's seed: not the search's (31)
 

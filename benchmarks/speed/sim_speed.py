@@ -15,9 +15,9 @@ import sys
 from mantaray.host.link import Link
 from mantaray.host.transport import SerialTransport
 from mantaray.host.vmcu import VirtualMcu
-from mantaray.sim.bridge import Bridge, TrialSpec
-from mantaray.sim.objects import OBJECTS
-from mantaray.sim.rig import Rig
+from mantaray.sim.model.objects import OBJECTS
+from mantaray.sim.model.rig import Rig
+from mantaray.sim.trial.bridge import Bridge, TrialSpec
 
 ALPHA_M = {"cube": 0.1, "bunny": 0.05, "disk": 0.05, "cylinder": 0.1, "apple": 0.05, "egg": 0.01}  # paper, Fig. 3
 

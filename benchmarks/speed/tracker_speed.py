@@ -111,12 +111,12 @@ def main() -> int:
 
     import mujoco
 
-    from mantaray.sim import mjcf as J
-    from mantaray.sim import model as M
-    from mantaray.sim.bridge import Bridge, TrialSpec
-    from mantaray.sim.rig import Rig
-    from mantaray.sim.tracking import Tracking
-    from mantaray.sim.vision import CameraVision
+    from mantaray.sim.model import mjcf as J
+    from mantaray.sim.model import model as M
+    from mantaray.sim.model.rig import Rig
+    from mantaray.sim.model.tracking import Tracking
+    from mantaray.sim.trial.bridge import Bridge, TrialSpec
+    from mantaray.sim.trial.vision import CameraVision
 
     rig = Rig().with_object("cube").with_vision("aruco")
     model, data = M.load(rig)

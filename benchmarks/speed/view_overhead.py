@@ -22,9 +22,9 @@ from mantaray.host.link import Link
 from mantaray.host.transport import SerialTransport
 from mantaray.host.view import REPORTED_ACTUATORS, LiveOptions, LiveServer, RunView
 from mantaray.host.vmcu import VirtualMcu
-from mantaray.sim.bridge import Bridge, TrialSpec
-from mantaray.sim.rig import Rig
-from mantaray.sim.trial_view import TrialView
+from mantaray.sim.model.rig import Rig
+from mantaray.sim.trial.bridge import Bridge, TrialSpec
+from mantaray.sim.trial.trial_view import TrialView
 
 SETUPS = ("no view", "recording", "live view")
 

@@ -1,0 +1,1 @@
+"""`mantaray sim ...`: the command lines (commands.py) and one handler module per command."""
