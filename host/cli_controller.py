@@ -33,8 +33,9 @@ def parse_gains(text: str) -> tuple[float, float, float, float]:
 def controller_settings(parser: argparse.ArgumentParser, args: argparse.Namespace):
     """The controller settings a command runs with: --settings FILE (its controller), else --controller's boot
     values, with --gains on each of its PIDs (where the command takes --gains); a --controller that contradicts the
-    file, or --gains beside a file that sets gains, is a usage error. Sets args.controller. The one shape every
-    command carries a controller's gains in: the settings' pid.AXIS.NAME keys, the firmware's numbers."""
+    file, or --gains beside a file that sets gains, is a usage error. The controller is the settings' (args is
+    left as parsed). The one shape every command carries a controller's gains in: the settings' pid.AXIS.NAME keys,
+    the firmware's numbers."""
     from mantaray.host.controller_settings import ControllerSettings, SettingsError
 
     try:
@@ -50,7 +51,6 @@ def controller_settings(parser: argparse.ArgumentParser, args: argparse.Namespac
             f"--controller {args.controller} contradicts {args.settings}, which sets up the "
             f"{settings.controller} controller"
         )
-    args.controller = settings.controller
     if getattr(args, "gains", None) is None:
         return settings
     if any(k.startswith("pid.") for k, _ in settings.values):

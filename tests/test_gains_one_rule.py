@@ -49,7 +49,7 @@ def _rig(options: list[str]):
 
 def _sim_run(options: list[str], plant: str, tmp_path):
     parser, args = _parsed(["sim", "run", "--plant", plant, "--out", str(tmp_path), *options])
-    return cli_run._trial(args, parser)[2].setup()
+    return cli_run._trial(args, parser).spec.setup()
 
 
 def _heatmap(options: list[str], plant: str):

@@ -1,8 +1,12 @@
-"""Command handlers stay short: each reads as its command's steps, the work in named helpers (issue 42, item 7)."""
+"""Command handlers stay short: each reads as its command's steps, the work in named helpers (issue 42, item 7); the
+simulation's settle their arguments into one frozen request instead of writing back into them (item 4)."""
 
 from __future__ import annotations
 
 import ast
+import dataclasses
+
+import pytest
 
 from mantaray.paths import REPO
 
@@ -29,3 +33,24 @@ def test_the_handlers_are_found():
 def test_no_command_handler_is_over_45_lines():
     long = [f"{path}:{name} ({lines} lines)" for path, name, lines in _handlers() if lines > MAX_LINES]
     assert not long, f"handlers over {MAX_LINES} lines: {', '.join(long)}"
+
+
+SETTINGS = "docs/results/tune/sphere_cascade/settings.toml"  # it names its controller (cascade) and plant (paper)
+
+
+def test_sim_run_and_heatmap_settle_their_defaults_in_a_request_and_leave_the_arguments_as_parsed(tmp_path):
+    from mantaray.cli import build_parser
+    from mantaray.sim.cli import heatmap, run
+
+    for argv, build in (
+        (["sim", "run", "--settings", SETTINGS, "--out", str(tmp_path)], run._trial),
+        (["sim", "heatmap", "--settings", SETTINGS, "--cells", "2", "--trials", "1"], heatmap._experiment),
+    ):
+        parser = build_parser(argv)
+        args = parser.parse_args(argv)
+        parsed = dict(vars(args))
+        request = build(args, parser)
+        assert vars(args) == parsed, argv[1]
+        assert (request.controller, request.plant) == ("cascade", "paper"), argv[1]
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            request.controller = "manhattan"

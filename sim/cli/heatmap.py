@@ -110,7 +110,7 @@ def _write_outputs(args: argparse.Namespace, experiment, results, out: Path) -> 
     from ..evaluation.summary import heatmap_outputs
 
     title = (
-        f"{args.object}, {args.controller}, α = {args.alpha:g} m, ε = {args.tolerance:g} m, T = {args.duration:g} s, "
+        f"{args.object}, {experiment.controller}, α = {args.alpha:g} m, ε = {args.tolerance:g} m, T = {args.duration:g} s, "
         + (
             f"adaptive, at most {experiment.trials_per_cell}"
             if experiment.adaptive
@@ -119,7 +119,7 @@ def _write_outputs(args: argparse.Namespace, experiment, results, out: Path) -> 
         + " trials/cell"
     )
     summary = heatmap_outputs(results, out, title)
-    print(json.dumps(summary) if args.json else _summary_line(args, summary, len(experiment.cell_ids()), out))
+    print(json.dumps(summary) if args.json else _summary_line(args, experiment, summary, out))
 
 
 def _experiment(args: argparse.Namespace, parser: argparse.ArgumentParser):
@@ -130,11 +130,10 @@ def _experiment(args: argparse.Namespace, parser: argparse.ArgumentParser):
         parser.error("--live shows the trial of a worker of this machine: use it with --executor local")
 
     settings = controller_settings(parser, args)
-    args.plant = plant_for_settings(parser, settings, args.plant)
     try:
         return Experiment(
             object_name=args.object,
-            controller=args.controller,
+            controller=settings.controller,
             cells=args.cells,
             trials_per_cell=args.trials,
             tolerance_m=args.tolerance,
@@ -144,7 +143,7 @@ def _experiment(args: argparse.Namespace, parser: argparse.ArgumentParser):
             resolution=args.resolution,
             timestep_s=args.timestep,
             only_cells=args.only_cells,
-            plant=args.plant,
+            plant=plant_for_settings(parser, settings, args.plant),
             plant_set=tuple(sorted(args.set)),
             stop_when_reached=args.stop_when_reached,
             settings=settings.values,
@@ -158,10 +157,10 @@ def _default_out(args: argparse.Namespace, experiment) -> str:
     """out/heatmap/ and a name for what the map is of: object, controller (or settings file), α and plant."""
     from ..evaluation.fidelity import fixed_slug
 
-    plant = ("" if args.plant == DEFAULT_PLANT else f"_{args.plant}") + fixed_slug(experiment.plant_set)
+    plant = ("" if experiment.plant == DEFAULT_PLANT else f"_{experiment.plant}") + fixed_slug(experiment.plant_set)
     tuned = f"_{Path(args.settings).stem}" if args.settings else ""
-    adaptive = "_adaptive" if args.adaptive else ""
-    return f"out/heatmap/{args.object}_{args.controller}{tuned}_alpha{args.alpha:g}{plant}{adaptive}"
+    adaptive = "_adaptive" if experiment.adaptive else ""
+    return f"out/heatmap/{args.object}_{experiment.controller}{tuned}_alpha{args.alpha:g}{plant}{adaptive}"
 
 
 def _records(args: argparse.Namespace, experiment, todo: list, live):
@@ -173,12 +172,17 @@ def _records(args: argparse.Namespace, experiment, todo: list, live):
     return run_local(experiment, todo, workers(args.jobs), None if live is None else Watch(live.options.grpc_url))
 
 
-def _summary_line(args: argparse.Namespace, summary: dict, cells: int, out: Path) -> str:
+def _summary_line(args: argparse.Namespace, experiment, summary: dict, out: Path) -> str:
+    cells = len(experiment.cell_ids())
     return (
-        f"{args.object}, {args.controller}: score {summary['score']:.1f} of {cells} cells "
+        f"{args.object}, {experiment.controller}: score {summary['score']:.1f} of {cells} cells "
         f"(within ε at any frame: {summary['reach_score']:.1f}); regions: "
         + ", ".join(f"{name} {r['cells']} cells ({r['area_m2']:.4f} m²)" for name, r in summary["regions"].items())
-        + (f"; adaptive: {summary['trials']} of {cells * args.trials} trials" if args.adaptive else "")
+        + (
+            f"; adaptive: {summary['trials']} of {cells * experiment.trials_per_cell} trials"
+            if experiment.adaptive
+            else ""
+        )
         + f"; {out}/results.jsonl, cells.csv, summary.json, heatmap.png"
     )
 

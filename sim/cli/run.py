@@ -6,6 +6,8 @@ import argparse
 import hashlib
 import json
 import os
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from mantaray.arguments import reporter
 from mantaray.host.cli_controller import controller_settings
@@ -16,16 +18,44 @@ from mantaray.protocol import rig as rig_description
 
 from .common import output, plant_for_settings
 
+if TYPE_CHECKING:
+    from ..model.rig import Rig
+    from ..model.tracking import Tracking
+    from ..trial.bridge import TrialSpec
+    from ..trial.trial_run import TrialOutputs
+
+
+@dataclass(frozen=True)
+class RunRequest:
+    """What `sim run` runs, settled once from its arguments: the rig, camera, trial and outputs, and the names the
+    arguments may leave to defaults (the controller a settings file sets, the plant it was tuned on, the rig file)."""
+
+    rig: Rig
+    tracking: Tracking
+    spec: TrialSpec
+    outputs: TrialOutputs
+    controller: str
+    plant: str
+    rig_file: rig_description.RigDescription
+
 
 def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """`sim run`: one trial set up from the arguments, run (sim/trial/trial_run.py), and reported."""
     from ..trial.trial_run import run_trial
 
-    rig, tracking, spec, outputs = _trial(args, parser)
+    request = _trial(args, parser)
+    outputs = request.outputs
     bar, progress = _progress(args)
     try:
         result, paths = run_trial(
-            rig, tracking, spec, outputs, _report, port=args.port, realtime=args.realtime, progress=progress
+            request.rig,
+            request.tracking,
+            request.spec,
+            outputs,
+            _report,
+            port=args.port,
+            realtime=args.realtime,
+            progress=progress,
         )
     except ValueError as exc:  # model.fabric_height: the sheet sags inside its corners there
         if "not over the fabric" not in str(exc):
@@ -40,12 +70,12 @@ def run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if bar is not None:
             bar.close()
     _warnings(args, result)
-    summary = {**result.summary(), "plant": args.plant, "plant_set": dict(args.set), **paths}
-    print(json.dumps(summary) if args.json else _summary_line(args, result, paths))
+    summary = {**result.summary(), "plant": request.plant, "plant_set": dict(args.set), **paths}
+    print(json.dumps(summary) if args.json else _summary_line(args, request, result, paths))
     return 0 if result.success else 1
 
 
-def _trial(args: argparse.Namespace, parser: argparse.ArgumentParser):
+def _trial(args: argparse.Namespace, parser: argparse.ArgumentParser) -> RunRequest:
     """The rig, camera model, trial and outputs the arguments ask for; a usage error for any that cannot be."""
     from mantaray.host.ports import check_port
 
@@ -55,15 +85,16 @@ def _trial(args: argparse.Namespace, parser: argparse.ArgumentParser):
     from ..trial.video import FPS_RANGE
 
     settings = controller_settings(parser, args)
-    args.plant = plant_for_settings(parser, settings, args.plant)
-    plant = Plant(args.plant).set(dict(args.set))
-    args.rig = args.rig or rig_description.default()
+    plant_name = plant_for_settings(parser, settings, args.plant)
+    plant = Plant(plant_name).set(dict(args.set))
+    rig_file = args.rig or rig_description.default()
+    resolved = {**vars(args), "controller": settings.controller, "plant": plant_name, "rig": rig_file}
     try:
         rig = plant.rig(args.object, resolution=args.resolution, timestep_s=args.timestep)
     except ValueError as exc:
         parser.error(f"--resolution, --timestep: {exc}")
     try:
-        rig = rig.with_description(args.rig)
+        rig = rig.with_description(rig_file)
     except ValueError as exc:  # a rig file whose actuators the simulated rig lacks, or no firmware is built for
         parser.error(f"--rig: {exc}")
     if args.vision:
@@ -87,7 +118,7 @@ def _trial(args: argparse.Namespace, parser: argparse.ArgumentParser):
         spec = TrialSpec(
             args.start,
             args.target,
-            controller=args.controller,
+            controller=settings.controller,
             duration_s=args.duration,
             alpha_m=args.alpha,
             tolerance_m=args.tolerance,
@@ -99,8 +130,8 @@ def _trial(args: argparse.Namespace, parser: argparse.ArgumentParser):
         parser.error(str(exc))
     outputs = TrialOutputs(
         out=output(parser, writable_dir, args.out),
-        stem=_trial_stem(args),
-        metadata={**_settings(args), "plant": args.plant, "object": rig.object.name},
+        stem=_trial_stem(resolved),
+        metadata={**_settings(resolved), "object": rig.object.name},
         tilt_limit_deg=settings.configure(m.Configure()).tilt_limit,
         video_fps=args.video_fps if args.video else None,
         viewer=args.viewer,
@@ -109,7 +140,7 @@ def _trial(args: argparse.Namespace, parser: argparse.ArgumentParser):
     )
     if outputs.live is not None:
         _report(f"live view at {outputs.live.options.page_url}")
-    return rig, tracking, spec, outputs
+    return RunRequest(rig, tracking, spec, outputs, settings.controller, plant_name, rig_file)
 
 
 def _progress(args: argparse.Namespace):
@@ -142,14 +173,14 @@ def _warnings(args: argparse.Namespace, result) -> None:
 HEADLINE = {"fell off": "FELL OFF", "success": "SUCCESS", "not within ε at T": "NOT WITHIN ε AT T"}  # the line's start
 
 
-def _summary_line(args: argparse.Namespace, result, paths: dict) -> str:
+def _summary_line(args: argparse.Namespace, request: RunRequest, result, paths: dict) -> str:
     from ..trial.trial_run import outcome_words
 
     reach = (
         "never reached ε" if result.time_to_reach_s is None else f"reached ε first at {result.time_to_reach_s:.2f} s"
     )
     return (
-        f"{HEADLINE[outcome_words(result)]}: {args.object}, {args.controller}, {args.plant} plant"
+        f"{HEADLINE[outcome_words(result)]}: {args.object}, {request.controller}, {request.plant} plant"
         + "".join(f", {k}={v}" for k, v in args.set)
         + f", start {args.start[0]:+.3f},{args.start[1]:+.3f} -> target {args.target[0]:+.3f},{args.target[1]:+.3f} "
         f"m; final error {result.final_error_m * 100:.1f} cm (ε {args.tolerance * 100:g} cm), {reach}; "
@@ -167,16 +198,20 @@ def _inside(parser: argparse.ArgumentParser, name: str, xy: tuple[float, float],
 _report = reporter("sim run")
 
 
-def _settings(args: argparse.Namespace) -> dict:
-    """What the trial was: every argument but where its outputs go and how it is watched."""
+def _settings(resolved: dict) -> dict:
+    """What the trial was: every argument, with the defaults settled, but where its outputs go and how it is
+    watched."""
     watching = ("out", "json", "video", "video_fps", "viewer", "live", "live_port", "bind", "linger")
-    settings = {k: v for k, v in sorted(vars(args).items()) if k not in (*watching, "func", "command", "sim_command")}
-    return {**settings, "rig": args.rig.name}  # the rig by its build's name
+    settings = {k: v for k, v in sorted(resolved.items()) if k not in (*watching, "func", "command", "sim_command")}
+    return {**settings, "rig": resolved["rig"].name}  # the rig by its build's name
 
 
-def _trial_stem(args: argparse.Namespace) -> str:
+def _trial_stem(resolved: dict) -> str:
     """The file name of one trial's outputs: what it was, readably, and a digest of every other setting, so two
     different trials never overwrite each other's files and the same trial run again does."""
-    digest = hashlib.sha1(repr(_settings(args)).encode()).hexdigest()[:6]
-    (sx, sy), (tx, ty) = args.start, args.target
-    return f"{args.object}_{args.controller}_{sx:+.3f},{sy:+.3f}_to_{tx:+.3f},{ty:+.3f}_seed{args.seed}_{digest}"
+    digest = hashlib.sha1(repr(_settings(resolved)).encode()).hexdigest()[:6]
+    (sx, sy), (tx, ty) = resolved["start"], resolved["target"]
+    return (
+        f"{resolved['object']}_{resolved['controller']}_{sx:+.3f},{sy:+.3f}_to_{tx:+.3f},{ty:+.3f}"
+        f"_seed{resolved['seed']}_{digest}"
+    )
