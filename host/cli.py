@@ -167,7 +167,10 @@ def _rig_inputs(args: argparse.Namespace, parser: argparse.ArgumentParser, targe
     except (ValueError, OSError, KeyError) as exc:
         parser.error(str(exc))
     tracker = Tracker(
-        marker_height_m=args.marker_height, camera_height_m=args.camera_height, calibration=calibration, blob=args.blob
+        marker_height_m=args.marker_height,
+        camera_height_m=args.camera_height,
+        calibration=calibration,
+        blobs=(args.blob,) if args.blob else (),
     )
     return setup, source, tracker, out
 

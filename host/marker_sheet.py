@@ -18,14 +18,14 @@ PRINTED = MarkerLayout()  # the layout this sheet prints unless told another
 
 
 def write_marker_sheet(out: Path, dpi: int, layout: MarkerLayout = PRINTED) -> int:
-    """Draw the four corner markers and two object markers on A4 into out; returns how many markers it holds."""
+    """Draw the four corner markers and two of each object's marker on A4 into out; returns how many markers it holds."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     items = [(f"corner {k} (id {i})", i, layout.corner_size_m) for k, i in enumerate(layout.corner_ids)]
-    items += [(f"object (id {layout.object_id})", layout.object_id, layout.object_size_m)] * 2
+    items += [(f"object (id {i})", i, layout.object_size_m) for i in layout.object_ids for _ in range(2)]  # a spare
     fig = plt.figure(figsize=(A4_MM[0] / 25.4, A4_MM[1] / 25.4))
     ax = fig.add_axes((0, 0, 1, 1))
     ax.set_xlim(0, A4_MM[0])

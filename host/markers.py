@@ -20,9 +20,27 @@ class MarkerLayout:
     corner_ids: tuple[int, int, int, int] = (0, 1, 2, 3)  # marker id at corner 0..3
     corner_offset_m: tuple[float, float] = (0.33, 0.20)  # [m] corner marker centres at (+-x, +-y)
     corner_size_m: float = 0.04  # [m] black square's side
-    object_id: int = 10
+    object_ids: tuple[int, ...] = (10,)  # the marker on each object's top, in the order of the run's objects
     object_size_m: float = 0.03  # [m] black square's side, on the object's top
     border_bits: int = 1  # ArUco's black border, in cells
+
+    def __post_init__(self) -> None:
+        """Every marker names one thing: object ids distinct, none a corner's, each in the dictionary."""
+        ids = tuple(self.object_ids)
+        size = int(self.dictionary.rsplit("_", 1)[-1])  # DICT_4X4_50: ids 0..49
+        if not ids:
+            raise ValueError("object_ids: at least one object's marker id")
+        if len(set(ids)) != len(ids):
+            twice = sorted({i for i in ids if ids.count(i) > 1})
+            raise ValueError(
+                f"object_ids: {', '.join(map(str, twice))} given to two objects; each object needs its own"
+            )
+        clash = sorted(set(ids) & set(self.corner_ids))
+        if clash:
+            raise ValueError(f"object_ids: {', '.join(map(str, clash))} is a corner marker's id ({self.corner_ids})")
+        outside = [i for i in ids if not 0 <= i < size]
+        if outside:
+            raise ValueError(f"object_ids: {outside[0]} is not in {self.dictionary} (ids 0..{size - 1})")
 
     def corner_centres_m(self) -> np.ndarray:
         """(4, 2) centres of the corner markers in the fabric frame, corner 0..3."""

@@ -20,7 +20,7 @@ from .link import LinkError
 from .loop import STOPPED_REACHED, CameraFrame, ClosedLoop, Tolerance
 from .runlog import RunLog
 from .session import BoardLost, EmergencyStopLatched, RigSession, Setup
-from .tracker import FrameSource, Observation, Tracker
+from .tracker import FrameSource, Observation, Presence, Tracker
 from .view import RunView
 
 STOP, EMERGENCY_STOP = "stopped", "emergency stop"  # the outcomes of the keys
@@ -110,6 +110,7 @@ class RigRun:
         self._interrupted = False
         self._keys: Keys | None = None
         self._seen: Observation | None = None  # the tracker's last observation, for the log
+        self._presence = Presence(tracker.object_names())  # when the tracker loses an object, and finds it again
         self._image = None  # the camera's last image (BGR or grey), for the view
         self._run_s = 0.0  # [s] run time of the last frame
         self._typed: str | None = None  # a target being typed after the t key; None: not typing
@@ -181,6 +182,8 @@ class RigRun:
                 return
             self._image = image
             obs = self._seen = self.tracker.observe(image, capture_s)
+            for line in self._presence.update(run_s, obs):
+                self.report(f"tracker: {line}")
             if obs.visible and (abs(obs.xy_m[0]) > reach[0] or abs(obs.xy_m[1]) > reach[1]):
                 self.report(
                     f"the object was seen at {obs.xy_m[0]:+.3f},{obs.xy_m[1]:+.3f} m, off the fabric by "

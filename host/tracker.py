@@ -7,11 +7,16 @@ straight above camera_xy_m at camera_height_m. With a calibration (camera matrix
 solves the camera's full pose from the corner markers and intersects the ray through the object's
 marker with the plane of the marker's height. Either way nothing is guessed: a frame without all four
 corner markers, or without the object, is reported as such (Observation.status).
+
+Several objects are told apart by their markers' ids (MarkerLayout.object_ids) or by their colours (one BlobColour
+each), so an object keeps its place in Observation.objects from frame to frame; Presence says when one is lost and
+when it is found again.
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -41,15 +46,34 @@ class Calibration:
 
 
 @dataclass(frozen=True)
+class ObjectSeen:
+    """Where one tracked object was in one frame."""
+
+    xy_m: tuple[float, float] | None  # [m] in the fabric frame; None: not seen in this frame
+    pixel: tuple[float, float] | None = None  # [px] where it was found in the image (x right, y down)
+
+
+@dataclass(frozen=True)
 class Observation:
-    """One camera frame's verdict: the object's (x, y) [m] in the fabric frame, or why there is none."""
+    """One camera frame's verdict: every tracked object's (x, y) [m] in the fabric frame, or why there is none.
+
+    status is the frame's verdict on the first (or only) object, whose place xy_m and pixel give: OK, NO_FRAME (no
+    object measured at all) or NO_OBJECT. objects holds every tracked object in the order of the layout's
+    object_ids (or of the blob colours); it is empty when the frame gave no fabric frame."""
 
     capture_time_s: float  # [s] when the frame was captured (monotonic clock or video time)
     status: str  # OK, NO_FRAME or NO_OBJECT
-    xy_m: tuple[float, float] | None = None
+    objects: tuple[ObjectSeen, ...] = ()
     corners_seen: tuple[int, ...] = ()  # which corner markers (0..3) this frame showed
     reused_frame_fit: bool = False  # the fabric frame came from an earlier image (a corner was hidden)
-    pixel: tuple[float, float] | None = None  # [px] where the object was found in the image (x right, y down)
+
+    @property
+    def xy_m(self) -> tuple[float, float] | None:
+        return self.objects[0].xy_m if self.objects else None
+
+    @property
+    def pixel(self) -> tuple[float, float] | None:
+        return self.objects[0].pixel if self.objects else None
 
     @property
     def visible(self) -> bool:
@@ -75,7 +99,7 @@ class Tracker:
     camera_height_m: float = 1.0  # [m] camera above that plane (homography mode's parallax)
     camera_xy_m: tuple[float, float] = (0.0, 0.0)  # [m] the point the camera stands above
     calibration: Calibration | None = None
-    blob: BlobColour | None = None  # track a colour blob instead of the object's marker
+    blobs: tuple[BlobColour, ...] = ()  # track colour blobs, one colour an object, instead of the objects' markers
     max_frame_age_s: float = 5.0  # [s] how long a fabric-frame fit may be reused
 
     def __post_init__(self) -> None:
@@ -102,15 +126,22 @@ class Tracker:
             reused = True
         else:
             return Observation(t, NO_FRAME, corners_seen=seen)
-        if self.blob is not None:
-            point = self._blob_centre(image)
+        if self.blobs:
+            points = [self._blob_centre(image, blob) for blob in self.blobs]
         else:
-            marker = found.get(self.layout.object_id)
-            point = None if marker is None else marker.mean(axis=0)
-        if point is None:
-            return Observation(t, NO_OBJECT, corners_seen=seen, reused_frame_fit=reused)
-        x, y = self._to_fabric(point)
-        return Observation(t, OK, (float(x), float(y)), seen, reused, (float(point[0]), float(point[1])))
+            points = [None if i not in found else found[i].mean(axis=0) for i in self.layout.object_ids]
+        objects = tuple(ObjectSeen(None) if p is None else self._seen_at(p) for p in points)
+        return Observation(t, OK if objects[0].xy_m is not None else NO_OBJECT, objects, seen, reused)
+
+    def object_names(self) -> list[str]:
+        """What each tracked object is called in messages, in Observation.objects' order."""
+        if self.blobs:
+            return [f"object {k} (colour blob {k})" for k in range(len(self.blobs))]
+        return [f"object {k} (marker {i})" for k, i in enumerate(self.layout.object_ids)]
+
+    def _seen_at(self, pixel: np.ndarray) -> ObjectSeen:
+        x, y = self._to_fabric(pixel)
+        return ObjectSeen((float(x), float(y)), (float(pixel[0]), float(pixel[1])))
 
     def _fit_frame(self, image_corners: np.ndarray):
         import cv2
@@ -179,21 +210,65 @@ class Tracker:
         point = centre + s * direction
         return float(point[0]), float(point[1])
 
-    def _blob_centre(self, image: np.ndarray) -> np.ndarray | None:
+    @staticmethod
+    def _blob_centre(image: np.ndarray, blob: BlobColour) -> np.ndarray | None:
         import cv2
 
-        assert self.blob is not None  # observe() calls this only in the blob mode
         if image.ndim == 2:
             raise ValueError("colour-blob tracking needs colour (BGR) images")
         hsv = cv2.cvtColor(image, cv2.COLOR_BGR2HSV)
-        mask = cv2.inRange(hsv, np.array(self.blob.hsv_low), np.array(self.blob.hsv_high))
+        mask = cv2.inRange(hsv, np.array(blob.hsv_low), np.array(blob.hsv_high))
         count, _, stats, centroids = cv2.connectedComponentsWithStats(mask)
         if count <= 1:
             return None
         best = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-        if stats[best, cv2.CC_STAT_AREA] < self.blob.min_area_px:
+        if stats[best, cv2.CC_STAT_AREA] < blob.min_area_px:
             return None
         return centroids[best]
+
+
+@dataclass
+class Presence:
+    """Which tracked objects are seen, frame after frame: an object is lost once not seen for lost_after_s since
+    it last was (a marker that flickers for a frame or two is not), and found again at the first frame that sees it
+    after that. A frame without the fabric frame says nothing of the objects."""
+
+    names: Sequence[str]  # the objects, in Observation.objects' order (Tracker.object_names)
+    # [s] shorter than the firmware's deadman (0.5 s by default), so the loss is said before the board levels
+    lost_after_s: float = 0.3
+    _last_seen_s: list = field(default_factory=list)  # [s] per object: the last frame that saw it (None: none yet)
+    _lost: list = field(default_factory=list)  # per object: reported lost and not found since
+    _first_s: float | None = None  # [s] the first frame's time: what "not seen yet" counts from
+
+    def __post_init__(self) -> None:
+        self._last_seen_s = [None] * len(self.names)
+        self._lost = [False] * len(self.names)
+
+    def update(self, t_s: float, observation: Observation) -> list[str]:
+        """The frame's changes at run time t_s [s], one line each: '<name> lost at T s (last seen at S s)',
+        '<name> found again at T s, after D s unseen'."""
+        if not observation.objects:
+            return []
+        if self._first_s is None:
+            self._first_s = t_s
+        lines = []
+        for k, (name, seen) in enumerate(zip(self.names, observation.objects, strict=True)):
+            last = self._last_seen_s[k]
+            since = self._first_s if last is None else last
+            if seen.xy_m is not None:
+                if self._lost[k]:
+                    again = "" if last is None else "again "
+                    lines.append(f"{name} found {again}at {t_s:.2f} s, after {t_s - since:.2f} s unseen")
+                self._last_seen_s[k], self._lost[k] = t_s, False
+            elif not self._lost[k] and t_s - since >= self.lost_after_s:
+                self._lost[k] = True
+                when = "not seen since the run began" if last is None else f"last seen at {last:.2f} s"
+                lines.append(f"{name} lost at {t_s:.2f} s ({when})")
+        return lines
+
+    def lost(self) -> list[int]:
+        """The objects lost now (their places in Observation.objects)."""
+        return [k for k, lost in enumerate(self._lost) if lost]
 
 
 class FrameSource:

@@ -30,8 +30,9 @@ def camera(height_m: float, xy_m=(0.0, 0.0), tilt_deg: float = 0.0):
     return cv2.Rodrigues(rotation)[0], -rotation @ centre
 
 
-def render(object_xy=None, marker_height_m=0.0, cam=None, hide_corner=None, noise=2.0, rng=None) -> np.ndarray:
-    """A grey image of the corner markers (plane z = 0) and the object's marker at its height, in perspective."""
+def render(object_xy=None, marker_height_m=0.0, cam=None, hide_corner=None, noise=2.0, rng=None, more=()) -> np.ndarray:
+    """A grey image of the corner markers (plane z = 0) and the object's marker (the layout's first id) at its
+    height, in perspective; more: further (marker id, (x, y)) objects at the same height."""
     rvec, tvec = cam if cam is not None else camera(1.0)
     k = intrinsics()
     image = np.full((H, W), 140, np.float64)
@@ -41,7 +42,8 @@ def render(object_xy=None, marker_height_m=0.0, cam=None, hide_corner=None, nois
         if i != hide_corner
     ]
     if object_xy is not None:
-        patches.append((LAYOUT.object_id, np.asarray(object_xy), LAYOUT.object_size_m, marker_height_m))
+        patches.append((LAYOUT.object_ids[0], np.asarray(object_xy), LAYOUT.object_size_m, marker_height_m))
+    patches += [(i, np.asarray(xy), LAYOUT.object_size_m, marker_height_m) for i, xy in more]
     for marker_id, centre, size, z in patches:
         half = size * quiet_scale(LAYOUT) / 2
         world = np.array(

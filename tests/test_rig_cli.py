@@ -79,6 +79,32 @@ def test_rig_runs_the_loop_on_a_video_logs_every_frame_and_plots(still_video, tm
     assert len(list(tmp_path.glob("rig-*.png"))) == 1
 
 
+def test_rig_reports_when_the_tracker_loses_the_object_and_finds_it_again(tmp_path):
+    """The object hidden from the camera for 4 frames (0.33 s, inside the firmware's 0.5 s deadman) of a 3 s video:
+    one loss and one return, in the log and on stderr, and the run goes on to its timeout."""
+    video = _video(tmp_path / "hidden.avi", lambda k: None if 12 <= k < 16 else (0.1, -0.05), int(3 * FPS))
+    with VirtualMcu(clock="wall") as vmcu:
+        proc = _mantaray(
+            "rig",
+            "--port",
+            vmcu.path,
+            "--camera",
+            video,
+            "--target=-0.1,0.1",
+            "--timeout",
+            "2.5",
+            "--out",
+            str(tmp_path),
+        )
+    assert proc.stdout.startswith("timeout"), proc.stdout + proc.stderr
+    events = [r["text"] for r in _log(tmp_path) if r["kind"] == "event" and r["text"].startswith("tracker:")]
+    assert events == [
+        "tracker: object 0 (marker 10) lost at 1.25 s (last seen at 0.92 s)",
+        "tracker: object 0 (marker 10) found again at 1.33 s, after 0.42 s unseen",
+    ]
+    assert all(e in proc.stderr for e in events)
+
+
 def test_rig_takes_the_gains_it_is_given(still_video, tmp_path):
     """--gains reaches the firmware's PIDs: with kP alone the tilt is kP times the error [deg/m x m]."""
     with VirtualMcu(clock="wall") as vmcu:
@@ -422,7 +448,7 @@ def test_markers_sheet_is_at_true_size(tmp_path):
         sizes.setdefault(int(i), []).append(side_px / 300 * 25.4)
     for i in layout.corner_ids:
         assert sizes[i] == [pytest.approx(40.0, abs=0.3)]
-    assert sizes[layout.object_id] == [pytest.approx(30.0, abs=0.3)] * 2
+    assert sizes[layout.object_ids[0]] == [pytest.approx(30.0, abs=0.3)] * 2
 
 
 def test_calibrate_recovers_a_cameras_intrinsics_from_charuco_views(tmp_path):

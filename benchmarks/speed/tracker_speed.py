@@ -67,7 +67,7 @@ def main() -> int:
     print("tracker at 1280 x 720, one OpenCV thread:")
     for name, tracker, images in (
         ("ArUco", T.Tracker(), frames),
-        ("colour blob", T.Tracker(blob=T.BlobColour((20, 120, 120), (35, 255, 255))), colour),
+        ("colour blob", T.Tracker(blobs=(T.BlobColour((20, 120, 120), (35, 255, 255)),)), colour),
     ):
         tracker.observe(images[0], 0.0)
         t = time.perf_counter()

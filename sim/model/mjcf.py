@@ -321,7 +321,7 @@ def _marker_xml(rig: Rig) -> tuple[str, str, str]:
     from mantaray.host.markers import MarkerLayout, quiet_scale
 
     layout = MarkerLayout()
-    ids = [*layout.corner_ids, layout.object_id]
+    ids = [*layout.corner_ids, layout.object_ids[0]]  # the scene's one object carries the first object's marker
     assets = "\n".join(
         f'    <texture name="aruco{i}" type="2d" file="aruco_{i}.png"/>\n'
         f'    <material name="aruco{i}" texture="aruco{i}" texrepeat="1 1" specular="0" shininess="0"/>'
@@ -340,7 +340,7 @@ def _marker_xml(rig: Rig) -> tuple[str, str, str]:
     on_object = (
         (
             f'      <geom name="object_marker" type="box" size="{_v(half_object, half_object, MARKER_PLATE_M)}" '
-            f'pos="{_v(0, 0, top + MARKER_PLATE_M)}" material="aruco{layout.object_id}" mass="0" contype="0" '
+            f'pos="{_v(0, 0, top + MARKER_PLATE_M)}" material="aruco{layout.object_ids[0]}" mass="0" contype="0" '
             f'conaffinity="0"/>\n'
         )
         if rig.camera.object_marker
@@ -357,7 +357,7 @@ def write_marker_textures(directory: Path) -> None:
 
     layout = MarkerLayout()
     directory.mkdir(parents=True, exist_ok=True)
-    for i in (*layout.corner_ids, layout.object_id):
+    for i in (*layout.corner_ids, *layout.object_ids):
         imageio.imwrite(directory / f"aruco_{i}.png", marker_image(layout, i, MARKER_TEXTURE_PX))
 
 

@@ -57,7 +57,7 @@ class CameraVision:
         self.tracker = Tracker(
             marker_height_m=float(height),
             camera_height_m=rig.camera.height_above_z0_m,
-            blob=blob_colour(rig.object.rgba) if mode == "blob" else None,
+            blobs=(blob_colour(rig.object.rgba),) if mode == "blob" else (),
         )
 
     def measure(self, data: mujoco.MjData, capture_time_s: float) -> np.ndarray | None:
