@@ -35,8 +35,8 @@ def test_the_flex_collides_with_nothing_and_the_plugin_is_in_the_scene():
 @pytest.mark.parametrize("object_name", ["sphere", "cube"])
 def test_the_plugin_is_given_the_whole_spring_the_points_share_and_the_damping_ratio(object_name):
     rig = _rig(object_name, **{"contact.kernel_damping_ratio": 0.25})
-    alone = J._object_alone(rig)
-    xml = K.plugin_xml(rig, alone, J.FABRIC, J.OBJECT)
+    alone = J._object_alone(rig.object, rig.contact)
+    xml = K.plugin_xml(rig, [alone], J.FABRIC, [J.OBJECT])
     said = dict(re.findall(r'key="([a-z_]+)" value="([^"]+)"', xml))
     assert float(said["stiffness_n_per_m"]) == rig.contact.kernel_stiffness_n_per_m
     assert float(said["damping_ratio"]) == 0.25
@@ -84,7 +84,7 @@ def test_the_stretch_holds_the_load_in_the_state_and_a_reset_clears_it():
     and the sheet's slope), and mj_resetData lets every point go."""
     rig, model, data = _tilted_cube(15.0)
     instance = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PLUGIN, K.INSTANCE)
-    alone = J._object_alone(rig)
+    alone = J._object_alone(rig.object, rig.contact)
     points, _ = K.surface_points(alone, alone.geom(J.OBJECT).id)
     start = model.plugin_stateadr[instance]
     assert model.plugin_statenum[instance] == 1 + 3 * len(points)

@@ -90,11 +90,29 @@ def load_plugin() -> None:
         _loaded = True
 
 
-def plugin_xml(rig: Rig, alone: mujoco.MjModel, flex: str, geom: str) -> str:
-    """The <extension> element that makes the object (geom, whose compiled model alone is given) meet the flex through
-    the kernel: the plugin's configuration from the rig's contact, in physical units."""
+def instance_name(k: int) -> str:
+    """The plugin instance of object k of the scene: object 0's is INSTANCE."""
+    return INSTANCE if k == 0 else f"{INSTANCE}{k}"
+
+
+def plugin_xml(rig: Rig, alones: list[mujoco.MjModel], flex: str, geoms: list[str]) -> str:
+    """The <extension> element that makes each object (geoms[k], whose compiled model alone is alones[k]) meet the
+    flex through the kernel, one plugin instance an object: each one's configuration from the rig's contact, in
+    physical units."""
+    instances = "\n".join(
+        _instance_xml(rig, k, alone, flex, geom) for k, (alone, geom) in enumerate(zip(alones, geoms, strict=True))
+    )
+    return f"""  <extension>
+    <plugin plugin="{PLUGIN}">
+{instances}
+    </plugin>
+  </extension>
+"""
+
+
+def _instance_xml(rig: Rig, k: int, alone: mujoco.MjModel, flex: str, geom: str) -> str:
     c = rig.contact
-    geom_id = alone.geom(geom).id
+    geom_id = alone.geom(0).id  # the object alone: its one geom
     points, radius_m = surface_points(alone, geom_id)
     share = 1.0 if len(points) == 1 else 1.0 / FACE_POINTS  # the points that bear the object share its spring
     config = {
@@ -109,20 +127,15 @@ def plugin_xml(rig: Rig, alone: mujoco.MjModel, flex: str, geom: str) -> str:
         "points_m": " ".join(repr(float(x)) for x in points.ravel()),
     }
     keys = "\n".join(f'        <config key="{key}" value="{value}"/>' for key, value in config.items())
-    return f"""  <extension>
-    <plugin plugin="{PLUGIN}">
-      <instance name="{INSTANCE}">
+    return f"""      <instance name="{instance_name(k)}">
 {keys}
-      </instance>
-    </plugin>
-  </extension>
-"""
+      </instance>"""
 
 
-def surface_height(model: mujoco.MjModel, data: mujoco.MjData) -> float | None:
-    """The kernel surface's height [m, world z] under the object's geom centre at the last mj_forward or step (NaN
+def surface_height(model: mujoco.MjModel, data: mujoco.MjData, k: int = 0) -> float | None:
+    """The kernel surface's height [m, world z] under object k's geom centre at the last mj_forward or step (NaN
     off the sheet), or None where the object meets the flex's triangles (no kernel contact in the model)."""
-    instance = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PLUGIN, INSTANCE)
+    instance = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PLUGIN, instance_name(k))
     if instance < 0:
         return None
     return float(data.plugin_state[model.plugin_stateadr[instance]])

@@ -4,25 +4,49 @@ from __future__ import annotations
 
 import hashlib
 import shutil
+from dataclasses import dataclass
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
 from . import kernel_contact
-from .objects import ASSETS
-from .rig import Rig
+from .objects import ASSETS, ObjectSpec
+from .rig import Contact, Rig
 
 MODEL_FILE = "manta_ray.xml"
 FABRIC = "fabric"  # the flex; its vertex bodies and their sites are fabric_<id>
-OBJECT = "object"  # the object's body and geom
-# The object's six dofs: slides along world x, y, z [m], then a ball joint (its rotation, which alone is damped).
-# MuJoCo steps them bit for bit as it steps a free joint (tests/test_sim_model.py), whose MJCF damping would
-# also brake the object's fall and slide; qpos and qvel are laid out as a free joint's.
-OBJECT_SLIDES = ("object_x", "object_y", "object_z")
-OBJECT_TURN = "object_turn"
-REST_KEY = "rest"  # the scene's keyframe, filled by model.load(): fabric settled, commands zero, object parked
-MARKER = "marker"  # site on top of the object: the point the overhead camera tracks
+
+
+@dataclass(frozen=True)
+class ObjectNames:
+    """The MJCF names of one object of the scene (object k of Rig.objects): its body (and its geom), its six dofs:
+    slides along world x, y, z [m], then a ball joint (its rotation, which alone is damped; MuJoCo steps them bit for
+    bit as it steps a free joint, tests/test_sim_model.py, whose MJCF damping would also brake the object's fall and
+    slide; qpos and qvel are laid out as a free joint's), the site on its top the overhead camera tracks, and its
+    marker plate."""
+
+    body: str
+    slides: tuple[str, str, str]
+    turn: str
+    marker: str
+    plate: str
+
+
+def object_names(k: int) -> ObjectNames:
+    """Object k's names: object 0's are those a one-object scene has always had (object, object_x, ..., marker)."""
+    s = "" if k == 0 else str(k)
+    return ObjectNames(
+        f"object{s}",
+        (f"object{s}_x", f"object{s}_y", f"object{s}_z"),
+        f"object{s}_turn",
+        f"marker{s}",
+        f"object{s}_marker",
+    )
+
+
+OBJECT, OBJECT_SLIDES, OBJECT_TURN, MARKER = (lambda n: (n.body, n.slides, n.turn, n.marker))(object_names(0))
+REST_KEY = "rest"  # the scene's keyframe, filled by model.load(): fabric settled, commands zero, objects parked
 OVERHEAD = "overhead"  # the scene's camera looking straight down at the fabric
 POST_OFFSET_M = 0.03  # [m] visual frame posts stand this far outboard of each actuator on the frame (no collisions)
 UNDER_TRAVEL_M = 0.05  # [m] an actuator inside an array stands on a post this far below its travel's end
@@ -262,66 +286,77 @@ def model_xml(rig: Rig) -> str:
 """
 
 
-def _object_body(rig: Rig, joints: str = "", marker_geom: str = "") -> str:
-    """The object's body: joints, one geom, the tracking site and the marker plate (if the camera asks for it)."""
-    o, c = rig.object, rig.contact
+def _object_body(o: ObjectSpec, c: Contact, names: ObjectNames, joints: str = "", marker_geom: str = "") -> str:
+    """An object's body: joints, one geom, the tracking site and the marker plate (if the camera asks for it)."""
     shape = f'type="mesh" mesh="{o.mesh.name}"' if o.mesh else f'type="{o.shape}" size="{_v(*o.size_m)}"'
-    return f"""    <body name="{OBJECT}">
-{joints}      <geom name="{OBJECT}" {shape} mass="{_v(o.mass_kg)}" pos="{_v(*o.geom_pos_m)}"
+    return f"""    <body name="{names.body}">
+{joints}      <geom name="{names.body}" {shape} mass="{_v(o.mass_kg)}" pos="{_v(*o.geom_pos_m)}"
             euler="{_v(*o.geom_euler_rad)}" rgba="{_v(*o.rgba)}" condim="{c.condim}"
             friction="{_v(*c.friction)}" solref="{_v(*c.solref)}" solimp="{_v(*c.solimp)}"/>
-      <site name="{MARKER}" pos="{_v(0, 0, o.half_height_m)}" size="0.005" rgba="0 0 0 1"/>
+      <site name="{names.marker}" pos="{_v(0, 0, o.half_height_m)}" size="0.005" rgba="0 0 0 1"/>
 {marker_geom}    </body>"""
 
 
-def _mesh_asset(rig: Rig) -> str:
-    m = rig.object.mesh
+def _mesh_asset(o: ObjectSpec) -> str:
+    m = o.mesh
     if m is None:
         return ""
     src = f'file="{m.file}"' if m.file else f'builtin="{m.builtin}" params="{_v(*m.params)}"'
     return f'    <mesh name="{m.name}" {src} scale="{_v(*m.scale)}" inertia="convex"/>'
 
 
-def _object_alone(rig: Rig) -> mujoco.MjModel:
-    """The object compiled alone: MuJoCo's own inertia and (for a mesh) vertices of it."""
+def _object_alone(o: ObjectSpec, c: Contact) -> mujoco.MjModel:
+    """An object compiled alone (named as object 0): MuJoCo's own inertia and (for a mesh) vertices of it."""
     return mujoco.MjSpec.from_string(f"""<mujoco><compiler angle="radian" meshdir="{ASSETS}"/>
-  <asset>{_mesh_asset(rig)}</asset><worldbody>{_object_body(rig)}</worldbody></mujoco>""").compile()
+  <asset>{_mesh_asset(o)}</asset><worldbody>{_object_body(o, c, object_names(0))}</worldbody></mujoco>""").compile()
 
 
-def rolling_damping(rig: Rig) -> float:
+def rolling_damping(rig: Rig, k: int = 0) -> float:
     """Damping [N m s/rad] on the object's rotation: rig.contact.rolling_damping_per_s x its inertia about its lowest point.
 
     For a sphere rolling on a level sheet that makes its speed decay at exactly that rate (I + m r^2 is the
-    rolling inertia about the contact). The inertia is MuJoCo's own, from compiling the object alone.
+    rolling inertia about the contact). The inertia is MuJoCo's own, from compiling the object alone. Object k's.
     """
-    alone = _object_alone(rig)
+    o = rig.objects[k]
+    alone = _object_alone(o, rig.contact)
     body = alone.body(OBJECT).id
-    about_contact = float(np.mean(alone.body_inertia[body])) + alone.body_mass[body] * rig.object.half_height_m**2
+    about_contact = float(np.mean(alone.body_inertia[body])) + alone.body_mass[body] * o.half_height_m**2
     return rig.contact.rolling_damping_per_s * about_contact
 
 
-def _object_xml(rig: Rig, marker_geom: str = "") -> tuple[str, str]:
-    """(asset lines, body) for the rig's object; qpos0 puts it at the world's origin, place_object() puts it on the fabric."""
+def _object_xml(rig: Rig, k: int, marker_geom: str = "") -> tuple[str, str]:
+    """(asset lines, body) for object k; qpos0 puts it at the world's origin, place_objects() puts it on the fabric."""
+    names = object_names(k)
     joints = "".join(
         f'      <joint name="{name}" type="slide" axis="{_v(*axis)}"/>\n'
-        for name, axis in zip(OBJECT_SLIDES, np.eye(3), strict=True)
+        for name, axis in zip(names.slides, np.eye(3), strict=True)
     )
-    joints += f'      <joint name="{OBJECT_TURN}" type="ball" damping="{_exact(rolling_damping(rig))}"/>\n'
-    return _mesh_asset(rig), _object_body(rig, joints, marker_geom)
+    joints += f'      <joint name="{names.turn}" type="ball" damping="{_exact(rolling_damping(rig, k))}"/>\n'
+    o = rig.objects[k]
+    return _mesh_asset(o), _object_body(o, rig.contact, names, joints, marker_geom)
 
 
 MARKER_TEXTURE_PX = 256  # [px] side of each ArUco texture (a multiple of the marker's 8 cells with its quiet zone)
 MARKER_PLATE_M = 0.001  # [m] half thickness of a marker plate (visual only)
 
 
-def _marker_xml(rig: Rig) -> tuple[str, str, str]:
-    """(assets, world geoms, object geom) drawing the tracker's ArUco markers that the rig's camera asks for."""
-    if not (rig.camera.corner_markers or rig.camera.object_marker):
-        return "", "", ""
-    from mantaray.host.markers import MarkerLayout, quiet_scale
+def marker_layout(rig: Rig):
+    """The tracker's marker layout for the rig's scene: object k carries the marker of id first + k (first: the
+    layout's default object id)."""
+    from mantaray.host.markers import MarkerLayout
 
-    layout = MarkerLayout()
-    ids = [*layout.corner_ids, layout.object_ids[0]]  # the scene's one object carries the first object's marker
+    first = MarkerLayout().object_ids[0]
+    return MarkerLayout(object_ids=tuple(range(first, first + len(rig.objects))))
+
+
+def _marker_xml(rig: Rig) -> tuple[str, str, list[str]]:
+    """(assets, world geoms, each object's geom) drawing the tracker's ArUco markers that the rig's camera asks for."""
+    if not (rig.camera.corner_markers or rig.camera.object_marker):
+        return "", "", [""] * len(rig.objects)
+    from mantaray.host.markers import quiet_scale
+
+    layout = marker_layout(rig)
+    ids = [*layout.corner_ids, *layout.object_ids]
     assets = "\n".join(
         f'    <texture name="aruco{i}" type="2d" file="aruco_{i}.png"/>\n'
         f'    <material name="aruco{i}" texture="aruco{i}" texrepeat="1 1" specular="0" shininess="0"/>'
@@ -336,26 +371,27 @@ def _marker_xml(rig: Rig) -> tuple[str, str, str]:
         if rig.camera.corner_markers
     )
     half_object = layout.object_size_m * quiet_scale(layout) / 2
-    top = rig.object.half_height_m
-    on_object = (
+    on_objects = [
         (
-            f'      <geom name="object_marker" type="box" size="{_v(half_object, half_object, MARKER_PLATE_M)}" '
-            f'pos="{_v(0, 0, top + MARKER_PLATE_M)}" material="aruco{layout.object_ids[0]}" mass="0" contype="0" '
+            f'      <geom name="{object_names(k).plate}" type="box" '
+            f'size="{_v(half_object, half_object, MARKER_PLATE_M)}" '
+            f'pos="{_v(0, 0, o.half_height_m + MARKER_PLATE_M)}" material="aruco{i}" mass="0" contype="0" '
             f'conaffinity="0"/>\n'
         )
         if rig.camera.object_marker
         else ""
-    )  # on the object's top
-    return assets, world, on_object
+        for k, (o, i) in enumerate(zip(rig.objects, layout.object_ids, strict=True))
+    ]  # on each object's top
+    return assets, world, on_objects
 
 
-def write_marker_textures(directory: Path) -> None:
-    """The ArUco textures the scene refers to, as PNG files in directory."""
+def write_marker_textures(rig: Rig, directory: Path) -> None:
+    """The ArUco textures the rig's scene refers to, as PNG files in directory."""
     import imageio.v2 as imageio
 
-    from mantaray.host.markers import MarkerLayout, marker_image
+    from mantaray.host.markers import marker_image
 
-    layout = MarkerLayout()
+    layout = marker_layout(rig)
     directory.mkdir(parents=True, exist_ok=True)
     for i in (*layout.corner_ids, *layout.object_ids):
         imageio.imwrite(directory / f"aruco_{i}.png", marker_image(layout, i, MARKER_TEXTURE_PX))
@@ -365,13 +401,23 @@ def scene_xml(rig: Rig) -> str:
     """The scene: includes the model file, adds floor, light, the overhead camera and the object."""
     z0, cam = rig.module.z0_m, rig.camera
     zoom_out = max(rig.module.modules_x, rig.module.modules_y)  # an array is seen as the camera sees one module
-    marker_assets, marker_geoms, object_marker = _marker_xml(rig)
-    asset, body = _object_xml(rig, object_marker)
+    marker_assets, marker_geoms, object_markers = _marker_xml(rig)
+    parts = [_object_xml(rig, k, plate) for k, plate in enumerate(object_markers)]
+    asset = "\n".join(a for a in dict.fromkeys(a for a, _ in parts) if a)  # a mesh two objects share, once
+    body = "\n".join(b for _, b in parts)
     extension = (
-        kernel_contact.plugin_xml(rig, _object_alone(rig), FABRIC, OBJECT) if rig.contact.model == "kernel" else ""
+        kernel_contact.plugin_xml(
+            rig,
+            [_object_alone(o, rig.contact) for o in rig.objects],
+            FABRIC,
+            [object_names(k).body for k in range(len(rig.objects))],
+        )
+        if rig.contact.model == "kernel"
+        else ""
     )
-    return f"""<!-- MANTA-RAY scene with the {rig.object.name}, generated by mantaray.sim.model.mjcf: do not edit by hand. -->
-<mujoco model="manta_ray scene ({rig.object.name})">
+    what = ", ".join(o.name for o in rig.objects)
+    return f"""<!-- MANTA-RAY scene with the {what}, generated by mantaray.sim.model.mjcf: do not edit by hand. -->
+<mujoco model="manta_ray scene ({what})">
   <include file="{MODEL_FILE}"/>
 {extension}  <statistic center="{_v(0, 0, z0 - 0.2)}" extent="1.2"/>
   <visual>
@@ -415,12 +461,11 @@ def write_model(rig: Rig, directory: str | Path) -> Path:
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     (directory / MODEL_FILE).write_text(model_xml(rig))
-    mesh = rig.object.mesh
-    if mesh is not None and mesh.file:
+    for mesh in {o.mesh for o in rig.objects if o.mesh is not None and o.mesh.file}:
         (directory / "assets").mkdir(exist_ok=True)
         shutil.copyfile(ASSETS / mesh.file, directory / "assets" / mesh.file)
     if rig.camera.corner_markers or rig.camera.object_marker:
-        write_marker_textures(directory / "assets")
-    scene = directory / f"scene_{rig.object.name}.xml"
+        write_marker_textures(rig, directory / "assets")
+    scene = directory / f"scene_{'_'.join(o.name for o in rig.objects)}.xml"
     scene.write_text(scene_xml(rig))
     return scene

@@ -9,6 +9,7 @@ resolution, solver) and the renderer's camera.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from mantaray.protocol import rig as _rig
@@ -246,7 +247,13 @@ class Rig:
     solver: Solver = field(default_factory=Solver)
     camera: Camera = field(default_factory=Camera)
     fall: FallRule = field(default_factory=FallRule)
-    object: ObjectSpec = OBJECTS["sphere"]
+    object: ObjectSpec = OBJECTS["sphere"]  # object 0: the one a trial controls
+    others: tuple[ObjectSpec, ...] = ()  # objects 1, 2, ... on the sheet beside it (with_objects)
+
+    @property
+    def objects(self) -> tuple[ObjectSpec, ...]:
+        """Every object on the sheet, object 0 first."""
+        return (self.object, *self.others)
 
     def with_description(self, description: _rig.RigDescription) -> Rig:
         """The same plant on the rig a rig file describes (an array: protocol/rigs/): its modules, each with the
@@ -271,6 +278,16 @@ class Rig:
     def with_object(self, name: str) -> Rig:
         """The same rig carrying another of the paper's objects (a key of objects.OBJECTS)."""
         return dataclasses.replace(self, object=OBJECTS[name])
+
+    def with_objects(self, names: Sequence[str]) -> Rig:
+        """The same rig carrying several of the paper's objects (keys of objects.OBJECTS), object 0 first; how many a
+        controller may steer at once is the firmware's to say, not the model's."""
+        unknown = [n for n in names if n not in OBJECTS]
+        if unknown or not names:
+            raise ValueError(
+                f"no object {unknown[0]!r}; the objects are: {', '.join(OBJECTS)}" if unknown else "at least one object"
+            )
+        return dataclasses.replace(self, object=OBJECTS[names[0]], others=tuple(OBJECTS[n] for n in names[1:]))
 
     def time_constants_s(self) -> dict[str, float]:
         """[s] The constraints' time constants as MuJoCo is given them, by the plant parameter that sets each."""

@@ -60,6 +60,9 @@ class TrialSpec:
     # leave out run the firmware's boot gains, the paper's, read so (plant.boot_gains)
     stop_when_reached: bool = False  # end at the first frame within epsilon, as the paper's loop does
     settings: tuple[tuple[str, float], ...] = ()  # the controller's own settings (host/controller_settings.py keys)
+    # [m] where the objects beside the steered one start (objects 1, 2, ... of the rig, Rig.others): each left to lie
+    # where the sheet takes it
+    others_start_m: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
         if self.controller.upper() not in m.Controller.__members__:
@@ -153,6 +156,10 @@ class TrialResult:
     state: np.ndarray  # supervisor state per frame (-1: no answer)
     module: np.ndarray  # the module the firmware drove per frame (-1: no answer)
     watch: LinkWatch
+    others_xy_m: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 2)))  # [m] (frames, others, 2): objects
+    #     1, 2, ... at each capture, as true_xy_m
+    others_final_xy_m: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # [m] (others, 2) at the end
+    others_fell_off: tuple[bool, ...] = ()
 
     def summary(self) -> dict:
         """The machine-readable one-line result."""
@@ -175,7 +182,27 @@ class TrialResult:
             "unseen_frames": self.watch.unseen_frames,
             "dropped_frames": self.watch.dropped_frames,
             "handovers": self.handovers,
+            **({"others": self.others_summary()} if self.spec.others_start_m else {}),
         }
+
+    def others_summary(self) -> list[dict]:
+        """Each object beside the steered one: where it started and ended [m], how far it was moved [m] (at the end,
+        and at most during the trial), and whether it fell off."""
+        out = []
+        for k, start in enumerate(self.spec.others_start_m):
+            path = self.others_xy_m[:, k] if len(self.others_xy_m) else np.zeros((0, 2))
+            moved = np.hypot(*(path - np.asarray(start)).T) if len(path) else np.zeros(0)
+            final = self.others_final_xy_m[k]
+            out.append(
+                {
+                    "start_m": list(start),
+                    "final_xy_m": [round(float(v), 5) for v in final],
+                    "displacement_m": round(float(np.hypot(*(final - np.asarray(start)))), 5),
+                    "largest_displacement_m": round(float(moved.max(initial=0.0)), 5),
+                    "fell_off": self.others_fell_off[k],
+                }
+            )
+        return out
 
     @property
     def handovers(self) -> int:
@@ -293,7 +320,15 @@ class Bridge:
         loop.run(plant, judge, stop_when_reached=spec.stop_when_reached)
         self.frame = loop.frame
         self._stop(trial, resets0, lost0)
-        return self._result(spec, trial, loop.arrays(), np.asarray(plant.true_xy_m).reshape(-1, 2), judge, trial.fell)
+        result = self._result(spec, trial, loop.arrays(), np.asarray(plant.true_xy_m).reshape(-1, 2), judge, trial.fell)
+        if self.rig.others:
+            count = len(self.rig.others)
+            result.others_xy_m = np.asarray(plant.others_xy_m, dtype=float).reshape(-1, count, 2)
+            result.others_final_xy_m = np.array([M.object_xy(self.model, self.data, k) for k in range(1, count + 1)])
+            result.others_fell_off = tuple(
+                M.fell_off(self.model, self.data, self.rig.fall, k) for k in range(1, count + 1)
+            )
+        return result
 
     def _commands(self, reply: m.Telemetry) -> np.ndarray:
         """[m] Every actuator's command: one module's telemetry shows all four; an array's firmware sends them all
@@ -310,7 +345,13 @@ class Bridge:
         """Set the firmware up, drop the object, start the controller at trial time 0."""
         t = time.perf_counter()
         self._configure(spec)
-        M.drop_object(self.model, self.data, *spec.start_m)
+        others = len(self.rig.others)
+        if len(spec.others_start_m) != others:
+            raise ValueError(
+                f"the rig carries {others} object{'s' if others != 1 else ''} beside the steered one, the trial "
+                f"gives {len(spec.others_start_m)} start{'s' if len(spec.others_start_m) != 1 else ''} for them"
+            )
+        M.drop_objects(self.model, self.data, [spec.start_m, *spec.others_start_m])
         base_us = (self.clock_us + CLOCK_GAP_US) & U32  # firmware time at trial time 0
         if self.lockstep:
             self._set_clock(base_us)
@@ -418,6 +459,7 @@ class _SimulatedPlant:
         self.bridge, self.spec, self.trial, self.progress = bridge, spec, trial, progress
         self.rng = np.random.default_rng(spec.seed)
         self.true_xy_m: list = []  # [m] where the object was at each frame the loop recorded
+        self.others_xy_m: list = []  # [m] where each object beside it was then
 
     def frames(self):
         """The camera's frames at its rate over T, the physics stepped to each; ends early if the object falls off.
@@ -453,6 +495,10 @@ class _SimulatedPlant:
         if telemetry is not None:
             M.set_commands(bridge.model, bridge.data, bridge._commands(telemetry))
         self.true_xy_m.append(frame.judged_xy_m)
+        if bridge.rig.others:
+            self.others_xy_m.append(
+                [M.object_xy(bridge.model, bridge.data, k) for k in range(1, len(bridge.rig.objects))]
+            )
         if bridge.view is not None:
             bridge.view.frame(frame, telemetry)
         if self.progress is not None:

@@ -33,6 +33,14 @@ def blob_colour(rgba: tuple[float, float, float, float]) -> BlobColour:
     return BlobColour((low, BLOB_MIN_SATURATION, BLOB_MIN_VALUE), (high, 255, 255))
 
 
+def camera_option() -> mujoco.MjvOption:
+    """What the rig's camera sees of the scene: everything but MuJoCo's sites (the tracking site's dot would lie on
+    the object's marker, over a white cell of some ids)."""
+    option = mujoco.MjvOption()
+    option.sitegroup[:] = 0
+    return option
+
+
 class CameraVision:
     """Renders the overhead camera and measures the object with the tracker, as the rig's camera would.
 
@@ -49,6 +57,7 @@ class CameraVision:
             raise ValueError("aruco vision needs the object's marker in the scene (Rig.camera.object_marker)")
         self.mode = mode
         self.renderer = mujoco.Renderer(model, FRAME_PX[1], FRAME_PX[0])
+        self.option = camera_option()
         M.place_object(model, data, 0.0, 0.0, rule=rig.fall)
         if mode == "aruco":
             height = data.site(J.MARKER).xpos[2] + 2 * J.MARKER_PLATE_M - rig.module.z0_m  # the plate's top
@@ -62,7 +71,7 @@ class CameraVision:
 
     def measure(self, data: mujoco.MjData, capture_time_s: float) -> np.ndarray | None:
         """The tracker's (x, y) [m] of the object in the frame rendered now, or None if it saw none."""
-        self.renderer.update_scene(data, camera=J.OVERHEAD)
+        self.renderer.update_scene(data, camera=J.OVERHEAD, scene_option=self.option)
         image = self.renderer.render()[:, :, ::-1]  # RGB -> OpenCV's BGR
         observation = self.tracker.observe(np.ascontiguousarray(image), capture_time_s)
         return np.asarray(observation.xy_m) if observation.visible else None
