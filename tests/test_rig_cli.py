@@ -41,6 +41,11 @@ def _mantaray(*args: str, **kwargs) -> subprocess.CompletedProcess:
     )
 
 
+def _rig(vmcu: VirtualMcu, camera: str, *args: str) -> subprocess.CompletedProcess:
+    """`mantaray rig` on the virtual MCU, its camera a video file."""
+    return _mantaray("rig", "--port", vmcu.path, "--camera", camera, *args)
+
+
 def _log(out) -> list[dict]:
     (path,) = out.glob("rig-*.jsonl")
     return [json.loads(line) for line in path.read_text().splitlines()]
@@ -84,18 +89,7 @@ def test_rig_reports_when_the_tracker_loses_the_object_and_finds_it_again(tmp_pa
     one loss and one return, in the log and on stderr, and the run goes on to its timeout."""
     video = _video(tmp_path / "hidden.avi", lambda k: None if 12 <= k < 16 else (0.1, -0.05), int(3 * FPS))
     with VirtualMcu(clock="wall") as vmcu:
-        proc = _mantaray(
-            "rig",
-            "--port",
-            vmcu.path,
-            "--camera",
-            video,
-            "--target=-0.1,0.1",
-            "--timeout",
-            "2.5",
-            "--out",
-            str(tmp_path),
-        )
+        proc = _rig(vmcu, video, "--target=-0.1,0.1", "--timeout", "2.5", "--out", str(tmp_path))
     assert proc.stdout.startswith("timeout"), proc.stdout + proc.stderr
     events = [r["text"] for r in _log(tmp_path) if r["kind"] == "event" and r["text"].startswith("tracker:")]
     assert events == [
@@ -258,11 +252,8 @@ def test_a_board_that_goes_away_ends_the_run_with_its_log_and_figure(still_video
 def test_rig_follows_a_circle(tmp_path):
     video = _video(tmp_path / "c.avi", lambda k: (0.0, 0.0), int(3 * FPS))
     with VirtualMcu(clock="wall") as vmcu:
-        proc = _mantaray(
-            "rig",
-            "--port",
-            vmcu.path,
-            "--camera",
+        proc = _rig(
+            vmcu,
             video,
             "--target",
             "0,0",
