@@ -8,8 +8,8 @@
 // under the object with the damping an object's mass would want; the force acts on the object at the point and is
 // shared back to the flex's vertices by the kernel's weights. The surface under (x, y) is the vertices' heights
 // averaged with Wendland C2 weights w(r) = (1 - r/h)^4 (1 + 4 r/h) of support radius h [m]. The configuration (the
-// names of the flex and the object's geom, h, the springs and the points) is written by sim/model/kernel_contact.py; the
-// plugin's state is the kernel surface's height [m, world z] under the geom's centre at the last step (NaN off the
+// names of the flex and the object's geom, h, the springs and the points) is written by sim/model/kernel_contact.py;
+// the plugin's state is the kernel surface's height [m, world z] under the geom's centre at the last step (NaN off the
 // sheet), which is how the Python side places an object on the surface without a second copy of it, then each point's
 // stick stretch [m, world frame]: how far the point has moved along the sheet since it touched, the tangential spring's
 // extension (Chrono's and Bullet's penalty friction), capped so the spring never pulls harder than mu N. So an object
