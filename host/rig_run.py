@@ -110,7 +110,6 @@ class RigRun:
         self._interrupted = False
         self._keys: Keys | None = None
         self._seen: Observation | None = None  # the tracker's last observation, for the log
-        self._presence = Presence(tracker.object_names())  # when the tracker loses an object, and finds it again
         self._image = None  # the camera's last image (BGR or grey), for the view
         self._run_s = 0.0  # [s] run time of the last frame
         self._typed: str | None = None  # a target being typed after the t key; None: not typing
@@ -167,6 +166,7 @@ class RigRun:
         the fabric."""
         t0 = wall0 = None
         reach = [s + m for s, m in zip(self.rules.half_surface_m, self.rules.half_module_m, strict=True)]
+        presence = Presence(self.tracker.object_names())  # when the tracker loses an object, and finds it again
         while not self._interrupted and self.outcome != FAULT and not self._stopped_by_key():
             grabbed = self.source.read()
             if grabbed is None:
@@ -182,7 +182,7 @@ class RigRun:
                 return
             self._image = image
             obs = self._seen = self.tracker.observe(image, capture_s)
-            for line in self._presence.update(run_s, obs):
+            for line in presence.update(run_s, obs):
                 self.report(f"tracker: {line}")
             if obs.visible and (abs(obs.xy_m[0]) > reach[0] or abs(obs.xy_m[1]) > reach[1]):
                 self.report(
