@@ -17,7 +17,7 @@ actuators of the object's module and puts every other actuator on the same plane
 object and compensates nothing, so this is the uncompensated side of the follow-up paper's comparison (its
 compensation cut the displacement by 59 to 78 %). Per pair it appends a line to OUT/results.jsonl (a rerun skips the
 pairs there: interrupt and rerun to resume) and prints it; at the end it prints the medians and the paired
-difference with a bootstrap 90 % interval, and writes OUT/bystander.png (the displacement of each pair, held
+difference with a bootstrap 90 % interval (also to OUT/summary.txt), and writes OUT/bystander.png (the displacement of each pair, held
 against moved).
 """
 
@@ -36,6 +36,7 @@ from mantaray.host.transport import InProcessTransport
 from mantaray.protocol import rig as rig_description
 from mantaray.sim.evaluation.fidelity import parse_fidelity
 from mantaray.sim.evaluation.paired import mean_interval
+from mantaray.sim.evaluation.results_file import write_whole
 from mantaray.sim.model.objects import OBJECTS
 from mantaray.sim.model.parameters import ParameterError, plant_names
 from mantaray.sim.model.plant import Plant, parse_setting
@@ -156,12 +157,12 @@ def main() -> int:
     )
     todo = [k for k in range(args.pairs) if k not in done]
     fixed = ", ".join(f"{k}={v}" for k, v in args.set) or "as declared"
-    print(
+    header = (
         f"bystander: {names[0]} steered in module 0, {names[1]} still in module 1; {args.plant} ({fixed}), "
         f"{fidelity.resolution} x {fidelity.resolution} a module at {fidelity.timestep_s * 1e3:g} ms, seed {args.seed}; "
-        f"{len(done)} of {args.pairs} pairs done",
-        flush=True,
+        f"{len(done)} of {args.pairs} pairs done"
     )
+    print(header, flush=True)
     work = [(rig, plant.tracking(), args.seed, k, args.duration) for k in todo]
     try:
         with concurrent.futures.ProcessPoolExecutor(args.jobs) as pool, results.open("a") as sink:
@@ -178,7 +179,7 @@ def main() -> int:
     moved = np.array([line["moved"]["displacement_m"] for line in lines])
     interval = mean_interval(moved - held, level=0.90, seed=args.seed)
     estimate, low, high = interval.mean, interval.low, interval.high
-    print(
+    summary = (
         f"{len(lines)} pairs: bystander displacement at T, median held {np.median(held) * 100:.2f} cm, moved "
         f"{np.median(moved) * 100:.2f} cm; moved - held {estimate * 100:+.2f} cm [{low * 100:+.2f} .. {high * 100:+.2f}] "
         f"(mean, 90 % bootstrap); largest during the trial, median held "
@@ -187,6 +188,8 @@ def main() -> int:
         f"{sum(line['moved']['bystander_fell_off'] for line in lines)} moved, "
         f"{sum(line['held']['bystander_fell_off'] for line in lines)} held"
     )
+    print(summary)
+    write_whole(out / "summary.txt", (header + "\n" + summary + "\n").encode())
     _figure(lines, out / "bystander.png")
     print(f"figure {out / 'bystander.png'}")
     return 0
