@@ -7,7 +7,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from mantaray.host.tracker import Tracker
+from mantaray.host.tracker import Presence, Tracker
 from mantaray.sim.model import kernel_contact as K
 from mantaray.sim.model import mjcf as J
 from mantaray.sim.model import model as M
@@ -64,7 +64,8 @@ def test_several_objects_are_placed_and_come_to_rest_on_the_sheet_together(conta
 
 def test_the_tracker_finds_each_object_by_its_marker_on_rendered_frames():
     """Three flat objects with the markers 10, 11, 12 on their tops, at rest where the sheet puts them: each found in
-    its own place within 3 mm of its plate's centre, told the plates' height."""
+    its own place within 3 mm of its plate's centre, told the plates' height; one taken away is lost, and found again
+    when it is back."""
     rig = Rig().with_objects(FLAT).with_vision("aruco")
     model, data = M.load(rig)
     M.place_objects(model, data, _starts(3, seed=4), rule=rig.fall, settle_max_s=6.0)
@@ -84,6 +85,20 @@ def test_the_tracker_finds_each_object_by_its_marker_on_rendered_frames():
         seen = tracker.observe(image, 0.0).objects
         assert len(seen) == 3 and all(s.xy_m is not None for s in seen)
         assert np.hypot(*(np.asarray(seen[k].xy_m) - top[:2])) < 0.003, (k, seen[k].xy_m, top[:2])
+    # object 1 lifted out of the camera's view and put back: lost, then found again
+    presence = Presence(tracker.object_names())
+    frames, qadr = [], model.jnt_qposadr[model.joint(J.object_names(1).slides[0]).id]
+    back = data.qpos[qadr : qadr + 3].copy()
+    for t_s, away in ((0.0, False), (0.5, True), (1.0, False)):
+        data.qpos[qadr : qadr + 3] = (5.0, 5.0, 5.0) if away else back  # [m] far beyond the frame
+        mujoco.mj_forward(model, data)
+        renderer.update_scene(data, camera=J.OVERHEAD, scene_option=camera_option())
+        frames.append(presence.update(t_s, tracker.observe(np.ascontiguousarray(renderer.render()[:, :, ::-1]), t_s)))
+    assert frames == [
+        [],
+        ["object 1 (marker 11) lost at 0.50 s (last seen at 0.00 s)"],
+        ["object 1 (marker 11) found again at 1.00 s, after 1.00 s unseen"],
+    ]
 
 
 def test_a_trial_steers_object_0_and_reports_where_the_others_were_moved():
