@@ -257,6 +257,10 @@ class Bridge:
             )
         if not lockstep and simulated:
             raise LinkError("real-time mode needs a wall-clock firmware; this one is on the simulated clock")
+        if tracking.vision is not None:
+            from .vision import check_scene
+
+            check_scene(rig, tracking.vision)  # before the model's load, which takes a while
         self.model, self.data = M.load(rig)
         self.vision = None
         if tracking.vision is not None:

@@ -41,6 +41,16 @@ def camera_option() -> mujoco.MjvOption:
     return option
 
 
+def check_scene(rig: Rig, mode: str) -> None:
+    """ValueError unless the rig's scene carries what the tracker mode needs: before any model is loaded."""
+    if mode not in VISION_MODES:
+        raise ValueError(f"vision mode must be one of {', '.join(VISION_MODES)}, got {mode!r}")
+    if not rig.camera.corner_markers:
+        raise ValueError("vision in the loop needs the scene's corner markers (Rig.camera.corner_markers)")
+    if mode == "aruco" and not rig.camera.object_marker:
+        raise ValueError("aruco vision needs the object's marker in the scene (Rig.camera.object_marker)")
+
+
 class CameraVision:
     """Renders the overhead camera and measures the object with the tracker, as the rig's camera would.
 
@@ -49,12 +59,7 @@ class CameraVision:
     """
 
     def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, rig: Rig, mode: str) -> None:
-        if mode not in VISION_MODES:
-            raise ValueError(f"vision mode must be one of {', '.join(VISION_MODES)}, got {mode!r}")
-        if not rig.camera.corner_markers:
-            raise ValueError("vision in the loop needs the scene's corner markers (Rig.camera.corner_markers)")
-        if mode == "aruco" and not rig.camera.object_marker:
-            raise ValueError("aruco vision needs the object's marker in the scene (Rig.camera.object_marker)")
+        check_scene(rig, mode)
         self.mode = mode
         self.renderer = mujoco.Renderer(model, FRAME_PX[1], FRAME_PX[0])
         self.option = camera_option()
