@@ -424,10 +424,11 @@ class RunView:
             ),
         )
 
-    def object3d(self, t_s: float, centre_m: Sequence[float], radius_m: float) -> None:
-        """The object as a ball at its centre [m, world]."""
+    def object3d(self, t_s: float, centres_m: Sequence[Sequence[float]], radii_m: Sequence[float]) -> None:
+        """The objects as balls at their centres [m, world]: the steered one (the first) orange, any others blue."""
         self._at(t_s)
-        self.stream.log("world/object", self.rr.Points3D([centre_m], radii=radius_m, colors=(230, 120, 30)))
+        colors = [(230, 120, 30)] + [(60, 120, 220)] * (len(centres_m) - 1)
+        self.stream.log("world/object", self.rr.Points3D(centres_m, radii=radii_m, colors=colors))
 
     def event(self, t_s: float, text: str, level: str = "WARN") -> None:
         """Something the run reported."""

@@ -118,3 +118,41 @@ def test_a_trial_steers_object_0_and_reports_where_the_others_were_moved():
     assert other["start_m"] == [-0.12, 0.12] and other["fell_off"] is False
     assert other["displacement_m"] == pytest.approx(np.hypot(*(result.others_final_xy_m[0] - (-0.12, 0.12))), abs=1e-5)
     assert other["largest_displacement_m"] >= 0
+
+
+def test_the_live_view_and_recording_draw_every_object():
+    from mantaray.host.loop import CameraFrame
+    from mantaray.sim.trial.trial_view import TrialView
+
+    class View:  # what TrialView feeds (host/view.py RunView), its deferred work done at once
+        dropped = 0
+
+        def __init__(self):
+            self.objects = []
+
+        def frame(self, *args):
+            pass
+
+        def defer(self, t_s, work, wait):
+            work()
+
+        def mesh(self, *args):
+            pass
+
+        def object3d(self, t_s, centres_m, radii_m):
+            self.objects.append((np.asarray(centres_m), list(radii_m)))
+
+        def camera(self, *args):
+            pass
+
+    rig = Plant().rig(resolution=11, timestep_s=0.002).with_objects(["sphere", "cube"])
+    model, data = M.load(rig)
+    M.place_objects(model, data, [(0.1, 0.1), (-0.1, -0.1)], rule=rig.fall)
+    view = View()
+    trial_view = TrialView(view, model, data, rig, link=None)
+    trial_view.frame(CameraFrame(0.0, (0.1, 0.1), (0.0, 0.0)), None)
+    trial_view._release()
+    ((centres, radii),) = view.objects
+    expected = [data.body(J.object_names(k).body).xpos for k in range(2)]
+    np.testing.assert_array_equal(centres, expected)
+    assert radii == [max(o.size_m or (o.half_height_m,)) for o in rig.objects]

@@ -1,4 +1,4 @@
-"""The simulation's part of a run's view (host/view.py): the overhead camera rendered, the fabric's mesh, the object."""
+"""The simulation's part of a run's view (host/view.py): the overhead camera rendered, the fabric's mesh, the objects."""
 
 from __future__ import annotations
 
@@ -37,7 +37,7 @@ class TrialView:
         self.lockstep = lockstep  # the run waits for a view that falls behind; in real time it drops frames instead
         self.camera = model.camera(J.OVERHEAD).id
         self.triangles = M.fabric_triangles(model)
-        self.radius_m = max(rig.object.size_m or (rig.object.half_height_m,))
+        self.radii_m = [max(o.size_m or (o.half_height_m,)) for o in rig.objects]  # [m] each object's ball
         self.tolerance_m = 0.0  # [m] the present trial's epsilon
         self.renderer: mujoco.Renderer | None = None  # made on the view's thread, which alone renders
         # copies of the physics state for the view's thread: one per frame it may lag behind, and one being drawn
@@ -67,10 +67,11 @@ class TrialView:
         """On the view's thread: the fabric and the object, then the camera with the target, epsilon and the
         detection drawn at the object centre's height (on target, they coincide in the image)."""
         try:
-            centre = data.body(J.OBJECT).xpos.copy()
+            centres = [data.body(J.object_names(k).body).xpos.copy() for k in range(len(self.radii_m))]
+            centre = centres[0]  # the steered object's: the detection and the target are drawn at its height
             camera_at = (data.cam_xpos[self.camera].copy(), data.cam_xmat[self.camera].copy())
             self.view.mesh(t_s, M.fabric_vertices(self.model, data), self.triangles)
-            self.view.object3d(t_s, centre, self.radius_m)
+            self.view.object3d(t_s, centres, self.radii_m)
             if self.renderer is None:
                 self.renderer = mujoco.Renderer(self.model, CAMERA_PX, CAMERA_PX)
                 for flag in PLAIN:
