@@ -33,7 +33,7 @@ def _probe(link: Link, frame: int, tries: int = 40) -> m.Telemetry:
                 m.ObjectPosition(
                     frame=(frame * 32 + k) & 0xFFFF, capture_time=frame * 32 + k + 1, flags=m.PositionFlags.NOT_VISIBLE
                 ),
-                timeout_s=0.1,
+                timeout_s=0.05,
             )
         except LinkError:
             continue
@@ -44,7 +44,7 @@ def test_no_corrupted_command_is_ever_applied_through_drops_flips_and_bursts():
     rng = np.random.default_rng(7)
     with VirtualMcu(clock="wall") as vmcu:
         faulty = FaultInjector(SerialTransport(vmcu.path), p_drop=0.01, p_flip=0.01, p_burst=0.05, seed=3)
-        link = Link(faulty, ack_timeout_s=0.1, retries=12)
+        link = Link(faulty, ack_timeout_s=0.05, retries=12)  # each lost frame costs a timeout: short ones keep it quick
         link.identify()
         link.command(m.Configure(telemetry_period=0))
         sent = {i: {0.0} for i in range(4)}

@@ -66,7 +66,7 @@ def test_the_tracker_finds_each_object_by_its_marker_on_rendered_frames():
     """Three flat objects with the markers 10, 11, 12 on their tops, at rest where the sheet puts them: each found in
     its own place within 3 mm of its plate's centre, told the plates' height; one taken away is lost, and found again
     when it is back."""
-    rig = Rig().with_objects(FLAT).with_vision("aruco")
+    rig = Plant().rig(resolution=15, timestep_s=0.001).with_objects(FLAT).with_vision("aruco")
     model, data = M.load(rig)
     M.place_objects(model, data, _starts(3, seed=4), rule=rig.fall, settle_max_s=6.0)
     renderer = mujoco.Renderer(model, FRAME_PX[1], FRAME_PX[0])
