@@ -255,17 +255,18 @@ def place_objects(
         moving = []
         for k in range(count):
             if fell_off(model, data, rule, k):
-                raise ObjectNotSettled(f"{_which(k, count)}fell off at t = {data.time:.3f} s")
+                raise ObjectNotSettled(f"{_which([k], count)}fell off at t = {data.time:.3f} s")
             v, w = object_speed(model, data, k)
             if not (v < AT_REST_SPEED_M_PER_S and w < AT_REST_SPIN_RAD_PER_S):
                 moving.append(k)
         still = 0 if moving else still + 1
         if still >= hold_steps:
             return float(data.time)
-    which = "object " if count == 1 else "objects " + ", ".join(map(str, moving)) + " " if moving else "objects "
-    raise ObjectNotSettled(f"{which}still moving after {settle_max_s} s")
+    raise ObjectNotSettled(f"{_which(moving or list(range(count)), count)}still moving after {settle_max_s} s")
 
 
-def _which(k: int, count: int) -> str:
-    """How a message names object k: 'object ' alone in a scene of one."""
-    return "object " if count == 1 else f"object {k} "
+def _which(ks: Sequence[int], count: int) -> str:
+    """How a message names objects ks: 'object ' alone in a scene of one, else by their numbers."""
+    if count == 1:
+        return "object "
+    return f"object{'s' if len(ks) > 1 else ''} {', '.join(map(str, ks))} "
